@@ -115,3 +115,26 @@ TEST_F(LieTest, RollPitchYawRoundTrip) {
 
 }  // namespace
 }  // namespace slam_mms
+
+#include "slam_mms/core/trajectory.hpp"
+
+namespace slam_mms {
+namespace {
+
+TEST(TrajectoryTest, InterpolationOrderingAndRange) {
+  Trajectory traj;
+  const Timestamp t0 = Timestamp::FromNanoseconds(1'000'000'000);
+  ASSERT_TRUE(traj.Add(t0, Eigen::Isometry3d::Identity()).ok());
+  Eigen::Isometry3d T1 = MakeIsometry(so3::Exp(Eigen::Vector3d(0, 0, 0.2)), {2.0, 0.0, 0.0});
+  ASSERT_TRUE(traj.Add(t0.PlusSeconds(1.0), T1).ok());
+  EXPECT_EQ(traj.Add(t0.PlusSeconds(0.5), T1).code(), StatusCode::kInvalidArgument);
+  const auto mid = traj.Interpolate(t0.PlusSeconds(0.25));
+  ASSERT_TRUE(mid.ok());
+  EXPECT_NEAR(mid->translation().x(), 0.5, 1e-12);
+  EXPECT_NEAR(RotationAngle(mid->linear()), 0.05, 1e-12);
+  EXPECT_EQ(traj.Interpolate(t0.PlusSeconds(1.5)).status().code(), StatusCode::kOutOfRange);
+  EXPECT_NEAR(traj.PathLength(), 2.0, 1e-12);
+}
+
+}  // namespace
+}  // namespace slam_mms

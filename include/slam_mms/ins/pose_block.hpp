@@ -5,8 +5,12 @@
 //                  Eigen::Quaterniond memory order, so Eigen::Map<Eigen::Quaterniond>(x + 3) works)
 //   manifold       ceres::ProductManifold<ceres::EuclideanManifold<3>,
 //   ceres::EigenQuaternionManifold>
-//                  (tangent [dt(3), dtheta(3)]; translation perturbed additively in world, rotation
-//                  on the right: q = q_hat * Exp(dtheta))
+//                  (tangent [dt(3), d(3)]: translation perturbed additively in world; rotation
+//                  perturbed on the LEFT in world with Ceres's half-angle tangent,
+//                  q = [cos|d|, sin|d| d/|d|] * q_hat, i.e. R = Exp(2 d) * R_hat. Solvers never see
+//                  this: cost functions work on the ambient block, and covariances of the solver's
+//                  tangent must be converted before being reported in the library's
+//                  right-perturbed, rotation-first convention.)
 //   velocity block double[3] = v_world [m/s]
 //   bias block     double[6] = [ba(3) m/s^2, bg(3) rad/s]
 // Cost functions return Jacobians with respect to the ambient 7-vector; Ceres chains them with the

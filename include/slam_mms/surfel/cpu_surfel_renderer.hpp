@@ -1,0 +1,45 @@
+#pragma once
+// CpuSurfelRenderer: the native SurfelRenderer. A z-buffer splat of oriented discs, exact per pixel
+// centre ray (see surfel_renderer.hpp for the image definition it shares with EglSurfelRenderer).
+//
+// How: the surfels are split into num_threads contiguous chunks; each thread culls and splats its
+// chunk into its own depth/winner buffer (bounding box of the disc's cone in pixel space, exact
+// ray-disc test per pixel); the buffers are merged (nearest wins, ties to the earlier surfel) and
+// the output pixels are written once. Worker threads are persistent and all buffers are reused, so
+// a steady-state Render does not allocate.
+//
+// Thread safety: not thread-safe; one renderer per thread. Move-only.
+
+#include <memory>
+#include <string>
+
+#include "slam_mms/surfel/surfel_renderer.hpp"
+
+namespace slam_mms {
+
+class CpuSurfelRenderer final : public SurfelRenderer {
+ public:
+  /// Default options (64 x 2048 HDL-64 image, 2 threads).
+  CpuSurfelRenderer();
+  /// Returns InvalidArgument when options.Validate() fails.
+  static StatusOr<std::unique_ptr<CpuSurfelRenderer>> Create(const SurfelRendererOptions& options);
+  ~CpuSurfelRenderer() override;
+  CpuSurfelRenderer(CpuSurfelRenderer&&) noexcept;
+  CpuSurfelRenderer& operator=(CpuSurfelRenderer&&) noexcept;
+  CpuSurfelRenderer(const CpuSurfelRenderer&) = delete;
+  CpuSurfelRenderer& operator=(const CpuSurfelRenderer&) = delete;
+
+  [[nodiscard]] Status Render(const SurfelRenderInput& input,
+                              const Eigen::Isometry3d& T_world_sensor,
+                              VertexNormalMap* out) override;
+  std::string Name() const override { return "cpu"; }
+  const RangeProjection& projection() const override;
+  const SurfelRendererOptions& options() const;
+
+ private:
+  struct Impl;
+  explicit CpuSurfelRenderer(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace slam_mms

@@ -1,0 +1,32 @@
+#pragma once
+// Surfel: one oriented disc of the surfel map (paper §5.1.2; SuMa, Behley & Stachniss 2018).
+//
+// Positions and normals are in the frame of the SurfelMap that holds them ("world"); a submap's
+// surfels can be moved rigidly with SurfelMap::TransformSubmap after a pose-graph correction.
+// The first 32 bytes (position, radius, normal, confidence) are what the renderers read; the struct
+// is 64 bytes with this fixed layout (EglSurfelRenderer uploads it with a 64-byte stride).
+//
+// Thread safety: value type.
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <type_traits>
+
+namespace slam_mms {
+
+struct Surfel {
+  Eigen::Vector3f position = Eigen::Vector3f::Zero();  ///< Disc centre in the map frame [m].
+  float radius = 0.0f;                                 ///< Disc radius [m].
+  Eigen::Vector3f normal = Eigen::Vector3f::UnitZ();   ///< Unit normal in the map frame.
+  float confidence = 0.0f;    ///< Stability log-odds l (SuMa): > 0 stable, < 0 unstable.
+  int64_t created_ns = 0;     ///< Stamp of the scan that created it [ns since epoch].
+  int64_t updated_ns = 0;     ///< Stamp of the last scan that confirmed it [ns since epoch].
+  int32_t created_frame = 0;  ///< SurfelMap integration counter at creation.
+  int32_t updated_frame = 0;  ///< Integration counter of the last confirmation.
+  int32_t submap_id = 0;      ///< Submap it belongs to (SurfelMap::SetSubmapId at creation).
+  int32_t num_updates = 0;    ///< Number of confirming measurements after creation.
+};
+
+static_assert(sizeof(Surfel) == 64, "Surfel is uploaded to the GPU as a 64-byte record");
+
+}  // namespace slam_mms

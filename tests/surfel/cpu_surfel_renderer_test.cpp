@@ -1,0 +1,167 @@
+#include "slam_mms/surfel/cpu_surfel_renderer.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <random>
+
+#include "surfel/synthetic_surfels.hpp"
+
+namespace slam_mms {
+namespace {
+
+SurfelRendererOptions SmallOptions(int threads) {
+  SurfelRendererOptions o;
+  o.projection.rows = 16;
+  o.projection.cols = 256;
+  o.num_threads = threads;
+  return o;
+}
+
+// The image definition of surfel_renderer.hpp, evaluated pixel by pixel over all surfels.
+VertexNormalMap BruteForce(const RangeProjection& proj, double min_facing_cos,
+                           const std::vector<Surfel>& surfels, const Eigen::Isometry3d& T_ws) {
+  VertexNormalMap m;
+  m.Reset(proj.rows(), proj.cols());
+  const Eigen::Isometry3d T_sw = T_ws.inverse();
+  const Eigen::Matrix3f R = T_sw.linear().cast<float>();
+  const Eigen::Vector3f t = T_sw.translation().cast<float>();
+  const float min_r = static_cast<float>(proj.options().min_range_m);
+  const float max_r = static_cast<float>(proj.options().max_range_m);
+  for (int i = 0; i < m.size(); ++i) {
+    const Eigen::Vector3f& ray = proj.ray_directions()[i];
+    float best = std::numeric_limits<float>::infinity();
+    for (size_t k = 0; k < surfels.size(); ++k) {
+      const Surfel& s = surfels[k];
+      const Eigen::Vector3f p = R * s.position + t;
+      const Eigen::Vector3f n = R * s.normal;
+      const float d = p.norm();
+      if (d < min_r || d > max_r || s.radius >= d) continue;
+      if (!(-n.dot(p) > static_cast<float>(min_facing_cos) * d)) continue;
+      const float denom = n.dot(ray);
+      if (!(denom < 0.0f)) continue;
+      const float tt = n.dot(p) / denom;
+      if ((tt * ray - p).squaredNorm() > s.radius * s.radius) continue;
+      if (tt < min_r || tt > max_r || !(tt < best)) continue;
+      best = tt;
+      m.vertex[i] = tt * ray;
+      m.normal[i] = n;
+      m.range[i] = tt;
+      m.index[i] = static_cast<int32_t>(k);
+    }
+  }
+  return m;
+}
+
+TEST(CpuSurfelRendererTest, MatchesBruteForceOracle) {
+  for (int threads : {1, 2, 3}) {
+    auto renderer = CpuSurfelRenderer::Create(SmallOptions(threads));
+    ASSERT_TRUE(renderer.ok()) << renderer.status().ToString();
+    const auto surfels = internal::MakeStreetSurfels(3000, 7, 30.0f);
+    // Larger discs so they cover the small image's big pixels.
+    std::vector<Surfel> big = surfels;
+    for (auto& s : big) s.radius *= 8.0f;
+    Eigen::Isometry3d T_ws = Eigen::Isometry3d::Identity();
+    T_ws.translation() = Eigen::Vector3d(1.5, -0.7, 0.2);
+    T_ws.linear() = Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    VertexNormalMap img;
+    ASSERT_TRUE((*renderer)->Render(SurfelRenderInput::All(big), T_ws, &img).ok());
+    const VertexNormalMap ref = BruteForce((*renderer)->projection(), 0.01, big, T_ws);
+    int valid = 0, mismatch = 0;
+    for (int i = 0; i < img.size(); ++i) {
+      ASSERT_EQ(img.HasVertex(i), ref.HasVertex(i)) << "pixel " << i << " threads " << threads;
+      if (!img.HasVertex(i)) continue;
+      ++valid;
+      EXPECT_NEAR(img.range[i], ref.range[i], 1e-4f);
+      if (img.index[i] != ref.index[i]) ++mismatch;
+      EXPECT_LT((img.vertex[i] - ref.vertex[i]).norm(), 1e-3f);
+      EXPECT_NEAR(img.normal[i].norm(), 1.0f, 1e-4f);
+    }
+    EXPECT_GT(valid, img.size() / 2);
+    EXPECT_LE(mismatch, valid / 200 + 1);  // only exact depth ties may pick another surfel
+  }
+}
+
+TEST(CpuSurfelRendererTest, DiscInFrontGivesPlaneAndRespectsIdsAndFacing) {
+  CpuSurfelRenderer renderer;
+  std::vector<Surfel> surfels(3);
+  surfels[0].position = {10.f, 0.f, 0.f};
+  surfels[0].normal = {-1.f, 0.f, 0.f};
+  surfels[0].radius = 0.5f;
+  surfels[1] = surfels[0];
+  surfels[1].position = {8.f, 0.f, 0.f};
+  surfels[1].normal = {1.f, 0.f, 0.f};  // faces away: never drawn
+  surfels[2] = surfels[0];
+  surfels[2].position = {20.f, 0.f, 0.f};  // behind surfel 0
+  surfels[2].radius = 1.5f;
+  VertexNormalMap img;
+  ASSERT_TRUE(
+      renderer.Render(SurfelRenderInput::All(surfels), Eigen::Isometry3d::Identity(), &img).ok());
+  int n0 = 0, n2 = 0;
+  for (int i = 0; i < img.size(); ++i) {
+    if (!img.HasVertex(i)) continue;
+    ASSERT_NE(img.index[i], 1);
+    if (img.index[i] == 0) {
+      ++n0;
+      EXPECT_NEAR(img.vertex[i].x(), 10.f, 1e-4f);
+      EXPECT_LE(std::hypot(img.vertex[i].y(), img.vertex[i].z()), 0.5f + 1e-4f);
+      EXPECT_NEAR(img.normal[i].x(), -1.f, 1e-6f);
+    } else {
+      ++n2;
+      EXPECT_NEAR(img.vertex[i].x(), 20.f, 1e-3f);
+    }
+  }
+  // Disc of radius 0.5 at 10 m: angular radius 0.05 rad; pixels 0.00307 x 0.00764 rad.
+  const double expected0 = M_PI * 0.05 * 0.05 / (2 * M_PI / 2048 * (28.0 * M_PI / 180 / 64));
+  EXPECT_NEAR(n0, expected0, 0.15 * expected0);
+  EXPECT_GT(n2, 0);
+  // Subset: only surfel 2 (id 2 is reported in the index image).
+  const std::vector<uint32_t> ids = {2};
+  ASSERT_TRUE(
+      renderer.Render(SurfelRenderInput::Subset(surfels, ids), Eigen::Isometry3d::Identity(), &img)
+          .ok());
+  for (int i = 0; i < img.size(); ++i) {
+    if (img.HasVertex(i)) {
+      EXPECT_EQ(img.index[i], 2);
+    }
+  }
+  EXPECT_GT(img.CountVertices(), n2);
+  // Bad ids are an error, not a crash.
+  const std::vector<uint32_t> bad = {5};
+  EXPECT_EQ(
+      renderer.Render(SurfelRenderInput::Subset(surfels, bad), Eigen::Isometry3d::Identity(), &img)
+          .code(),
+      StatusCode::kInvalidArgument);
+}
+
+TEST(CpuSurfelRendererTest, WrapAroundTheRearSeam) {
+  CpuSurfelRenderer renderer;
+  std::vector<Surfel> surfels(1);
+  surfels[0].position = {-10.f, 0.f, 0.f};  // straight behind: on the column 0 / cols-1 seam
+  surfels[0].normal = {1.f, 0.f, 0.f};
+  surfels[0].radius = 0.3f;
+  VertexNormalMap img;
+  ASSERT_TRUE(
+      renderer.Render(SurfelRenderInput::All(surfels), Eigen::Isometry3d::Identity(), &img).ok());
+  int left = 0, right = 0;
+  for (int i = 0; i < img.size(); ++i) {
+    if (!img.HasVertex(i)) continue;
+    const int col = i % img.cols;
+    if (col < 100) ++left;
+    if (col > img.cols - 100) ++right;
+  }
+  EXPECT_GT(left, 5);
+  EXPECT_NEAR(left, right, 4);
+}
+
+TEST(CpuSurfelRendererTest, RejectsBadOptions) {
+  SurfelRendererOptions o;
+  o.num_threads = 0;
+  auto r = CpuSurfelRenderer::Create(o);
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.status().message().find("num_threads"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace slam_mms

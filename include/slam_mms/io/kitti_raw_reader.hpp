@@ -1,15 +1,14 @@
 #pragma once
 // KittiRawReader: reads one drive folder in KITTI raw layout and streams its scans one at a time.
-//
-//   <date>/calib_imu_to_velo.txt                      (also accepted in the drive folder itself)
-//   <date>/<drive>/velodyne_points/data/NNNNNNNNNN.bin  sync: float32 x y z reflectance, little
-//   endian
-//                                  data/NNNNNNNNNN.txt  extract: text lines "x y z reflectance"
-//                  velodyne_points/timestamps.txt, timestamps_start.txt, timestamps_end.txt
-//                  oxts/data/NNNNNNNNNN.txt, oxts/timestamps.txt   (sync: 10 Hz, one per scan;
-//                                                                   extract: 100 Hz, irregular)
-//                  oxts_100hz/data/..., oxts_100hz/timestamps.txt  (optional, written by
-//                                                                   KittiRawWriter / the simulator)
+// Files:
+// - calib_imu_to_velo.txt in Options::calib_dir, else the drive folder, else its parent (date);
+// - velodyne_points/data/NNNNNNNNNN.bin (sync: float32 x y z reflectance, little endian) or
+//   NNNNNNNNNN.txt (extract: text lines "x y z reflectance");
+// - velodyne_points/timestamps.txt (trigger), timestamps_start.txt, timestamps_end.txt;
+// - oxts/data/NNNNNNNNNN.txt and oxts/timestamps.txt (sync: 10 Hz, one per scan; extract: 100 Hz,
+//   irregular); optional (a drive without oxts/ has no GNSS/INS records, logged);
+// - oxts_100hz/data/NNNNNNNNNN.txt and oxts_100hz/timestamps.txt: optional 100 Hz IMU records
+//   (written by KittiRawWriter / the simulator).
 //
 // Layouts. kSync: binary scans and 10 Hz OXTS with one record per scan (the counts must match).
 // kExtract: text scans and 100 Hz OXTS with irregular timing; an empty line in a timestamps file
@@ -30,8 +29,8 @@
 // Validation is strict: any malformed input returns a Status naming the file, line and field
 // (a .bin size not a multiple of 16, an OXTS line without 30 numbers, timestamps going backwards or
 // duplicated, a missing or malformed calib file, a frame range outside the drive). Points with a
-// NaN/Inf coordinate or reflectance are dropped, counted (Scan-level count via
-// LastScanDroppedPoints and in total) and logged at kWarning.
+// NaN/Inf coordinate or reflectance are dropped, counted (TotalDroppedPoints) and logged at
+// kWarning. An empty scan file, or one with no finite point, is kDataLoss.
 //
 // Ownership: owns its index of file names and timestamps (a few hundred bytes per scan) and the
 // OXTS records of the frame range; scan points are read from disk on each ReadScan call.

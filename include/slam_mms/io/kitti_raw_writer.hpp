@@ -1,18 +1,18 @@
 #pragma once
 // KittiRawWriter: writes a drive folder in KITTI raw "sync" layout that KittiRawReader reads back
-// (used by the simulator):
-//
-//   <parent>/calib_imu_to_velo.txt, calib_velo_to_cam.txt, calib_cam_to_cam.txt  (WriteCalibration)
-//   <drive>/velodyne_points/data/%010d.bin + timestamps.txt, timestamps_start.txt,
-//   timestamps_end.txt <drive>/oxts/data/%010d.txt + timestamps.txt + dataformat.txt (AddOxts, 10
-//   Hz) <drive>/oxts_100hz/data/%010d.txt + timestamps.txt + dataformat.txt          (AddImuOxts,
-//   100 Hz)
+// (used by the simulator). Files:
+// - <parent>/calib_imu_to_velo.txt, calib_velo_to_cam.txt, calib_cam_to_cam.txt (WriteCalibration);
+// - <drive>/velodyne_points/data/%010d.bin and timestamps.txt, timestamps_start.txt,
+//   timestamps_end.txt (AddScan);
+// - <drive>/oxts/data/%010d.txt, timestamps.txt, dataformat.txt (AddOxts, 10 Hz; the folder is
+//   created at the first AddOxts);
+// - <drive>/oxts_100hz/data/%010d.txt, timestamps.txt, dataformat.txt (AddImuOxts, 100 Hz).
 //
 // Scans are numbered 0, 1, ... in the order added (Scan::index is ignored), points written as
 // float32 x y z reflectance (intensity); per-point times are not stored (KITTI has none; the reader
-// derives them from azimuth). Timestamp files are in the KITTI format "2011-09-26
-// 13:02:25.964389445". OXTS lines are written with %.17g (lossless). calib_velo_to_cam.txt /
-// calib_cam_to_cam.txt are minimal placeholders (identity camera extrinsics, KITTI-like intrinsics)
+// derives them from azimuth). Timestamp files use the KITTI format (Timestamp::ToKittiString).
+// OXTS lines are written with %.17g (lossless). calib_velo_to_cam.txt and calib_cam_to_cam.txt are
+// minimal placeholders (KITTI's velo->cam axis permutation without offset, KITTI-like intrinsics)
 // so tools expecting them find them; only calib_imu_to_velo.txt carries information.
 //
 // Ownership: owns its open files; move-only. Thread safety: none (one thread per writer).

@@ -38,6 +38,7 @@ Status RangeProjectionOptions::Validate() const {
   if (!(normal_max_range_jump_m >= 0.0)) {
     return FieldError("normal_max_range_jump_m", normal_max_range_jump_m, "must be >= 0");
   }
+  if (normal_col_step < 1) return FieldError("normal_col_step", normal_col_step, "must be >= 1");
   if (!(normal_max_range_jump_ratio >= 0.0)) {
     return FieldError("normal_max_range_jump_ratio", normal_max_range_jump_ratio, "must be >= 0");
   }
@@ -135,6 +136,7 @@ void RangeProjection::ComputeNormals(VertexNormalMap* map) const {
   const int cols = map->cols;
   const float jump_m = static_cast<float>(options_.normal_max_range_jump_m);
   const float jump_ratio = static_cast<float>(options_.normal_max_range_jump_ratio);
+  const int col_step = std::max(1, options_.normal_col_step);
   for (int row = 0; row < rows; ++row) {
     for (int col = 0; col < cols; ++col) {
       const int k = row * cols + col;
@@ -142,32 +144,35 @@ void RangeProjection::ComputeNormals(VertexNormalMap* map) const {
       const float r = map->range[static_cast<size_t>(k)];
       if (!(r > 0.0f)) continue;
       const float max_jump = std::max(jump_m, jump_ratio * r);
-      // The neighbour nearer in range among two candidates, or -1.
-      auto pick = [&](int k1, int k2) {
-        float best = std::numeric_limits<float>::infinity();
-        int best_k = -1;
-        for (int kn : {k1, k2}) {
-          if (kn < 0) continue;
-          const float rn = map->range[static_cast<size_t>(kn)];
-          if (!(rn > 0.0f)) continue;
-          const float d = std::abs(rn - r);
-          if (d <= max_jump && d < best) {
-            best = d;
-            best_k = kn;
-          }
-        }
-        return best_k;
+      auto usable = [&](int kn) {
+        if (kn < 0) return false;
+        const float rn = map->range[static_cast<size_t>(kn)];
+        return rn > 0.0f && std::abs(rn - r) <= max_jump;
       };
-      const int left = row * cols + (col == 0 ? cols - 1 : col - 1);
-      const int right = row * cols + (col == cols - 1 ? 0 : col + 1);
+      // Central difference where both neighbours pass the discontinuity test, else one-sided.
+      auto difference = [&](int k_plus, int k_minus, Eigen::Vector3f* d) {
+        const bool plus = usable(k_plus);
+        const bool minus = usable(k_minus);
+        const Eigen::Vector3f& p = map->vertex[static_cast<size_t>(k)];
+        if (plus && minus) {
+          *d = map->vertex[static_cast<size_t>(k_plus)] - map->vertex[static_cast<size_t>(k_minus)];
+        } else if (plus) {
+          *d = map->vertex[static_cast<size_t>(k_plus)] - p;
+        } else if (minus) {
+          *d = p - map->vertex[static_cast<size_t>(k_minus)];
+        } else {
+          return false;
+        }
+        return true;
+      };
+      const int step = std::min(col_step, cols / 2);
+      const int right = row * cols + (col + step) % cols;
+      const int left = row * cols + (col - step + cols) % cols;
       const int up = row > 0 ? k - cols : -1;
       const int down = row + 1 < rows ? k + cols : -1;
-      const int kh = pick(right, left);
-      const int kv = pick(up, down);
-      if (kh < 0 || kv < 0) continue;
+      Eigen::Vector3f dh, dv;
+      if (!difference(right, left, &dh) || !difference(down, up, &dv)) continue;
       const Eigen::Vector3f& p = map->vertex[static_cast<size_t>(k)];
-      const Eigen::Vector3f dh = map->vertex[static_cast<size_t>(kh)] - p;
-      const Eigen::Vector3f dv = map->vertex[static_cast<size_t>(kv)] - p;
       const float nh = dh.norm();
       const float nv = dv.norm();
       if (!(nh > 1e-6f) || !(nv > 1e-6f)) continue;

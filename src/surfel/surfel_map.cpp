@@ -1,0 +1,431 @@
+#include "slam_mms/surfel/surfel_map.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <utility>
+
+#include "surfel/fast_math.hpp"
+#include "surfel/surfel_map_impl.hpp"
+
+namespace slam_mms {
+namespace {
+
+Status FieldError(const char* field, double value, const char* rule) {
+  std::ostringstream os;
+  os << "SurfelMapOptions::" << field << " = " << value << "; " << rule;
+  return InvalidArgumentError(os.str());
+}
+
+enum PixelState : uint8_t { kNone = 0, kExplained = 1, kConflict = 2 };
+
+}  // namespace
+
+Status SurfelMapOptions::Validate() const {
+  SLAM_MMS_RETURN_IF_ERROR(renderer.Validate().WithContext("SurfelMapOptions::renderer"));
+  if (!(max_distance_m > 0.0)) return FieldError("max_distance_m", max_distance_m, "must be > 0");
+  if (!(max_angle_deg > 0.0 && max_angle_deg <= 90.0)) {
+    return FieldError("max_angle_deg", max_angle_deg, "must be in (0, 90]");
+  }
+  if (!(radius_factor > 0.0)) return FieldError("radius_factor", radius_factor, "must be > 0");
+  if (!(min_radius_m > 0.0)) return FieldError("min_radius_m", min_radius_m, "must be > 0");
+  if (!(max_radius_m >= min_radius_m)) {
+    return FieldError("max_radius_m", max_radius_m, "must be >= min_radius_m");
+  }
+  if (!(min_creation_cos >= 0.0 && min_creation_cos < 1.0)) {
+    return FieldError("min_creation_cos", min_creation_cos, "must be in [0, 1)");
+  }
+  if (!(p_stable > 0.5 && p_stable < 1.0)) {
+    return FieldError("p_stable", p_stable, "must be in (0.5, 1)");
+  }
+  if (!(sigma_angle > 0.0)) return FieldError("sigma_angle", sigma_angle, "must be > 0");
+  if (!(sigma_distance > 0.0)) return FieldError("sigma_distance", sigma_distance, "must be > 0");
+  if (!std::isfinite(confidence_threshold)) {
+    return FieldError("confidence_threshold", confidence_threshold, "must be finite");
+  }
+  if (unstable_age_frames < 0) {
+    return FieldError("unstable_age_frames", unstable_age_frames, "must be >= 0");
+  }
+  if (!(max_confidence > 0.0)) return FieldError("max_confidence", max_confidence, "must be > 0");
+  if (max_update_age_frames < 0) {
+    return FieldError("max_update_age_frames", max_update_age_frames, "must be >= 0");
+  }
+  if (max_weight < 1) return FieldError("max_weight", max_weight, "must be >= 1");
+  if (!(active_radius_m > 0.0))
+    return FieldError("active_radius_m", active_radius_m, "must be > 0");
+  if (!(index_cell_size_m > 0.1)) {
+    return FieldError("index_cell_size_m", index_cell_size_m, "must be > 0.1");
+  }
+  return OkStatus();
+}
+
+SurfelMap::Impl::Impl(const SurfelMapOptions& o)
+    : options(o),
+      index(static_cast<float>(o.index_cell_size_m)),
+      own_renderer(std::move(CpuSurfelRenderer::Create(o.renderer).value())),
+      pool(o.renderer.num_threads),
+      removed_per_thread(static_cast<size_t>(o.renderer.num_threads)),
+      moved_per_thread(static_cast<size_t>(o.renderer.num_threads)),
+      confirmed_per_thread(static_cast<size_t>(o.renderer.num_threads)) {
+  renderer = own_renderer.get();
+}
+
+uint32_t SurfelMap::Impl::AddSlot(const Surfel& s) {
+  uint32_t id;
+  if (!free_ids.empty()) {
+    id = free_ids.back();
+    free_ids.pop_back();
+    surfels[id] = s;
+    alive[id] = 1;
+    conflict[id] = 0;
+  } else {
+    id = static_cast<uint32_t>(surfels.size());
+    surfels.push_back(s);
+    alive.push_back(1);
+    conflict.push_back(0);
+  }
+  index.Insert(id, s.position);
+  ++num_alive;
+  return id;
+}
+
+void SurfelMap::Impl::RemoveSlot(uint32_t id) {
+  if (!alive[id]) return;
+  alive[id] = 0;
+  index.Erase(id);
+  free_ids.push_back(id);
+  --num_alive;
+}
+
+SurfelMap::SurfelMap() : impl_(std::make_unique<Impl>(SurfelMapOptions())) {}
+SurfelMap::SurfelMap(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+SurfelMap::~SurfelMap() = default;
+SurfelMap::SurfelMap(SurfelMap&&) noexcept = default;
+SurfelMap& SurfelMap::operator=(SurfelMap&&) noexcept = default;
+
+StatusOr<SurfelMap> SurfelMap::Create(const SurfelMapOptions& options) {
+  SLAM_MMS_RETURN_IF_ERROR(options.Validate());
+  return SurfelMap(std::make_unique<Impl>(options));
+}
+
+const SurfelMapOptions& SurfelMap::options() const { return impl_->options; }
+
+Status SurfelMap::SetRenderer(SurfelRenderer* renderer) {
+  if (renderer == nullptr) {
+    impl_->renderer = impl_->own_renderer.get();
+    return OkStatus();
+  }
+  const RangeProjectionOptions& a = renderer->projection().options();
+  const RangeProjectionOptions& b = impl_->options.renderer.projection;
+  if (a.rows != b.rows || a.cols != b.cols || a.fov_up_deg != b.fov_up_deg ||
+      a.fov_down_deg != b.fov_down_deg || a.min_range_m != b.min_range_m ||
+      a.max_range_m != b.max_range_m) {
+    return InvalidArgumentError(
+        "SurfelMap::SetRenderer: the renderer's projection (size, FOV, range gates) differs from "
+        "SurfelMapOptions::renderer.projection");
+  }
+  impl_->renderer = renderer;
+  return OkStatus();
+}
+
+SurfelRenderer& SurfelMap::renderer() { return *impl_->renderer; }
+void SurfelMap::SetSubmapId(int32_t submap_id) { impl_->submap_id = submap_id; }
+int32_t SurfelMap::submap_id() const { return impl_->submap_id; }
+const std::vector<Surfel>& SurfelMap::surfels() const { return impl_->surfels; }
+bool SurfelMap::IsAlive(uint32_t id) const {
+  return id < impl_->alive.size() && impl_->alive[id] != 0;
+}
+size_t SurfelMap::size() const { return impl_->num_alive; }
+int32_t SurfelMap::frame_count() const { return impl_->frame_count; }
+
+std::vector<Surfel> SurfelMap::LiveSurfels() const {
+  std::vector<Surfel> out;
+  out.reserve(impl_->num_alive);
+  for (size_t i = 0; i < impl_->surfels.size(); ++i) {
+    if (impl_->alive[i]) out.push_back(impl_->surfels[i]);
+  }
+  return out;
+}
+
+size_t SurfelMap::MemoryBytes() const {
+  const Impl& m = *impl_;
+  size_t b = m.surfels.capacity() * sizeof(Surfel) + m.alive.capacity() + m.conflict.capacity() +
+             m.free_ids.capacity() * sizeof(uint32_t) + m.index.MemoryBytes() +
+             (m.active.capacity() + m.candidates.capacity()) * sizeof(uint32_t) +
+             m.pixel_state.capacity();
+  b += m.model.vertex.capacity() * sizeof(Eigen::Vector3f) * 2 +
+       m.model.range.capacity() * sizeof(float) + m.model.index.capacity() * sizeof(int32_t);
+  for (const auto& v : m.removed_per_thread) b += v.capacity() * sizeof(uint32_t);
+  for (const auto& v : m.moved_per_thread) b += v.capacity() * sizeof(uint32_t);
+  return b;
+}
+
+void SurfelMap::Clear() {
+  Impl& m = *impl_;
+  m.surfels.clear();
+  m.alive.clear();
+  m.conflict.clear();
+  m.free_ids.clear();
+  m.num_alive = 0;
+  m.index.Clear();
+  m.frame_count = 0;
+}
+
+void SurfelMap::SelectActive(const Eigen::Vector3d& center_world, double radius_m,
+                             float min_confidence, std::vector<uint32_t>* ids) const {
+  const Impl& m = *impl_;
+  ids->clear();
+  const Eigen::Vector3f c = center_world.cast<float>();
+  const float r = static_cast<float>(radius_m);
+  m.index.CandidatesInSphere(c, r, ids);
+  const float r2 = r * r;
+  size_t kept = 0;
+  for (size_t k = 0; k < ids->size(); ++k) {
+    const uint32_t id = (*ids)[k];
+    const Surfel& s = m.surfels[id];
+    if (m.alive[id] && (s.position - c).squaredNorm() <= r2 && s.confidence > min_confidence) {
+      (*ids)[kept++] = id;
+    }
+  }
+  ids->resize(kept);
+}
+
+Status SurfelMap::RenderModel(const Eigen::Isometry3d& T_world_sensor, float min_confidence,
+                              VertexNormalMap* out) {
+  Impl& m = *impl_;
+  SelectActive(T_world_sensor.translation(), m.options.active_radius_m, min_confidence, &m.active);
+  return m.renderer->Render(SurfelRenderInput::Subset(m.surfels, m.active), T_world_sensor, out);
+}
+
+size_t SurfelMap::TransformSubmap(int32_t submap_id, const Eigen::Isometry3d& T_new_old) {
+  Impl& m = *impl_;
+  const Eigen::Matrix3f R = T_new_old.linear().cast<float>();
+  const Eigen::Vector3f t = T_new_old.translation().cast<float>();
+  size_t n = 0;
+  for (uint32_t id = 0; id < m.surfels.size(); ++id) {
+    Surfel& s = m.surfels[id];
+    if (!m.alive[id] || s.submap_id != submap_id) continue;
+    s.position = R * s.position + t;
+    s.normal = (R * s.normal).normalized();
+    m.index.Update(id, s.position);
+    ++n;
+  }
+  return n;
+}
+
+StatusOr<std::vector<uint32_t>> SurfelMap::AddSurfels(const std::vector<Surfel>& surfels) {
+  for (size_t i = 0; i < surfels.size(); ++i) {
+    const Surfel& s = surfels[i];
+    if (!s.position.allFinite() || !s.normal.allFinite() || !std::isfinite(s.confidence) ||
+        !(s.radius > 0.0f) || !std::isfinite(s.radius) ||
+        std::abs(s.normal.norm() - 1.0f) > 1e-3f) {
+      std::ostringstream os;
+      os << "SurfelMap::AddSurfels: surfel " << i
+         << " is invalid (non-finite values, radius <= 0 or normal not unit)";
+      return InvalidArgumentError(os.str());
+    }
+  }
+  std::vector<uint32_t> ids;
+  ids.reserve(surfels.size());
+  for (const Surfel& s : surfels) ids.push_back(impl_->AddSlot(s));
+  return ids;
+}
+
+StatusOr<SurfelIntegrationStats> SurfelMap::Integrate(const VertexNormalMap& scan,
+                                                      const Eigen::Isometry3d& T_world_sensor,
+                                                      Timestamp stamp) {
+  Impl& m = *impl_;
+  const SurfelMapOptions& o = m.options;
+  const RangeProjection& proj = m.renderer->projection();
+  const int rows = proj.rows();
+  const int cols = proj.cols();
+  if (scan.rows != rows || scan.cols != cols ||
+      scan.range.size() != static_cast<size_t>(rows) * static_cast<size_t>(cols) ||
+      scan.vertex.size() != scan.range.size() || scan.normal.size() != scan.range.size()) {
+    std::ostringstream os;
+    os << "SurfelMap::Integrate: scan image is " << scan.rows << " x " << scan.cols
+       << "; the map's projection is " << rows << " x " << cols;
+    return InvalidArgumentError(os.str());
+  }
+  if (!T_world_sensor.matrix().allFinite()) {
+    return InvalidArgumentError("SurfelMap::Integrate: T_world_sensor is not finite");
+  }
+  SurfelIntegrationStats stats;
+  const int32_t frame = m.frame_count;
+
+  // 1-2. Active surfels and the model rendered at the pose.
+  SelectActive(T_world_sensor.translation(), o.active_radius_m,
+               -std::numeric_limits<float>::infinity(), &m.active);
+  stats.num_active = static_cast<int>(m.active.size());
+  SLAM_MMS_RETURN_IF_ERROR(
+      m.renderer->Render(SurfelRenderInput::Subset(m.surfels, m.active), T_world_sensor, &m.model));
+
+  const float max_d = static_cast<float>(o.max_distance_m);
+  const float max_sin = static_cast<float>(std::sin(o.max_angle_deg * M_PI / 180.0));
+  const int num_pixels = rows * cols;
+  m.pixel_state.resize(static_cast<size_t>(num_pixels));
+  const int num_threads = m.pool.num_threads();
+
+  // 3. Per pixel: explained by the rendered surfel, or a conflict (the ray passed through it).
+  const int pix_chunk = (num_pixels + num_threads - 1) / num_threads;
+  m.pool.Run([&](int ti) {
+    const int i0 = std::min(num_pixels, ti * pix_chunk);
+    const int i1 = std::min(num_pixels, i0 + pix_chunk);
+    for (int i = i0; i < i1; ++i) {
+      uint8_t state = kNone;
+      if (scan.HasVertex(i) && m.model.HasVertex(i)) {
+        const Eigen::Vector3f& ns = m.model.normal[i];
+        const float d = std::abs(ns.dot(scan.vertex[i] - m.model.vertex[i]));
+        if (scan.HasNormal(i) && d < max_d && scan.normal[i].cross(ns).norm() < max_sin) {
+          state = kExplained;
+        } else if (scan.range[i] > m.model.range[i] + max_d) {
+          state = kConflict;
+        }
+      }
+      m.pixel_state[i] = state;
+    }
+  });
+  std::vector<uint32_t>& conflicted = m.candidates;  // reuse as the list of flagged ids
+  conflicted.clear();
+  for (int i = 0; i < num_pixels; ++i) {
+    if (m.pixel_state[i] == kExplained) ++stats.num_explained;
+    if (m.pixel_state[i] != kConflict) continue;
+    const uint32_t id = static_cast<uint32_t>(m.model.index[i]);
+    if (!m.conflict[id]) {
+      m.conflict[id] = 1;
+      conflicted.push_back(id);
+    }
+  }
+  stats.num_conflicts = static_cast<int>(conflicted.size());
+
+  // 4-5. Per active surfel: confirm and refine, or penalise a conflict; mark unstable ones.
+  const Eigen::Isometry3d T_sensor_world = T_world_sensor.inverse();
+  const Eigen::Matrix3f R_sw = T_sensor_world.linear().cast<float>();
+  const Eigen::Vector3f t_sw = T_sensor_world.translation().cast<float>();
+  const Eigen::Matrix3f R_ws = T_world_sensor.linear().cast<float>();
+  const Eigen::Vector3f t_ws = T_world_sensor.translation().cast<float>();
+  const RangeProjectionOptions& po = proj.options();
+  const float fov_up = static_cast<float>(po.fov_up_deg * M_PI / 180.0);
+  const float rows_per_rad =
+      static_cast<float>(rows / ((po.fov_up_deg - po.fov_down_deg) * M_PI / 180.0));
+  const float pixel_size = static_cast<float>(
+      std::max(std::tan(0.5 * (po.fov_up_deg - po.fov_down_deg) * M_PI / 180.0 / rows),
+               std::tan(M_PI / cols)));
+  auto new_radius = [&](float range, float cos_incidence) {
+    const float c = std::clamp(cos_incidence, 0.5f, 1.0f);
+    return std::clamp(static_cast<float>(o.radius_factor) * range * pixel_size / c,
+                      static_cast<float>(o.min_radius_m), static_cast<float>(o.max_radius_m));
+  };
+  const float log_unstable = static_cast<float>(std::log((1.0 - o.p_stable) / o.p_stable));
+  const float inv_sa2 = static_cast<float>(1.0 / (o.sigma_angle * o.sigma_angle));
+  const float inv_sd2 = static_cast<float>(1.0 / (o.sigma_distance * o.sigma_distance));
+  const float p_stable = static_cast<float>(o.p_stable);
+  const float max_conf = static_cast<float>(o.max_confidence);
+  const float conf_threshold = static_cast<float>(o.confidence_threshold);
+  const float min_r = static_cast<float>(po.min_range_m);
+  const float max_r = static_cast<float>(po.max_range_m);
+  const size_t n_active = m.active.size();
+  const size_t chunk = (n_active + static_cast<size_t>(num_threads) - 1) / num_threads;
+  m.pool.Run([&](int ti) {
+    std::vector<uint32_t>& removed = m.removed_per_thread[static_cast<size_t>(ti)];
+    std::vector<uint32_t>& moved = m.moved_per_thread[static_cast<size_t>(ti)];
+    removed.clear();
+    moved.clear();
+    int confirmed = 0;
+    const size_t k0 = std::min(n_active, static_cast<size_t>(ti) * chunk);
+    const size_t k1 = std::min(n_active, k0 + chunk);
+    for (size_t k = k0; k < k1; ++k) {
+      const uint32_t id = m.active[k];
+      Surfel& s = m.surfels[id];
+      const Eigen::Vector3f p = R_sw * s.position + t_sw;
+      const Eigen::Vector3f n = R_sw * s.normal;
+      const float d = p.norm();
+      bool is_confirmed = false;
+      if (d >= min_r && d <= max_r && n.dot(p) < 0.0f) {
+        const float yaw = internal::FastAtan2(p.y(), p.x());
+        const float pitch = internal::FastAtan2(p.z(), std::sqrt(p.x() * p.x() + p.y() * p.y()));
+        const float v = (fov_up - pitch) * rows_per_rad;
+        float u = 0.5f * (1.0f - yaw / internal::kPiF) * static_cast<float>(cols);
+        const int row = static_cast<int>(std::floor(v));
+        int col = static_cast<int>(std::floor(u));
+        if (col >= cols) col -= cols;
+        if (col < 0) col += cols;
+        if (row >= 0 && row < rows) {
+          const int i = row * cols + col;
+          if (scan.HasVertex(i) && scan.HasNormal(i)) {
+            const Eigen::Vector3f& vm = scan.vertex[i];
+            const Eigen::Vector3f& nm = scan.normal[i];
+            const float dist = std::abs(n.dot(vm - p));
+            const float a = nm.cross(n).norm();
+            if (dist < max_d && a < max_sin) {
+              is_confirmed = true;
+              float prob = p_stable * std::exp(-a * a * inv_sa2) * std::exp(-dist * dist * inv_sd2);
+              prob = std::clamp(prob, 1.0f - p_stable, 0.999f);
+              s.confidence = std::min(s.confidence + std::log(prob / (1.0f - prob)), max_conf);
+              const float range = scan.range[i];
+              s.radius = std::min(s.radius, new_radius(range, -nm.dot(vm) / range));
+              if (frame - s.created_frame < o.max_update_age_frames) {
+                const float w = static_cast<float>(std::min(s.num_updates + 1, o.max_weight));
+                const Eigen::Vector3f v_world = R_ws * vm + t_ws;
+                const Eigen::Vector3f n_world = R_ws * nm;
+                s.position = (w * s.position + v_world) / (w + 1.0f);
+                const Eigen::Vector3f nn = w * s.normal + n_world;
+                const float len = nn.norm();
+                if (len > 1e-6f) s.normal = nn / len;
+                moved.push_back(id);
+              }
+              s.updated_frame = frame;
+              s.updated_ns = stamp.nanoseconds();
+              ++s.num_updates;
+              ++confirmed;
+            }
+          }
+        }
+      }
+      if (!is_confirmed && m.conflict[id]) s.confidence += log_unstable;
+      m.conflict[id] = 0;
+      if (s.confidence < log_unstable ||
+          (s.confidence < conf_threshold && frame - s.updated_frame >= o.unstable_age_frames)) {
+        removed.push_back(id);
+      }
+    }
+    m.confirmed_per_thread[static_cast<size_t>(ti)] = confirmed;
+  });
+  for (int c : m.confirmed_per_thread) stats.num_confirmed += c;
+  for (const auto& removed : m.removed_per_thread) {
+    for (uint32_t id : removed) m.RemoveSlot(id);
+    stats.num_removed += static_cast<int>(removed.size());
+  }
+  for (const auto& moved : m.moved_per_thread) {
+    for (uint32_t id : moved) {
+      if (m.alive[id]) m.index.Update(id, m.surfels[id].position);
+    }
+  }
+
+  // 6. New surfels for the unexplained pixels with a normal facing the sensor.
+  const float min_cos = static_cast<float>(o.min_creation_cos);
+  for (int i = 0; i < num_pixels; ++i) {
+    if (m.pixel_state[i] == kExplained || !scan.HasVertex(i) || !scan.HasNormal(i)) continue;
+    const Eigen::Vector3f& v = scan.vertex[i];
+    const Eigen::Vector3f& nv = scan.normal[i];
+    const float range = scan.range[i];
+    const float cos_inc = -nv.dot(v) / range;
+    if (!(cos_inc > min_cos)) continue;
+    Surfel s;
+    s.position = R_ws * v + t_ws;
+    s.normal = (R_ws * nv).normalized();
+    s.radius = new_radius(range, cos_inc);
+    s.confidence = 0.0f;  // log-odds of the prior p = 0.5
+    s.created_ns = s.updated_ns = stamp.nanoseconds();
+    s.created_frame = s.updated_frame = frame;
+    s.submap_id = m.submap_id;
+    s.num_updates = 0;
+    m.AddSlot(s);
+    ++stats.num_created;
+  }
+  ++m.frame_count;
+  stats.num_surfels = m.num_alive;
+  return stats;
+}
+
+}  // namespace slam_mms

@@ -1,0 +1,42 @@
+#pragma once
+// SurfelMap's private state (shared by surfel_map.cpp and surfel_map_io.cpp).
+#include <memory>
+#include <vector>
+
+#include "slam_mms/surfel/cpu_surfel_renderer.hpp"
+#include "slam_mms/surfel/surfel_map.hpp"
+#include "surfel/voxel_index.hpp"
+#include "surfel/worker_pool.hpp"
+
+namespace slam_mms {
+
+struct SurfelMap::Impl {
+  explicit Impl(const SurfelMapOptions& o);
+
+  /// Appends or reuses a slot; returns the id.
+  uint32_t AddSlot(const Surfel& s);
+  void RemoveSlot(uint32_t id);
+
+  SurfelMapOptions options;
+  std::vector<Surfel> surfels;
+  std::vector<uint8_t> alive;
+  std::vector<uint32_t> free_ids;
+  size_t num_alive = 0;
+  internal::VoxelIndex index;
+  int32_t submap_id = 0;
+  int32_t frame_count = 0;
+  std::unique_ptr<CpuSurfelRenderer> own_renderer;
+  SurfelRenderer* renderer = nullptr;
+  internal::WorkerPool pool;
+  // Scratch reused across Integrate calls.
+  std::vector<uint32_t> active;
+  std::vector<uint32_t> candidates;
+  VertexNormalMap model;
+  std::vector<uint8_t> pixel_state;  // 0 none, 1 explained, 2 conflict
+  std::vector<uint8_t> conflict;     // by surfel id
+  std::vector<std::vector<uint32_t>> removed_per_thread;
+  std::vector<std::vector<uint32_t>> moved_per_thread;
+  std::vector<int> confirmed_per_thread;
+};
+
+}  // namespace slam_mms

@@ -1,0 +1,57 @@
+#pragma once
+// VoxelIndex: a hash of cubic cells holding surfel ids, with O(1) insert, erase and move (each id
+// remembers its cell and its slot in that cell), and sphere queries. Private to the surfel module.
+// Thread safety: not thread-safe for writes; concurrent const queries are safe.
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <unordered_map>
+#include <vector>
+
+namespace slam_mms::internal {
+
+class VoxelIndex {
+ public:
+  explicit VoxelIndex(float cell_size_m = 10.0f) : cell_size_(cell_size_m) {}
+
+  void Clear();
+  /// Adds `id` at `position` (id must not be present).
+  void Insert(uint32_t id, const Eigen::Vector3f& position);
+  /// Removes `id` (must be present).
+  void Erase(uint32_t id);
+  /// Moves `id` to the cell of `position` if that differs from its current cell.
+  void Update(uint32_t id, const Eigen::Vector3f& position);
+  /// Appends to *ids every id in the cells that intersect the sphere (a superset of the ids within
+  /// radius; the caller filters by exact distance).
+  void CandidatesInSphere(const Eigen::Vector3f& center, float radius,
+                          std::vector<uint32_t>* ids) const;
+  size_t num_cells() const { return cells_.size(); }
+  size_t MemoryBytes() const;
+  float cell_size() const { return cell_size_; }
+
+ private:
+  struct Key {
+    int32_t x, y, z;
+    bool operator==(const Key& o) const { return x == o.x && y == o.y && z == o.z; }
+  };
+  struct KeyHash {
+    size_t operator()(const Key& k) const {
+      return (static_cast<size_t>(static_cast<uint32_t>(k.x)) * 73856093u) ^
+             (static_cast<size_t>(static_cast<uint32_t>(k.y)) * 19349663u) ^
+             (static_cast<size_t>(static_cast<uint32_t>(k.z)) * 83492791u);
+    }
+  };
+  struct Where {
+    Key key{0, 0, 0};
+    uint32_t slot = 0;
+    bool present = false;
+  };
+  Key KeyOf(const Eigen::Vector3f& p) const;
+  void EnsureSlot(uint32_t id);
+
+  float cell_size_;
+  std::unordered_map<Key, std::vector<uint32_t>, KeyHash> cells_;
+  std::vector<Where> where_;  // by id
+};
+
+}  // namespace slam_mms::internal

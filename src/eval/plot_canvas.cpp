@@ -1,0 +1,298 @@
+#include "eval/plot_canvas.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+namespace slam_mms::eval::internal {
+namespace {
+
+constexpr int kFont = cv::FONT_HERSHEY_SIMPLEX;
+constexpr int kShift = 4;  // sub-pixel bits for anti-aliased drawing
+constexpr double kShiftScale = 16.0;
+const cv::Scalar kBlack(0, 0, 0);
+const cv::Scalar kDarkGray(60, 60, 60);
+const cv::Scalar kGridGray(225, 225, 225);
+
+}  // namespace
+
+cv::Scalar PaletteColor(size_t index) {
+  // Okabe-Ito: blue, vermillion, bluish green, reddish purple, orange, sky blue, yellow (BGR).
+  static const cv::Scalar kColors[] = {cv::Scalar(178, 114, 0), cv::Scalar(0, 94, 213),
+                                       cv::Scalar(115, 158, 0), cv::Scalar(167, 121, 204),
+                                       cv::Scalar(0, 159, 230), cv::Scalar(233, 180, 86),
+                                       cv::Scalar(66, 228, 240)};
+  return kColors[index % (sizeof(kColors) / sizeof(kColors[0]))];
+}
+
+std::vector<double> NiceTicks(double lo, double hi, int target, double* step_out) {
+  std::vector<double> ticks;
+  if (!(hi > lo) || !std::isfinite(lo) || !std::isfinite(hi)) return ticks;
+  const double raw = (hi - lo) / std::max(1, target);
+  const double mag = std::pow(10.0, std::floor(std::log10(raw)));
+  const double frac = raw / mag;
+  const double nice = frac < 1.5 ? 1.0 : frac < 3.0 ? 2.0 : frac < 7.0 ? 5.0 : 10.0;
+  const double step = nice * mag;
+  if (step_out != nullptr) *step_out = step;
+  for (double v = std::ceil(lo / step - 1e-9) * step; v <= hi + 1e-9 * step; v += step) {
+    ticks.push_back(std::abs(v) < 1e-12 * step ? 0.0 : v);
+  }
+  return ticks;
+}
+
+std::string FormatTick(double value, double step) {
+  int decimals = 0;
+  if (step > 0 && step < 1.0) decimals = static_cast<int>(std::ceil(-std::log10(step) - 1e-9));
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "%.*f", decimals, value);
+  return buf;
+}
+
+PlotCanvas::PlotCanvas(int width_px, int height_px, int right_px)
+    : image_(height_px, width_px, CV_8UC3, cv::Scalar(255, 255, 255)) {
+  area_ = cv::Rect(kLeftPx, kTopPx, std::max(10, width_px - kLeftPx - right_px),
+                   std::max(10, height_px - kTopPx - kBottomPx));
+}
+
+cv::Size PlotCanvas::FitEqualAspect(double dx, double dy, int max_width_px, int max_height_px,
+                                    int right_px) {
+  const int aw = max_width_px - kLeftPx - right_px;
+  const int ah = max_height_px - kTopPx - kBottomPx;
+  if (!(dx > 0.0) || !(dy > 0.0) || aw <= 0 || ah <= 0) return {max_width_px, max_height_px};
+  const double s = std::min(aw / dx, ah / dy);
+  const int w = std::max(480, static_cast<int>(std::ceil(dx * s)) + kLeftPx + right_px);
+  const int h = std::max(360, static_cast<int>(std::ceil(dy * s)) + kTopPx + kBottomPx);
+  return {std::min(w, max_width_px), std::min(h, max_height_px)};
+}
+
+void PlotCanvas::SetRange(double x_lo, double x_hi, double y_lo, double y_hi, bool equal_aspect) {
+  if (!(x_hi > x_lo)) {
+    x_lo -= 0.5;
+    x_hi += 0.5;
+  }
+  if (!(y_hi > y_lo)) {
+    y_lo -= 0.5;
+    y_hi += 0.5;
+  }
+  if (equal_aspect) {
+    const double sx = area_.width / (x_hi - x_lo);
+    const double sy = area_.height / (y_hi - y_lo);
+    const double s = std::min(sx, sy);
+    const double cx = 0.5 * (x_lo + x_hi), cy = 0.5 * (y_lo + y_hi);
+    const double hx = 0.5 * area_.width / s, hy = 0.5 * area_.height / s;
+    x_lo = cx - hx;
+    x_hi = cx + hx;
+    y_lo = cy - hy;
+    y_hi = cy + hy;
+  }
+  x_lo_ = x_lo;
+  x_hi_ = x_hi;
+  y_lo_ = y_lo;
+  y_hi_ = y_hi;
+}
+
+cv::Point2d PlotCanvas::ToPixel(double x, double y) const {
+  return {area_.x + (x - x_lo_) / (x_hi_ - x_lo_) * area_.width,
+          area_.y + (y_hi_ - y) / (y_hi_ - y_lo_) * area_.height};
+}
+
+cv::Point PlotCanvas::ToPixelFixed(double x, double y) const {
+  const cv::Point2d p = ToPixel(x, y);
+  return {static_cast<int>(std::lround(p.x * kShiftScale)),
+          static_cast<int>(std::lround(p.y * kShiftScale))};
+}
+
+void PlotCanvas::DrawGrid() {
+  cv::Mat roi = image_(area_);
+  for (double x : NiceTicks(x_lo_, x_hi_, 8)) {
+    const double px = ToPixel(x, 0).x - area_.x;
+    cv::line(roi, cv::Point(static_cast<int>(std::lround(px)), 0),
+             cv::Point(static_cast<int>(std::lround(px)), area_.height), kGridGray, 1, cv::LINE_8);
+  }
+  for (double y : NiceTicks(y_lo_, y_hi_, 7)) {
+    const double py = ToPixel(0, y).y - area_.y;
+    cv::line(roi, cv::Point(0, static_cast<int>(std::lround(py))),
+             cv::Point(area_.width, static_cast<int>(std::lround(py))), kGridGray, 1, cv::LINE_8);
+  }
+}
+
+void PlotCanvas::Text(const std::string& s, cv::Point org, double scale, const cv::Scalar& color,
+                      int thickness) {
+  cv::putText(image_, s, org, kFont, scale, color, thickness, cv::LINE_AA);
+}
+
+void PlotCanvas::DrawAxes(const std::string& x_label, const std::string& y_label,
+                          const std::string& title) {
+  // White margins hide any data drawn outside the box.
+  cv::rectangle(image_, area_, kDarkGray, 1, cv::LINE_8);
+  const double tick_scale = 0.52;
+  double step = 1.0;
+  for (double x : NiceTicks(x_lo_, x_hi_, 8, &step)) {
+    const int px = static_cast<int>(std::lround(ToPixel(x, 0).x));
+    cv::line(image_, {px, area_.br().y}, {px, area_.br().y + 6}, kDarkGray, 1);
+    const std::string s = FormatTick(x, step);
+    int base = 0;
+    const cv::Size sz = cv::getTextSize(s, kFont, tick_scale, 1, &base);
+    Text(s, {px - sz.width / 2, area_.br().y + 10 + sz.height}, tick_scale, kDarkGray);
+  }
+  int max_label_w = 0;
+  for (double y : NiceTicks(y_lo_, y_hi_, 7, &step)) {
+    const int py = static_cast<int>(std::lround(ToPixel(0, y).y));
+    cv::line(image_, {area_.x - 6, py}, {area_.x, py}, kDarkGray, 1);
+    const std::string s = FormatTick(y, step);
+    int base = 0;
+    const cv::Size sz = cv::getTextSize(s, kFont, tick_scale, 1, &base);
+    max_label_w = std::max(max_label_w, sz.width);
+    Text(s, {area_.x - 10 - sz.width, py + sz.height / 2}, tick_scale, kDarkGray);
+  }
+  // Axis labels: x centred below, y rotated to the left of the tick labels.
+  const double label_scale = 0.62;
+  int base = 0;
+  cv::Size sz = cv::getTextSize(x_label, kFont, label_scale, 1, &base);
+  Text(x_label, {area_.x + area_.width / 2 - sz.width / 2, image_.rows - 18}, label_scale, kBlack);
+  sz = cv::getTextSize(y_label, kFont, label_scale, 1, &base);
+  cv::Mat label(sz.height + base + 4, sz.width + 4, CV_8UC3, cv::Scalar(255, 255, 255));
+  cv::putText(label, y_label, {2, sz.height + 1}, kFont, label_scale, kBlack, 1, cv::LINE_AA);
+  cv::Mat rotated;
+  cv::rotate(label, rotated, cv::ROTATE_90_COUNTERCLOCKWISE);
+  const int lx = std::max(2, area_.x - 16 - max_label_w - rotated.cols);
+  const int ly = area_.y + area_.height / 2 - rotated.rows / 2;
+  if (ly >= 0 && ly + rotated.rows <= image_.rows) {
+    rotated.copyTo(image_(cv::Rect(lx, ly, rotated.cols, rotated.rows)));
+  }
+  // Title.
+  const double title_scale = 0.8;
+  sz = cv::getTextSize(title, kFont, title_scale, 2, &base);
+  Text(title, {area_.x + area_.width / 2 - sz.width / 2, area_.y - 22}, title_scale, kBlack, 2);
+}
+
+void PlotCanvas::Polyline(const std::vector<cv::Point2d>& data_pts, const cv::Scalar& color,
+                          int thickness) {
+  cv::Mat roi = image_(area_);
+  std::vector<cv::Point> run;
+  run.reserve(data_pts.size());
+  const cv::Point offset(static_cast<int>(area_.x * kShiftScale),
+                         static_cast<int>(area_.y * kShiftScale));
+  auto flush = [&]() {
+    if (run.size() >= 2) {
+      cv::polylines(roi, run, false, color, thickness, cv::LINE_AA, kShift);
+    } else if (run.size() == 1) {
+      cv::circle(roi, run[0], static_cast<int>(thickness * kShiftScale / 2), color, cv::FILLED,
+                 cv::LINE_AA, kShift);
+    }
+    run.clear();
+  };
+  for (const cv::Point2d& p : data_pts) {
+    if (!std::isfinite(p.x) || !std::isfinite(p.y)) {
+      flush();
+      continue;
+    }
+    run.push_back(ToPixelFixed(p.x, p.y) - offset);
+  }
+  flush();
+}
+
+void PlotCanvas::ShadeXSpan(double x0, double x1, const cv::Scalar& color, double alpha) {
+  const int px0 =
+      std::clamp(static_cast<int>(std::lround(ToPixel(x0, 0).x)), area_.x, area_.br().x);
+  const int px1 =
+      std::clamp(static_cast<int>(std::lround(ToPixel(x1, 0).x)), area_.x, area_.br().x);
+  if (px1 <= px0) return;
+  cv::Mat roi = image_(cv::Rect(px0, area_.y, px1 - px0, area_.height));
+  cv::Mat fill(roi.size(), roi.type(), color);
+  cv::addWeighted(fill, alpha, roi, 1.0 - alpha, 0.0, roi);
+}
+
+cv::Size PlotCanvas::LegendSize(const std::vector<LegendEntry>& entries) {
+  int base = 0, text_w = 0, text_h = 0;
+  for (const LegendEntry& e : entries) {
+    const cv::Size sz = cv::getTextSize(e.label, kFont, 0.55, 1, &base);
+    text_w = std::max(text_w, sz.width);
+    text_h = std::max(text_h, sz.height);
+  }
+  const int row_h = text_h + 14;
+  return {10 + 36 + 10 + text_w + 10, 10 + static_cast<int>(entries.size()) * row_h + 5};
+}
+
+void PlotCanvas::LegendOutsideRight(const std::vector<LegendEntry>& entries) {
+  LegendAt(entries, 4);
+}
+
+void PlotCanvas::Legend(const std::vector<LegendEntry>& entries, bool upper_left) {
+  LegendAt(entries, upper_left ? 1 : 0);
+}
+
+void PlotCanvas::LegendAvoiding(const std::vector<LegendEntry>& entries,
+                                const std::vector<cv::Point2d>& data_pts) {
+  if (entries.empty()) return;
+  const cv::Size sz = LegendSize(entries);
+  int best = 0;
+  size_t best_count = std::numeric_limits<size_t>::max();
+  for (int corner = 0; corner < 4; ++corner) {
+    const int x = (corner == 1 || corner == 3) ? area_.x + 12 : area_.br().x - 12 - sz.width;
+    const int y = corner < 2 ? area_.y + 12 : area_.br().y - 12 - sz.height;
+    const cv::Rect2d box(x - 8, y - 8, sz.width + 16, sz.height + 16);
+    size_t count = 0;
+    for (const cv::Point2d& p : data_pts) {
+      if (std::isfinite(p.x) && box.contains(ToPixel(p.x, p.y))) ++count;
+    }
+    if (count < best_count) {
+      best_count = count;
+      best = corner;
+    }
+  }
+  LegendAt(entries, best);
+}
+
+void PlotCanvas::LegendAt(const std::vector<LegendEntry>& entries, int corner) {
+  if (entries.empty()) return;
+  const double scale = 0.55;
+  int base = 0, text_h = 0;
+  for (const LegendEntry& e : entries) {
+    text_h = std::max(text_h, cv::getTextSize(e.label, kFont, scale, 1, &base).height);
+  }
+  const cv::Size sz = LegendSize(entries);
+  const int row_h = text_h + 14, swatch_w = 36, pad = 10;
+  const int w = sz.width, h = sz.height;
+  int x = (corner == 1 || corner == 3) ? area_.x + 12 : area_.br().x - 12 - w;
+  int y = (corner < 2 || corner == 4) ? area_.y + 12 : area_.br().y - 12 - h;
+  if (corner == 4) {
+    x = area_.br().x + 14;
+    y = area_.y;
+  }
+  cv::Mat roi = image_(cv::Rect(x, y, w, h) & cv::Rect(0, 0, image_.cols, image_.rows));
+  cv::Mat white(roi.size(), roi.type(), cv::Scalar(255, 255, 255));
+  cv::addWeighted(white, 0.88, roi, 0.12, 0.0, roi);
+  cv::rectangle(image_, cv::Rect(x, y, w, h), cv::Scalar(170, 170, 170), 1, cv::LINE_8);
+  for (size_t i = 0; i < entries.size(); ++i) {
+    const LegendEntry& e = entries[i];
+    const int cy = y + pad + static_cast<int>(i) * row_h + row_h / 2;
+    const int sx = x + pad;
+    switch (e.kind) {
+      case LegendEntry::Kind::kLine:
+        cv::line(image_, {sx, cy}, {sx + swatch_w, cy}, e.color, e.thickness, cv::LINE_AA);
+        break;
+      case LegendEntry::Kind::kBox:
+        cv::rectangle(image_, cv::Rect(sx, cy - text_h / 2 - 2, swatch_w, text_h + 4), e.color,
+                      cv::FILLED);
+        break;
+      case LegendEntry::Kind::kDot:
+        cv::circle(image_, {sx + swatch_w / 2, cy}, 5, e.color, cv::FILLED, cv::LINE_AA);
+        break;
+    }
+    Text(e.label, {sx + swatch_w + 10, cy + text_h / 2}, scale, kBlack);
+  }
+}
+
+bool PlotCanvas::Save(const std::string& path) const {
+  try {
+    return cv::imwrite(path, image_);
+  } catch (const cv::Exception&) {
+    return false;
+  }
+}
+
+}  // namespace slam_mms::eval::internal

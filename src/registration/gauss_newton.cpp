@@ -47,9 +47,16 @@ StepResult SolveAndAnalyse(const NormalEquations& eq, double degeneracy_threshol
     cov_lambda[i] = 1.0 / std::max(lambda[i], lambda_max * 1e-12);
   }
   const Matrix6d Hs_inv = E * cov_lambda.asDiagonal() * E.transpose();
+  // Per-axis information with the others free, 1 / (H'^-1)_kk, relative to lambda_max. Relative
+  // eigenvalues are floored at threshold^2 here, so that an exactly null direction that is
+  // numerically mixed (by 1e-3 or so) into another axis does not mark that axis too.
+  const double floor_rel = degeneracy_threshold * degeneracy_threshold;
   for (int k = 0; k < 6; ++k) {
-    const double info = 1.0 / Hs_inv(k, k);
-    d.axis_information[k] = std::clamp(info / lambda_max, 0.0, 1.0);
+    double inv = 0.0;
+    for (int i = 0; i < 6; ++i) {
+      inv += E(k, i) * E(k, i) / std::max(lambda[i] / lambda_max, floor_rel);
+    }
+    d.axis_information[k] = std::clamp(1.0 / inv, 0.0, 1.0);
     d.degenerate_axis[static_cast<size_t>(k)] = d.axis_information[k] < degeneracy_threshold;
   }
   // delta' = -H'^+ g', delta = S^-1 delta'.

@@ -233,7 +233,8 @@ StatusOr<RegistrationResult> PointIcp::Align(const PointCloudView& source,
         if (n.squaredNorm() < 0.5f) continue;
         const Eigen::Vector3d p_s = m.source[i].cast<double>();
         const double r =
-            PointToPlaneResidual(R, t, p_s, m.points[idx].cast<double>(), n.cast<double>(), &J);
+            PointToPlaneResidual<double>(R, t, p_s, Eigen::Vector3d(m.points[idx].cast<double>()),
+                                         Eigen::Vector3d(n.cast<double>()), &J);
         local.Add(J, r, HuberWeight(r, huber), p_s);
       }
     };

@@ -14,16 +14,20 @@
 namespace slam_mms::registration_internal {
 
 /// Residual [m] of source point p_s (source frame) against the plane (q_t, n_t) of the target
-/// frame; writes the 1x6 Jacobian (as a column) when J != nullptr.
-inline double PointToPlaneResidual(const Eigen::Matrix3d& R_target_source,
-                                   const Eigen::Vector3d& t_target_source,
-                                   const Eigen::Vector3d& p_source, const Eigen::Vector3d& q_target,
-                                   const Eigen::Vector3d& n_target, Vector6d* J) {
-  const Eigen::Vector3d p_target = R_target_source * p_source + t_target_source;
+/// frame; writes the 1x6 Jacobian (as a column) when J != nullptr. Scalar: float (ProjectiveIcp's
+/// hot loop) or double (PointIcp).
+template <typename Scalar>
+inline Scalar PointToPlaneResidual(const Eigen::Matrix<Scalar, 3, 3>& R_target_source,
+                                   const Eigen::Matrix<Scalar, 3, 1>& t_target_source,
+                                   const Eigen::Matrix<Scalar, 3, 1>& p_source,
+                                   const Eigen::Matrix<Scalar, 3, 1>& q_target,
+                                   const Eigen::Matrix<Scalar, 3, 1>& n_target,
+                                   Eigen::Matrix<Scalar, 6, 1>* J) {
+  const Eigen::Matrix<Scalar, 3, 1> p_target = R_target_source * p_source + t_target_source;
   if (J != nullptr) {
-    const Eigen::Vector3d n_source = R_target_source.transpose() * n_target;
-    J->head<3>() = p_source.cross(n_source);
-    J->tail<3>() = n_source;
+    const Eigen::Matrix<Scalar, 3, 1> n_source = R_target_source.transpose() * n_target;
+    J->template head<3>() = p_source.cross(n_source);
+    J->template tail<3>() = n_source;
   }
   return n_target.dot(p_target - q_target);
 }

@@ -33,6 +33,27 @@ Eigen::Isometry3d Offset(std::mt19937& rng, double trans_m, double rot_deg) {
   return se3::Exp(xi);
 }
 
+TEST(PointToPlaneTest, FloatJacobianOfTheProjectiveHotLoopMatchesDouble) {
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int trial = 0; trial < 20; ++trial) {
+    Vector6d xi;
+    for (int i = 0; i < 6; ++i) xi[i] = u(rng);
+    const Eigen::Isometry3d T = se3::Exp(xi);
+    const Eigen::Vector3d p(30 * u(rng), 30 * u(rng), 3 * u(rng));
+    const Eigen::Vector3d q = T * p + Eigen::Vector3d(u(rng), u(rng), u(rng));
+    const Eigen::Vector3d n = Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized();
+    Vector6d Jd;
+    Eigen::Matrix<float, 6, 1> Jf;
+    const double rd = PointToPlaneResidual<double>(T.linear(), T.translation(), p, q, n, &Jd);
+    const float rf =
+        PointToPlaneResidual<float>(T.linear().cast<float>(), T.translation().cast<float>(),
+                                    p.cast<float>(), q.cast<float>(), n.cast<float>(), &Jf);
+    EXPECT_NEAR(rf, rd, 1e-4);
+    EXPECT_LT((Jf.cast<double>() - Jd).norm(), 1e-4 * (1.0 + Jd.norm()));
+  }
+}
+
 TEST(PointToPlaneTest, JacobianMatchesNumericDifferentiation) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
@@ -44,14 +65,16 @@ TEST(PointToPlaneTest, JacobianMatchesNumericDifferentiation) {
     const Eigen::Vector3d q(10 * u(rng), 10 * u(rng), 3 * u(rng));
     const Eigen::Vector3d n = Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized();
     Vector6d J;
-    PointToPlaneResidual(T.linear(), T.translation(), p, q, n, &J);
+    PointToPlaneResidual<double>(T.linear(), T.translation(), p, q, n, &J);
     const double h = 1e-6;
     for (int k = 0; k < 6; ++k) {
       Vector6d d = Vector6d::Zero();
       d[k] = h;
       const Eigen::Isometry3d Tp = T * se3::Exp(d), Tm = T * se3::Exp(-d);
-      const double rp = PointToPlaneResidual(Tp.linear(), Tp.translation(), p, q, n, nullptr);
-      const double rm = PointToPlaneResidual(Tm.linear(), Tm.translation(), p, q, n, nullptr);
+      const double rp =
+          PointToPlaneResidual<double>(Tp.linear(), Tp.translation(), p, q, n, nullptr);
+      const double rm =
+          PointToPlaneResidual<double>(Tm.linear(), Tm.translation(), p, q, n, nullptr);
       EXPECT_NEAR(J[k], (rp - rm) / (2 * h), 1e-6) << "trial " << trial << " k " << k;
     }
   }

@@ -1,0 +1,224 @@
+#include "slam_mms/registration/projective_icp.hpp"
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "registration/gauss_newton.hpp"
+#include "registration/point_to_plane.hpp"
+#include "registration/worker_pool.hpp"
+
+namespace slam_mms {
+namespace {
+
+using registration_internal::GaussNewtonSettings;
+using registration_internal::NormalEquations;
+using registration_internal::PointToPlaneResidual;
+using registration_internal::WorkerPool;
+
+constexpr float kPiF = 3.14159265358979f;
+
+// atan2 with max error ~1e-5 rad (0.3% of a 2048-column pixel), ~4x faster than std::atan2.
+inline float FastAtan2(float y, float x) {
+  const float ax = std::abs(x), ay = std::abs(y);
+  const float mx = ax > ay ? ax : ay;
+  const float mn = ax > ay ? ay : ax;
+  const float a = mn / (mx + 1e-30f);
+  const float s = a * a;
+  float r = ((-0.0464964749f * s + 0.15931422f) * s - 0.327622764f) * s * a + a;
+  if (ay > ax) r = 0.5f * kPiF - r;
+  if (x < 0.0f) r = kPiF - r;
+  return y < 0.0f ? -r : r;
+}
+
+// Upper triangle of H (21), g (6) and statistics, in double; J and r in float.
+struct Accumulator {
+  double H[21];
+  double g[6];
+  double weighted_r2, r2;
+  double m2[3];
+  size_t inliers, candidates;
+
+  void Zero() { *this = Accumulator{}; }
+  inline void Add(const Eigen::Matrix<float, 6, 1>& J, float r, float w, const Eigen::Vector3f& p) {
+    double wj[6];
+    for (int i = 0; i < 6; ++i) wj[i] = static_cast<double>(w * J[i]);
+    int k = 0;
+    for (int i = 0; i < 6; ++i) {
+      for (int j = i; j < 6; ++j) H[k++] += wj[i] * static_cast<double>(J[j]);
+    }
+    for (int i = 0; i < 6; ++i) g[i] += wj[i] * static_cast<double>(r);
+    const double wr = static_cast<double>(w * r);
+    weighted_r2 += wr * static_cast<double>(r);
+    r2 += static_cast<double>(r * r);
+    m2[0] += static_cast<double>(p.x() * p.x());
+    m2[1] += static_cast<double>(p.y() * p.y());
+    m2[2] += static_cast<double>(p.z() * p.z());
+    ++inliers;
+  }
+  void AddTo(NormalEquations* eq) const {
+    int k = 0;
+    for (int i = 0; i < 6; ++i) {
+      for (int j = i; j < 6; ++j) eq->H(i, j) += H[k++];
+    }
+    for (int i = 0; i < 6; ++i) eq->g[i] += g[i];
+    eq->weighted_r2 += weighted_r2;
+    eq->r2 += r2;
+    eq->moment2 += Eigen::Vector3d(m2[0], m2[1], m2[2]);
+    eq->inliers += inliers;
+    eq->candidates += candidates;
+  }
+};
+
+Status FieldError(const std::string& field, double value, const std::string& rule) {
+  return InvalidArgumentError("ProjectiveIcp::Options::" + field + " = " + std::to_string(value) +
+                              "; " + rule);
+}
+
+Status CheckMap(const VertexNormalMap& m, const char* what) {
+  const size_t n = static_cast<size_t>(m.rows) * static_cast<size_t>(m.cols);
+  if (m.rows <= 0 || m.cols <= 0 || m.vertex.size() != n || m.normal.size() != n ||
+      m.range.size() != n) {
+    return InvalidArgumentError(std::string("ProjectiveIcp::Align: ") + what + " map is " +
+                                std::to_string(m.rows) + " x " + std::to_string(m.cols) +
+                                " with inconsistent or empty vertex/normal/range arrays");
+  }
+  return OkStatus();
+}
+
+}  // namespace
+
+Status ProjectiveIcp::Options::Validate() const {
+  if (!(max_distance > 0.0)) return FieldError("max_distance", max_distance, "must be > 0");
+  if (!(max_angle_deg > 0.0 && max_angle_deg <= 180.0))
+    return FieldError("max_angle_deg", max_angle_deg, "must be in (0, 180]");
+  if (!std::isfinite(huber_delta)) return FieldError("huber_delta", huber_delta, "must be finite");
+  if (max_iterations <= 0) return FieldError("max_iterations", max_iterations, "must be > 0");
+  if (min_correspondences < 6)
+    return FieldError("min_correspondences", min_correspondences, "must be >= 6");
+  if (!(rotation_eps > 0.0)) return FieldError("rotation_eps", rotation_eps, "must be > 0");
+  if (!(translation_eps > 0.0))
+    return FieldError("translation_eps", translation_eps, "must be > 0");
+  if (!(degeneracy_threshold > 0.0 && degeneracy_threshold < 1.0))
+    return FieldError("degeneracy_threshold", degeneracy_threshold, "must be in (0, 1)");
+  if (pixel_stride < 1) return FieldError("pixel_stride", pixel_stride, "must be >= 1");
+  if (num_threads < 1 || num_threads > 256)
+    return FieldError("num_threads", num_threads, "must be in [1, 256]");
+  return OkStatus();
+}
+
+struct ProjectiveIcp::Impl {
+  Impl(const RangeProjection& p, const Options& o)
+      : options(o), projection(p.options()), pool(o.num_threads) {
+    per_thread.resize(static_cast<size_t>(pool.size()));
+  }
+  Options options;
+  RangeProjectionOptions projection;
+  WorkerPool pool;
+  std::vector<Accumulator> per_thread;
+  std::vector<int32_t> valid;  // scan pixels with vertex and normal (scratch)
+};
+
+ProjectiveIcp::ProjectiveIcp() : impl_(std::make_unique<Impl>(RangeProjection(), Options())) {}
+ProjectiveIcp::ProjectiveIcp(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+ProjectiveIcp::~ProjectiveIcp() = default;
+ProjectiveIcp::ProjectiveIcp(ProjectiveIcp&&) noexcept = default;
+ProjectiveIcp& ProjectiveIcp::operator=(ProjectiveIcp&&) noexcept = default;
+
+StatusOr<ProjectiveIcp> ProjectiveIcp::Create(const RangeProjection& projection,
+                                              const Options& options) {
+  SLAM_MMS_RETURN_IF_ERROR(options.Validate());
+  SLAM_MMS_RETURN_IF_ERROR(projection.options().Validate());
+  return ProjectiveIcp(std::make_unique<Impl>(projection, options));
+}
+
+const ProjectiveIcp::Options& ProjectiveIcp::options() const { return impl_->options; }
+
+StatusOr<RegistrationResult> ProjectiveIcp::Align(const VertexNormalMap& scan,
+                                                  const VertexNormalMap& model,
+                                                  const Eigen::Isometry3d& T_model_scan_init) {
+  Impl& m = *impl_;
+  SLAM_MMS_RETURN_IF_ERROR(CheckMap(scan, "scan"));
+  SLAM_MMS_RETURN_IF_ERROR(CheckMap(model, "model"));
+  if (model.rows != m.projection.rows || model.cols != m.projection.cols) {
+    return InvalidArgumentError("ProjectiveIcp::Align: model map is " + std::to_string(model.rows) +
+                                " x " + std::to_string(model.cols) + " but the projection is " +
+                                std::to_string(m.projection.rows) + " x " +
+                                std::to_string(m.projection.cols));
+  }
+  if (!T_model_scan_init.matrix().allFinite())
+    return InvalidArgumentError("ProjectiveIcp::Align: T_model_scan_init is not finite");
+
+  m.valid.clear();
+  const int stride = m.options.pixel_stride;
+  int count = 0;
+  for (int i = 0; i < scan.size(); ++i) {
+    if (!scan.HasVertex(i) || !scan.HasNormal(i)) continue;
+    if (count++ % stride == 0) m.valid.push_back(i);
+  }
+
+  const float rows = static_cast<float>(model.rows);
+  const float cols = static_cast<float>(model.cols);
+  const int cols_i = model.cols;
+  const int rows_i = model.rows;
+  const float fov_up = static_cast<float>(m.projection.fov_up_deg * M_PI / 180.0);
+  const float inv_fov = static_cast<float>(
+      1.0 / ((m.projection.fov_up_deg - m.projection.fov_down_deg) * M_PI / 180.0));
+  const float u_scale = 0.5f * cols / kPiF;  // u = cols/2 - yaw * cols / (2 pi)
+  const float max_d2 = static_cast<float>(m.options.max_distance * m.options.max_distance);
+  const float min_cos = static_cast<float>(std::cos(m.options.max_angle_deg * M_PI / 180.0));
+  const float huber = static_cast<float>(m.options.huber_delta);
+
+  GaussNewtonSettings s;
+  s.max_iterations = m.options.max_iterations;
+  s.min_correspondences = static_cast<size_t>(m.options.min_correspondences);
+  s.rotation_eps_rad = m.options.rotation_eps;
+  s.translation_eps_m = m.options.translation_eps;
+  s.degeneracy_threshold = m.options.degeneracy_threshold;
+  s.freeze_degenerate_directions = m.options.freeze_degenerate_directions;
+
+  auto build = [&](const Eigen::Isometry3d& T, NormalEquations* eq) {
+    const Eigen::Matrix3f R = T.linear().cast<float>();
+    const Eigen::Vector3f t = T.translation().cast<float>();
+    auto job = [&](int th) {
+      Accumulator& acc = m.per_thread[static_cast<size_t>(th)];
+      acc.Zero();
+      size_t begin, end;
+      m.pool.Range(th, m.valid.size(), &begin, &end);
+      acc.candidates = end - begin;
+      for (size_t k = begin; k < end; ++k) {
+        const size_t i = static_cast<size_t>(m.valid[k]);
+        const Eigen::Vector3f& v_s = scan.vertex[i];
+        const Eigen::Vector3f q = R * v_s + t;
+        // Spherical projection (RangeProjection's mapping) of q into the model image.
+        const float xy = std::sqrt(q.x() * q.x() + q.y() * q.y());
+        float u = 0.5f * cols - FastAtan2(q.y(), q.x()) * u_scale;
+        const float v = (fov_up - FastAtan2(q.z(), xy)) * inv_fov * rows;
+        if (!(v >= 0.0f && v < rows)) continue;
+        if (u >= cols) u -= cols;
+        if (u < 0.0f) u += cols;
+        int col = static_cast<int>(u);
+        if (col >= cols_i) col = cols_i - 1;
+        int row = static_cast<int>(v);
+        if (row >= rows_i) row = rows_i - 1;
+        const size_t j = static_cast<size_t>(row * cols_i + col);
+        if (!(model.range[j] > 0.0f)) continue;
+        const Eigen::Vector3f& n_m = model.normal[j];
+        const Eigen::Vector3f& v_m = model.vertex[j];
+        const Eigen::Vector3f diff = q - v_m;
+        if (diff.squaredNorm() > max_d2) continue;
+        if (n_m.dot(R * scan.normal[i]) < min_cos) continue;
+        Eigen::Matrix<float, 6, 1> J;
+        const float r = PointToPlaneResidual<float>(R, t, v_s, v_m, n_m, &J);  // eq 15
+        const float a = std::abs(r);
+        const float w = (huber <= 0.0f || a <= huber) ? 1.0f : huber / a;
+        acc.Add(J, r, w, v_s);
+      }
+    };
+    m.pool.Run(job);
+    for (const auto& acc : m.per_thread) acc.AddTo(eq);
+  };
+  return registration_internal::RunGaussNewton(s, T_model_scan_init, build);
+}
+
+}  // namespace slam_mms

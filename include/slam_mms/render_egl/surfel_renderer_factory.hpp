@@ -1,0 +1,26 @@
+#pragma once
+// MakeSurfelRenderer: the automatic choice between EglSurfelRenderer and CpuSurfelRenderer.
+//   kAuto: EGL when it starts on a hardware GPU (GL_RENDERER not llvmpipe/softpipe/swrast);
+//   otherwise
+//          the CPU renderer, which is faster than Mesa's software rasteriser (measured in
+//          benchmarks/bm_render.cpp: BM_RenderCpu vs BM_RenderEgl).
+//   kCpu / kEgl: that one (kEgl returns EGL's Unavailable status when it cannot start).
+//
+// Thread safety: the function is thread-safe; the renderer it returns is not (see each class).
+
+#include <memory>
+
+#include "slam_mms/core/status.hpp"
+#include "slam_mms/surfel/surfel_renderer.hpp"
+
+namespace slam_mms {
+
+enum class SurfelRendererBackend { kAuto = 0, kCpu = 1, kEgl = 2 };
+
+const char* SurfelRendererBackendName(SurfelRendererBackend backend);
+
+StatusOr<std::unique_ptr<SurfelRenderer>> MakeSurfelRenderer(
+    const SurfelRendererOptions& options,
+    SurfelRendererBackend backend = SurfelRendererBackend::kAuto);
+
+}  // namespace slam_mms

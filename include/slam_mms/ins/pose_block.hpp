@@ -73,4 +73,19 @@ inline Eigen::Isometry3d PoseFromBlock(const double* x) {
 
 inline Eigen::Isometry3d PoseFromBlock(const PoseBlock& b) { return PoseFromBlock(b.data()); }
 
+/// d(delta_theta)/d(q_ambient), 3x4, at the unit quaternion q, for the RIGHT rotation perturbation
+/// R = R_hat * Exp(delta_theta) (the library's convention): delta_theta ~= 2 vec(q_hat^-1 * q').
+/// A cost function that has its Jacobian J_theta (rows x 3) with respect to delta_theta returns
+/// J_theta * QuaternionRightTangentToAmbient(q) as the Jacobian with respect to the 4 quaternion
+/// numbers [qx, qy, qz, qw]; Ceres then multiplies by the manifold's PlusJacobian.
+inline Eigen::Matrix<double, 3, 4> QuaternionRightTangentToAmbient(const Eigen::Quaterniond& q) {
+  Eigen::Matrix<double, 3, 4> J;
+  const Eigen::Vector3d v = q.vec();
+  Eigen::Matrix3d v_hat;
+  v_hat << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
+  J.leftCols<3>() = 2.0 * (q.w() * Eigen::Matrix3d::Identity() - v_hat);
+  J.col(3) = -2.0 * v;
+  return J;
+}
+
 }  // namespace slam_mms

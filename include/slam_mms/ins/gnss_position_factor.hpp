@@ -1,0 +1,44 @@
+#pragma once
+// GNSS position factor F_GNSS (paper eq 24) on one pose block, with the antenna lever arm:
+//
+//   r_GNSS = sqrt_info * ( p_world_body + R_world_body * t_body_antenna - p~_world_antenna )
+//
+// The paper writes r = p_Nref - p~_GNSS (lever arm zero). The robust loss is the caller's choice
+// (pass it to Problem::AddResidualBlock, e.g. ceres::HuberLoss / CauchyLoss scaled in sigmas, since
+// the residual is whitened). Parameter block: pose[7] (pose_block.hpp); analytic Jacobian w.r.t.
+// the ambient block.
+//
+// Thread safety: immutable after construction; Evaluate may run concurrently.
+
+#include <ceres/sized_cost_function.h>
+
+#include <Eigen/Core>
+#include <memory>
+
+#include "slam_mms/core/status.hpp"
+
+namespace slam_mms {
+
+class GnssPositionFactor final : public ceres::SizedCostFunction<3, 7> {
+ public:
+  /// Validates (finite values, symmetric positive definite covariance) before anything reaches
+  /// Ceres. cov_world_antenna: 3x3 covariance of the measured antenna position in world [m^2].
+  static StatusOr<std::unique_ptr<GnssPositionFactor>> Create(
+      const Eigen::Vector3d& p_world_antenna, const Eigen::Matrix3d& cov_world_antenna,
+      const Eigen::Vector3d& t_body_antenna);
+
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override;
+
+  const Eigen::Matrix3d& sqrt_information() const { return sqrt_info_; }
+
+ private:
+  GnssPositionFactor(const Eigen::Vector3d& p_world_antenna, const Eigen::Matrix3d& sqrt_info,
+                     const Eigen::Vector3d& t_body_antenna);
+
+  Eigen::Vector3d p_world_antenna_;
+  Eigen::Matrix3d sqrt_info_;
+  Eigen::Vector3d t_body_antenna_;
+};
+
+}  // namespace slam_mms

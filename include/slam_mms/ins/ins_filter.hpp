@@ -1,0 +1,131 @@
+#pragma once
+// InsFilter: the POS of a traditional mobile mapping system (paper §4, the `gnss_ins` baseline) and
+// the motion prior of the SLAM-integrated one: a 15-state error-state EKF fusing IMU samples with
+// GNSS position fixes (through GnssPrior's use / down-weight / reject decisions), or, instead, an
+// external POS solution (a commercial INS's poses) that is only stored and interpolated.
+//
+// Model (documented simplifications):
+// - Nominal state: p_world, v_world, R_world_body, accel bias ba, gyro bias bg; `world` is the
+// local
+//   ENU frame of GnssPrior. Gravity is constant in world, g = (0, 0, -gravity): Somigliana's normal
+//   gravity at the origin's latitude and height by default (or a given constant). Earth rotation
+//   (15 deg/h) and transport rate are neglected: fine for a tactical IMU over minutes, and a
+//   tactical gyro could not gyrocompass anyway (so static alignment needs a given yaw).
+// - Error state [dp (world, additive), dv (world), dtheta (right: R = R_hat Exp(dtheta)), dba,
+// dbg],
+//   biases as random walks. Propagation between consecutive samples uses the mean of the two
+//   samples (second order); a GNSS fix between samples propagates to the fix with the last sample
+//   held. A fix older than the state (latency <= max_fix_latency_s) is compared with the antenna
+//   position extrapolated back by the velocity.
+// - During GNSS outages (no usable fix) the filter propagates the IMU alone and its covariance
+// grows.
+//
+// Ownership: owns its GnssPrior and a bounded state history (history_s); move-only.
+// Thread safety: not thread-safe for mutation; const queries may run concurrently.
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <deque>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "slam_mms/core/sensor_data.hpp"
+#include "slam_mms/core/status.hpp"
+#include "slam_mms/core/timestamp.hpp"
+#include "slam_mms/ins/gnss_prior.hpp"
+#include "slam_mms/io/oxts_record.hpp"
+
+namespace slam_mms {
+
+using Matrix15d = Eigen::Matrix<double, 15, 15>;
+
+class InsFilter {
+ public:
+  struct Options {
+    // IMU noise, continuous-time densities (RT3003-like tactical grade by default).
+    double gyro_noise_density = 1.7e-4;      ///< [rad/s/sqrt(Hz)] (~0.6 deg/sqrt(h)).
+    double accel_noise_density = 2.0e-3;     ///< [m/s^2/sqrt(Hz)].
+    double gyro_bias_random_walk = 2.0e-5;   ///< [rad/s^2/sqrt(Hz)].
+    double accel_bias_random_walk = 3.0e-4;  ///< [m/s^3/sqrt(Hz)].
+    /// Gravity magnitude [m/s^2]; <= 0 selects Somigliana normal gravity at the world origin.
+    double gravity_mps2 = 0.0;
+    // Initial 1-sigma uncertainties.
+    double init_sigma_position_m = 1.0;  ///< Used by Initialize() (GNSS init: the fix's).
+    double init_sigma_velocity_mps = 0.1;
+    double init_sigma_roll_pitch_rad = 0.0087;  ///< 0.5 deg.
+    double init_sigma_yaw_rad = 0.035;          ///< 2 deg.
+    double init_sigma_accel_bias_mps2 = 0.05;
+    double init_sigma_gyro_bias_radps = 1.0e-3;
+    double max_imu_gap_s = 0.6;         ///< Longer IMU gaps are bridged but logged [s].
+    double max_fix_latency_s = 0.25;    ///< Older fixes (than the state) are rejected [s].
+    double max_extrapolation_s = 0.25;  ///< StateAt beyond the last state by at most this [s].
+    double history_s = 600.0;           ///< States kept for StateAt [s].
+    GnssPrior::Options gnss;            ///< Lever arm, floors, gates, outage timeout.
+
+    [[nodiscard]] Status Validate() const;
+  };
+
+  /// Default options.
+  InsFilter();
+  static StatusOr<InsFilter> Create(const Options& options);
+  ~InsFilter();
+  InsFilter(InsFilter&&) noexcept;
+  InsFilter& operator=(InsFilter&&) noexcept;
+  InsFilter(const InsFilter&) = delete;
+  InsFilter& operator=(const InsFilter&) = delete;
+
+  // ---- initialisation ------------------------------------------------------------------------
+  /// Full state known (position in world). Covariance from the options' initial sigmas.
+  [[nodiscard]] Status Initialize(const InsState& state);
+  /// Attitude and velocity known; the position comes from the next usable GNSS fix (through the
+  /// lever arm), which also sets the filter's time.
+  [[nodiscard]] Status InitializeAttitude(const Eigen::Quaterniond& q_world_body,
+                                          const Eigen::Vector3d& v_world_mps);
+  /// Attitude and velocity from an OXTS record (KITTI), position from its fix (or the next usable).
+  [[nodiscard]] Status InitializeFromOxts(const OxtsRecord& record, Timestamp stamp);
+  /// Static alignment: roll and pitch from the mean specific force, gyro bias from the mean rate,
+  /// yaw given (ENU, 0 = east, counter-clockwise); velocity zero; position from the next usable
+  /// fix.
+  [[nodiscard]] Status InitializeStaticAlignment(const std::vector<ImuSample>& static_samples,
+                                                 double yaw_rad);
+  bool initialized() const;
+
+  // ---- data ----------------------------------------------------------------------------------
+  /// One IMU sample (time-ordered). Before initialisation only remembered.
+  [[nodiscard]] Status AddImu(const ImuSample& sample);
+  /// One GNSS fix: decision by GnssPrior against the current estimate, then the EKF update if
+  /// usable. Also completes a pending attitude initialisation.
+  StatusOr<GnssDecisionResult> AddGnss(const GnssFix& fix);
+  /// An external POS solution (instead of IMU + GNSS): states are stored and interpolated. Cannot
+  /// be mixed with AddImu.
+  [[nodiscard]] Status AddExternalPose(const InsState& state);
+
+  // ---- queries -------------------------------------------------------------------------------
+  /// The latest state (FailedPrecondition before initialisation).
+  StatusOr<InsState> CurrentState() const;
+  /// The state at `t`, interpolated between stored states (pose by slerp, velocity and covariance
+  /// linearly), or extrapolated with the last IMU sample up to max_extrapolation_s past the last.
+  StatusOr<InsState> StateAt(Timestamp t) const;
+  /// 15x15 error-state covariance [dp, dv, dtheta, dba, dbg] of the latest state.
+  const Matrix15d& covariance() const;
+  /// Every stored state, oldest first (the GNSS/INS-only trajectory).
+  std::vector<InsState> States() const;
+  /// Gravity vector in world (valid once the origin is known or gravity_mps2 > 0).
+  Eigen::Vector3d gravity_world() const;
+
+  const GnssPrior& gnss_prior() const;
+  /// For outage windows, the reference time and the origin.
+  GnssPrior& mutable_gnss_prior();
+  const Options& options() const;
+
+  /// Somigliana normal gravity on the WGS-84 ellipsoid with the free-air height correction [m/s^2].
+  static double NormalGravity(double latitude_deg, double height_m);
+
+ private:
+  explicit InsFilter(const Options& options);
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace slam_mms

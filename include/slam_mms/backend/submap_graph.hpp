@@ -1,0 +1,158 @@
+#pragma once
+// SubmapGraph: the level-2 global factor graph (paper §5.2, Fig. 4 right, eqs 20-25) on Ceres.
+//
+// Nodes are submaps, each with its reference pose T_world_submap (the pose of its first scan,
+// X_Nref) and the poses T_submap_scan of its scans, which level 1 estimated and level 2 keeps
+// rigid: after every solve each scan pose is T_world_scan = T_world_submap * T_submap_scan.
+//
+// Factors (eq 25: argmin sum |r_GNSS|^2 + |r_Reckon|^2 + |r_Reg|^2 + |r_Loop|^2):
+//  - AddRegistrationFactor: map-to-map registration of submap b against a (F_Reg, §5.2.1).
+//  - AddReckonFactor: the serial scan-to-map chain T~ = T_Nref_Nlast * T_Nlast_(N+1)first (eq 21).
+//  - AddLoopFactor: loop closure, always with Options::loop_loss (robust: one bad loop cannot bend
+//    the map) (eqs 22-23).
+//  - AddGnssPrior: a GNSS antenna position on a scan of a submap (eq 24; the ins module's
+//    GnssPositionFactor with the lever arm folded into the submap frame). Plug and play: add it
+//    only for valid fixes; the graph works with none (then the first submap is held fixed as the
+//    gauge).
+//
+// Solving: batch Levenberg-Marquardt (<= Options::max_iterations), warm-started from the current
+// estimate. The orchestration decides when (§5.2.3) and says why with SolveTrigger. Solve time is
+// bounded as the graph grows: unless the trigger is kFinish, only the newest
+// Options::active_submaps nodes plus the nodes spanned by loops added since the last solve (from
+// the older loop end to the newest node) and, for kGnssReturned, the nodes since the last
+// GNSS-anchored node before the outage are free; all others are held constant; a wall-time cap
+// bounds the rest. See docs/backend.md.
+//
+// Ownership: move-only (pimpl). Thread safety: none; one thread at a time (Solve uses
+// Options::num_threads threads internally).
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "slam_mms/backend/robust_loss.hpp"
+#include "slam_mms/backend/solve_summary.hpp"
+#include "slam_mms/core/lie.hpp"
+#include "slam_mms/core/status.hpp"
+#include "slam_mms/core/timestamp.hpp"
+
+namespace slam_mms {
+
+using SubmapId = int64_t;
+
+/// Why the orchestration asks for a global solve (paper §5.2.3).
+enum class SolveTrigger {
+  kGnssReturned,  ///< GNSS is back after a long outage: free the outage segment.
+  kLoopClosed,    ///< A loop factor was added: free the loop.
+  kFinish,        ///< End of the drive: solve the whole graph.
+  kRequested,     ///< Any other reason: the recent window (plus pending loops).
+};
+
+const char* SolveTriggerName(SolveTrigger trigger);
+
+/// A scan pose, in the submap frame and (after a solve) in the world.
+struct SubmapScanPose {
+  SubmapId submap = 0;
+  int64_t scan_id = 0;
+  Timestamp stamp;
+  Eigen::Isometry3d T_submap_scan = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d T_world_scan = Eigen::Isometry3d::Identity();
+};
+
+/// A loop-closure candidate (the caller registers and verifies it, e.g. with ICP).
+struct LoopCandidate {
+  SubmapId submap = 0;
+  double distance_m = 0.0;  ///< From the query position to the nearest pose of the submap.
+};
+
+class SubmapGraph {
+ public:
+  struct Options {
+    int max_iterations = 100;          ///< Levenberg-Marquardt iterations (paper: <= 100), > 0.
+    double max_solve_time_s = 5.0;     ///< Wall-time cap of one solve [s], > 0.
+    int num_threads = 2;               ///< Ceres threads, > 0.
+    double function_tolerance = 1e-8;  ///< Ceres relative cost change to stop, > 0.
+    /// Newest nodes free in a bounded solve (kFinish frees all), > 0.
+    int active_submaps = 50;
+    /// Robust loss of loop factors (scale in sigma of the whitened residual).
+    RobustLoss loop_loss = RobustLoss::Cauchy(1.0);
+    /// Robust loss of GNSS priors (multipath).
+    RobustLoss gnss_loss = RobustLoss::Huber(3.0);
+    /// Loop candidates: nearer than this to the query [m] (the paper's D_thr), > 0.
+    double loop_candidate_distance_m = 20.0;
+    /// Loop candidates: at least this many submaps older than the query submap, >= 1.
+    int loop_min_submap_gap = 3;
+
+    [[nodiscard]] Status Validate() const;
+  };
+
+  static StatusOr<SubmapGraph> Create(const Options& options);
+  static StatusOr<SubmapGraph> Create();
+
+  SubmapGraph(SubmapGraph&&) noexcept;
+  SubmapGraph& operator=(SubmapGraph&&) noexcept;
+  SubmapGraph(const SubmapGraph&) = delete;
+  SubmapGraph& operator=(const SubmapGraph&) = delete;
+  ~SubmapGraph();
+
+  /// Adds submap `id` (greater than every id added before) with its reference pose.
+  Status AddSubmap(SubmapId id, const Eigen::Isometry3d& T_world_submap);
+
+  /// Records a scan of submap `id` with its pose in the submap frame (from level 1).
+  Status AddScan(SubmapId id, int64_t scan_id, Timestamp stamp,
+                 const Eigen::Isometry3d& T_submap_scan);
+
+  /// Replaces the scan poses of submap `id` (level 1 may refine them until the submap closes).
+  Status SetScans(SubmapId id, const std::vector<SubmapScanPose>& scans);
+
+  /// F_Reg: T~_a_b from map-to-map registration, covariance rotation first.
+  Status AddRegistrationFactor(SubmapId a, SubmapId b, const Eigen::Isometry3d& T_a_b,
+                               const Matrix6d& covariance,
+                               const RobustLoss& loss = RobustLoss::Huber(3.0));
+  /// F_Reckon (eq 21): T~_a_b from the serial scan-to-map chain.
+  Status AddReckonFactor(SubmapId a, SubmapId b, const Eigen::Isometry3d& T_a_b,
+                         const Matrix6d& covariance);
+  /// F_Loop (eqs 22-23), robustified by Options::loop_loss.
+  Status AddLoopFactor(SubmapId a, SubmapId b, const Eigen::Isometry3d& T_a_b,
+                       const Matrix6d& covariance);
+  /// F_GNSS (eq 24): antenna position p~_world_antenna (3x3 covariance) measured when the body was
+  /// at T_submap_body in submap `id`, antenna at t_body_antenna (lever arm) in the body frame.
+  Status AddGnssPrior(SubmapId id, const Eigen::Vector3d& p_world_antenna,
+                      const Eigen::Matrix3d& covariance,
+                      const Eigen::Isometry3d& T_submap_body = Eigen::Isometry3d::Identity(),
+                      const Eigen::Vector3d& t_body_antenna = Eigen::Vector3d::Zero());
+
+  /// Batch LM (eq 25), then every scan pose follows its submap.
+  StatusOr<SolveSummary> Solve(SolveTrigger trigger);
+
+  /// Submaps within Options::loop_candidate_distance_m of p_world (nearest pose of each submap:
+  /// reference and scans), at least Options::loop_min_submap_gap submaps older than `current`,
+  /// nearest first.
+  std::vector<LoopCandidate> LoopCandidates(const Eigen::Vector3d& p_world, SubmapId current) const;
+
+  bool HasSubmap(SubmapId id) const;
+  std::vector<SubmapId> SubmapIds() const;
+  StatusOr<Eigen::Isometry3d> SubmapPose(SubmapId id) const;
+  /// Marginal covariance of a submap pose (rotation first, right perturbation), over the whole
+  /// graph.
+  StatusOr<Matrix6d> SubmapCovariance(SubmapId id) const;
+  /// Every scan of every submap, in submap then scan order, with T_world_scan up to date.
+  std::vector<SubmapScanPose> ScanPoses() const;
+
+  int num_submaps() const;
+  int num_loop_factors() const;
+  int num_gnss_priors() const;
+  /// Nodes left free in the last solve.
+  int last_num_free_submaps() const;
+  const Options& options() const;
+
+ private:
+  struct Impl;
+  explicit SubmapGraph(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace slam_mms

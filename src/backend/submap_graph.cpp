@@ -1,0 +1,328 @@
+#include "slam_mms/backend/submap_graph.hpp"
+
+#include <ceres/problem.h>
+
+#include <algorithm>
+#include <array>
+#include <limits>
+#include <map>
+#include <string>
+
+#include "backend/backend_math.hpp"
+#include "backend/ceres_solve.hpp"
+#include "slam_mms/backend/relative_pose_factor.hpp"
+#include "slam_mms/core/logging.hpp"
+#include "slam_mms/ins/gnss_position_factor.hpp"
+#include "slam_mms/ins/pose_block.hpp"
+
+namespace slam_mms {
+
+using backend_internal::ValidateCovariance;
+using backend_internal::ValidatePose;
+
+namespace {
+
+struct Node {
+  SubmapId id = 0;
+  size_t index = 0;
+  int num_gnss = 0;
+  std::array<double, kPoseBlockSize> pose{};
+  std::vector<SubmapScanPose> scans;
+};
+
+std::string Id(SubmapId id) { return std::to_string(id); }
+
+Status Positive(const char* field, double v) {
+  if (v > 0.0) return OkStatus();
+  return InvalidArgumentError(std::string("SubmapGraph::Options::") + field + " = " +
+                              std::to_string(v) + "; must be > 0");
+}
+
+}  // namespace
+
+const char* SolveTriggerName(SolveTrigger trigger) {
+  switch (trigger) {
+    case SolveTrigger::kGnssReturned: return "gnss_returned";
+    case SolveTrigger::kLoopClosed: return "loop_closed";
+    case SolveTrigger::kFinish: return "finish";
+    case SolveTrigger::kRequested: return "requested";
+  }
+  return "unknown";
+}
+
+Status SubmapGraph::Options::Validate() const {
+  SLAM_MMS_RETURN_IF_ERROR(Positive("max_iterations", max_iterations));
+  SLAM_MMS_RETURN_IF_ERROR(Positive("max_solve_time_s", max_solve_time_s));
+  SLAM_MMS_RETURN_IF_ERROR(Positive("num_threads", num_threads));
+  SLAM_MMS_RETURN_IF_ERROR(Positive("function_tolerance", function_tolerance));
+  SLAM_MMS_RETURN_IF_ERROR(Positive("active_submaps", active_submaps));
+  SLAM_MMS_RETURN_IF_ERROR(Positive("loop_candidate_distance_m", loop_candidate_distance_m));
+  SLAM_MMS_RETURN_IF_ERROR(Positive("loop_min_submap_gap", loop_min_submap_gap));
+  SLAM_MMS_RETURN_IF_ERROR(loop_loss.Validate().WithContext("SubmapGraph::Options::loop_loss"));
+  SLAM_MMS_RETURN_IF_ERROR(gnss_loss.Validate().WithContext("SubmapGraph::Options::gnss_loss"));
+  return OkStatus();
+}
+
+struct SubmapGraph::Impl {
+  Options options;
+  std::unique_ptr<ceres::Problem> problem;
+  std::map<SubmapId, std::unique_ptr<Node>> nodes;
+  std::vector<Node*> ordered;  // By index (== id order).
+  int num_loops = 0;
+  int num_gnss = 0;
+  int last_free = 0;
+  std::optional<size_t> pending_loop_from;  // Oldest node index touched by loops since last solve.
+
+  explicit Impl(const Options& o) : options(o) {
+    ceres::Problem::Options po;
+    po.enable_fast_removal = false;  // The graph only grows.
+    problem = std::make_unique<ceres::Problem>(po);
+  }
+
+  Node* Find(SubmapId id) const {
+    auto it = nodes.find(id);
+    return it == nodes.end() ? nullptr : it->second.get();
+  }
+
+  StatusOr<std::pair<Node*, Node*>> Pair(SubmapId a, SubmapId b, const char* what) const {
+    Node* na = Find(a);
+    Node* nb = Find(b);
+    if (na == nullptr || nb == nullptr) {
+      return NotFoundError(std::string("SubmapGraph::") + what + ": unknown submap " +
+                           Id(na == nullptr ? a : b));
+    }
+    if (a == b) return InvalidArgumentError(std::string("SubmapGraph::") + what + ": a == b");
+    return std::make_pair(na, nb);
+  }
+
+  Status AddBetween(SubmapId a, SubmapId b, const Eigen::Isometry3d& T_a_b,
+                    const Matrix6d& covariance, const RobustLoss& loss, const char* what) {
+    SLAM_MMS_RETURN_IF_ERROR(loss.Validate());
+    SLAM_MMS_ASSIGN_OR_RETURN(auto nodes_ab, Pair(a, b, what));
+    SLAM_MMS_ASSIGN_OR_RETURN(auto cost, RelativePoseFactor::Create(T_a_b, covariance));
+    problem->AddResidualBlock(cost.release(), loss.NewLossFunction(), nodes_ab.first->pose.data(),
+                              nodes_ab.second->pose.data());
+    return OkStatus();
+  }
+
+  // The node index from which a bounded solve frees the graph.
+  size_t FreeFrom(SolveTrigger trigger) const {
+    const size_t n = ordered.size();
+    if (trigger == SolveTrigger::kFinish) return 0;
+    const size_t window = static_cast<size_t>(options.active_submaps);
+    size_t from = n > window ? n - window : 0;
+    if (pending_loop_from) from = std::min(from, *pending_loop_from);
+    if (trigger == SolveTrigger::kGnssReturned) {
+      // Walk back: the GNSS-anchored nodes after the outage, the outage, then the last
+      // GNSS-anchored node before it.
+      size_t i = n;
+      while (i > 0 && ordered[i - 1]->num_gnss > 0) --i;
+      while (i > 0 && ordered[i - 1]->num_gnss == 0) --i;
+      from = std::min(from, i > 0 ? i - 1 : 0);
+    }
+    return from;
+  }
+};
+
+SubmapGraph::SubmapGraph(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+SubmapGraph::SubmapGraph(SubmapGraph&&) noexcept = default;
+SubmapGraph& SubmapGraph::operator=(SubmapGraph&&) noexcept = default;
+SubmapGraph::~SubmapGraph() = default;
+
+StatusOr<SubmapGraph> SubmapGraph::Create(const Options& options) {
+  SLAM_MMS_RETURN_IF_ERROR(options.Validate());
+  return SubmapGraph(std::make_unique<Impl>(options));
+}
+
+StatusOr<SubmapGraph> SubmapGraph::Create() { return Create(Options()); }
+
+Status SubmapGraph::AddSubmap(SubmapId id, const Eigen::Isometry3d& T_world_submap) {
+  Impl& m = *impl_;
+  if (!m.ordered.empty() && id <= m.ordered.back()->id) {
+    return InvalidArgumentError("SubmapGraph::AddSubmap: id " + Id(id) +
+                                " is not greater than the last id " + Id(m.ordered.back()->id));
+  }
+  SLAM_MMS_RETURN_IF_ERROR(ValidatePose(T_world_submap, "SubmapGraph::AddSubmap " + Id(id)));
+  auto node = std::make_unique<Node>();
+  node->id = id;
+  node->index = m.ordered.size();
+  PoseToBlock(T_world_submap, node->pose.data());
+  m.problem->AddParameterBlock(node->pose.data(), kPoseBlockSize, NewPoseManifold());
+  m.ordered.push_back(node.get());
+  m.nodes.emplace(id, std::move(node));
+  return OkStatus();
+}
+
+Status SubmapGraph::AddScan(SubmapId id, int64_t scan_id, Timestamp stamp,
+                            const Eigen::Isometry3d& T_submap_scan) {
+  Node* node = impl_->Find(id);
+  if (node == nullptr) return NotFoundError("SubmapGraph::AddScan: unknown submap " + Id(id));
+  SLAM_MMS_RETURN_IF_ERROR(ValidatePose(T_submap_scan, "SubmapGraph::AddScan T_submap_scan"));
+  SubmapScanPose s;
+  s.submap = id;
+  s.scan_id = scan_id;
+  s.stamp = stamp;
+  s.T_submap_scan = T_submap_scan;
+  node->scans.push_back(s);
+  return OkStatus();
+}
+
+Status SubmapGraph::SetScans(SubmapId id, const std::vector<SubmapScanPose>& scans) {
+  Node* node = impl_->Find(id);
+  if (node == nullptr) return NotFoundError("SubmapGraph::SetScans: unknown submap " + Id(id));
+  for (const auto& s : scans) {
+    SLAM_MMS_RETURN_IF_ERROR(ValidatePose(s.T_submap_scan, "SubmapGraph::SetScans T_submap_scan"));
+  }
+  node->scans = scans;
+  for (auto& s : node->scans) s.submap = id;
+  return OkStatus();
+}
+
+Status SubmapGraph::AddRegistrationFactor(SubmapId a, SubmapId b, const Eigen::Isometry3d& T_a_b,
+                                          const Matrix6d& covariance, const RobustLoss& loss) {
+  return impl_->AddBetween(a, b, T_a_b, covariance, loss, "AddRegistrationFactor");
+}
+
+Status SubmapGraph::AddReckonFactor(SubmapId a, SubmapId b, const Eigen::Isometry3d& T_a_b,
+                                    const Matrix6d& covariance) {
+  return impl_->AddBetween(a, b, T_a_b, covariance, RobustLoss::None(), "AddReckonFactor");
+}
+
+Status SubmapGraph::AddLoopFactor(SubmapId a, SubmapId b, const Eigen::Isometry3d& T_a_b,
+                                  const Matrix6d& covariance) {
+  Impl& m = *impl_;
+  SLAM_MMS_RETURN_IF_ERROR(
+      m.AddBetween(a, b, T_a_b, covariance, m.options.loop_loss, "AddLoopFactor"));
+  const size_t oldest = std::min(m.Find(a)->index, m.Find(b)->index);
+  m.pending_loop_from = std::min(m.pending_loop_from.value_or(oldest), oldest);
+  ++m.num_loops;
+  return OkStatus();
+}
+
+Status SubmapGraph::AddGnssPrior(SubmapId id, const Eigen::Vector3d& p_world_antenna,
+                                 const Eigen::Matrix3d& covariance,
+                                 const Eigen::Isometry3d& T_submap_body,
+                                 const Eigen::Vector3d& t_body_antenna) {
+  Impl& m = *impl_;
+  Node* node = m.Find(id);
+  if (node == nullptr) return NotFoundError("SubmapGraph::AddGnssPrior: unknown submap " + Id(id));
+  SLAM_MMS_RETURN_IF_ERROR(ValidatePose(T_submap_body, "SubmapGraph::AddGnssPrior T_submap_body"));
+  if (!p_world_antenna.allFinite() || !t_body_antenna.allFinite()) {
+    return InvalidArgumentError("SubmapGraph::AddGnssPrior: position or lever arm not finite");
+  }
+  SLAM_MMS_RETURN_IF_ERROR(ValidateCovariance<3>(covariance, "SubmapGraph::AddGnssPrior"));
+  // Eq. (24) with the antenna expressed in the submap frame: p_Nref + R_Nref * t_submap_antenna.
+  const Eigen::Vector3d t_submap_antenna = T_submap_body * t_body_antenna;
+  SLAM_MMS_ASSIGN_OR_RETURN(
+      auto cost, GnssPositionFactor::Create(p_world_antenna, covariance, t_submap_antenna));
+  m.problem->AddResidualBlock(cost.release(), m.options.gnss_loss.NewLossFunction(),
+                              node->pose.data());
+  ++node->num_gnss;
+  ++m.num_gnss;
+  return OkStatus();
+}
+
+StatusOr<SolveSummary> SubmapGraph::Solve(SolveTrigger trigger) {
+  Impl& m = *impl_;
+  const size_t n = m.ordered.size();
+  const size_t from = m.FreeFrom(trigger);
+  int num_free = 0;
+  for (size_t i = 0; i < n; ++i) {
+    // Without any GNSS prior the first submap is the gauge (the paper's w is then its frame).
+    const bool gauge = i == 0 && m.num_gnss == 0;
+    if (i >= from && !gauge) {
+      m.problem->SetParameterBlockVariable(m.ordered[i]->pose.data());
+      ++num_free;
+    } else {
+      m.problem->SetParameterBlockConstant(m.ordered[i]->pose.data());
+    }
+  }
+  m.last_free = num_free;
+  backend_internal::CeresSolveOptions so;
+  so.max_iterations = m.options.max_iterations;
+  so.max_solve_time_s = m.options.max_solve_time_s;
+  so.num_threads = m.options.num_threads;
+  so.function_tolerance = m.options.function_tolerance;
+  SolveSummary summary = backend_internal::SolveProblem(m.problem.get(), so);
+  if (summary.usable()) m.pending_loop_from.reset();
+  SLAM_MMS_LOG(kDebug) << "SubmapGraph: solve (" << SolveTriggerName(trigger) << ") " << num_free
+                       << "/" << n << " free, " << SolveTerminationName(summary.termination) << ", "
+                       << summary.iterations << " iterations, " << summary.solve_time_s << " s";
+  return summary;
+}
+
+std::vector<LoopCandidate> SubmapGraph::LoopCandidates(const Eigen::Vector3d& p_world,
+                                                       SubmapId current) const {
+  const Impl& m = *impl_;
+  std::vector<LoopCandidate> out;
+  if (!p_world.allFinite()) return out;
+  const Node* cur = m.Find(current);
+  const size_t cur_index = cur != nullptr ? cur->index : m.ordered.size();
+  const size_t gap = static_cast<size_t>(m.options.loop_min_submap_gap);
+  if (cur_index < gap) return out;
+  for (size_t i = 0; i + gap <= cur_index; ++i) {
+    const Node* node = m.ordered[i];
+    const Eigen::Isometry3d T_world_submap = PoseFromBlock(node->pose.data());
+    double d = (T_world_submap.translation() - p_world).norm();
+    for (const auto& s : node->scans) {
+      d = std::min(d, (T_world_submap * s.T_submap_scan.translation() - p_world).norm());
+    }
+    if (d < m.options.loop_candidate_distance_m) out.push_back({node->id, d});
+  }
+  std::sort(out.begin(), out.end(), [](const LoopCandidate& x, const LoopCandidate& y) {
+    return x.distance_m < y.distance_m;
+  });
+  return out;
+}
+
+bool SubmapGraph::HasSubmap(SubmapId id) const { return impl_->Find(id) != nullptr; }
+
+std::vector<SubmapId> SubmapGraph::SubmapIds() const {
+  std::vector<SubmapId> ids;
+  for (const Node* n : impl_->ordered) ids.push_back(n->id);
+  return ids;
+}
+
+StatusOr<Eigen::Isometry3d> SubmapGraph::SubmapPose(SubmapId id) const {
+  const Node* node = impl_->Find(id);
+  if (node == nullptr) return NotFoundError("SubmapGraph::SubmapPose: unknown submap " + Id(id));
+  return PoseFromBlock(node->pose.data());
+}
+
+StatusOr<Matrix6d> SubmapGraph::SubmapCovariance(SubmapId id) const {
+  const Impl& m = *impl_;
+  const Node* node = m.Find(id);
+  if (node == nullptr) {
+    return NotFoundError("SubmapGraph::SubmapCovariance: unknown submap " + Id(id));
+  }
+  // Over the whole graph: free every node but the gauge.
+  for (Node* n : m.ordered) {
+    if (n->index == 0 && m.num_gnss == 0) {
+      m.problem->SetParameterBlockConstant(n->pose.data());
+    } else {
+      m.problem->SetParameterBlockVariable(n->pose.data());
+    }
+  }
+  return backend_internal::PoseBlockCovariance(m.problem.get(), node->pose.data(),
+                                               m.options.num_threads);
+}
+
+std::vector<SubmapScanPose> SubmapGraph::ScanPoses() const {
+  std::vector<SubmapScanPose> out;
+  for (const Node* n : impl_->ordered) {
+    const Eigen::Isometry3d T_world_submap = PoseFromBlock(n->pose.data());
+    for (SubmapScanPose s : n->scans) {
+      s.T_world_scan = T_world_submap * s.T_submap_scan;  // T_w_Ni = T_w_Nref * T_Nref_Ni.
+      out.push_back(s);
+    }
+  }
+  return out;
+}
+
+int SubmapGraph::num_submaps() const { return static_cast<int>(impl_->ordered.size()); }
+int SubmapGraph::num_loop_factors() const { return impl_->num_loops; }
+int SubmapGraph::num_gnss_priors() const { return impl_->num_gnss; }
+int SubmapGraph::last_num_free_submaps() const { return impl_->last_free; }
+const SubmapGraph::Options& SubmapGraph::options() const { return impl_->options; }
+
+}  // namespace slam_mms

@@ -1,0 +1,77 @@
+#pragma once
+// Hdl64Lidar: a Velodyne HDL-64E model as in KITTI raw. Every firing is cast at its own time from
+// the lidar pose on the TRUE trajectory, so a scan is skewed exactly like a raw KITTI scan: points
+// are expressed in the lidar frame of their own firing time, time offsets run from the scan start.
+//
+// Geometry: 64 beams (uniform +2.0 .. -24.8 deg, or a table), `firings_per_revolution` firings per
+// beam, clockwise seen from above starting and ending behind the car: firing j of the scan has
+// azimuth atan2(y, x) = pi - 2 pi j / N and time offset j / (N * rate), which is KITTI's
+// t = 0.5 (-atan2(y, x) / pi + 1) convention. Range noise is Gaussian; returns beyond max_range or
+// grazing the surface (|cos incidence| < min_cos_incidence) are lost; reflectance =
+// albedo (0.3 + 0.7 |cos incidence|) + noise, clamped to [0, 1]. An optional elevation bias writes
+// every point `elevation_bias_deg` lower than the ray that produced it (KITTI's 0.205 deg defect).
+// Points are stored ring by ring (top beam first), each ring in firing order.
+//
+// Noise is drawn from a counter-based hash of (seed, scan, beam, firing): results do not depend on
+// the number of threads. Thread safety: const methods may be called concurrently.
+
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <vector>
+
+#include "slam_mms/core/sensor_data.hpp"
+#include "slam_mms/core/status.hpp"
+#include "slam_mms/sim/city_world.hpp"
+#include "slam_mms/sim/reference_trajectory.hpp"
+
+namespace slam_mms::sim {
+
+class Hdl64Lidar {
+ public:
+  struct Options {
+    int num_beams = 64;
+    double elevation_max_deg = 2.0;  ///< Uniform table from max down to min.
+    double elevation_min_deg = -24.8;
+    /// Explicit per-beam elevations [deg] (top first); overrides the uniform table when not empty.
+    std::vector<double> elevation_table_deg;
+    int firings_per_revolution = 2083;
+    double rotation_rate_hz = 10.0;
+    double range_noise_sigma_m = 0.02;
+    double min_range_m = 2.0;  ///< Returns closer than this are dropped (the car itself).
+    double max_range_m = 120.0;
+    double min_cos_incidence = 0.02;  ///< Grazing returns below this are lost.
+    double reflectance_noise_sigma = 0.02;
+    double elevation_bias_deg = 0.0;  ///< KITTI-like: 0.205 (points written this much too low).
+
+    [[nodiscard]] Status Validate() const;
+  };
+
+  /// One simulated scan and, for the ground truth, the exact (noise-free) world hits.
+  struct Output {
+    Scan scan;                                   ///< Points in the lidar frame, per-point times.
+    std::vector<Eigen::Vector3f> p_world_exact;  ///< Same order as the scan's points.
+    std::vector<SurfaceClass> surfaces;          ///< Same order.
+    std::vector<uint8_t> beams;                  ///< Beam (ring) index of each point, 0 = top.
+  };
+
+  Hdl64Lidar();
+  explicit Hdl64Lidar(const Options& options);  ///< Call options.Validate() first.
+
+  /// Simulates the revolution starting at `t_start_s` (trajectory seconds). `T_body_lidar` is the
+  /// lidar mount; `scan_index` and `seed` select the noise; `num_threads` >= 1.
+  Output Simulate(const CityWorld& world, const ReferenceTrajectory& trajectory,
+                  const Eigen::Isometry3d& T_body_lidar, double t_start_s, int64_t scan_index,
+                  uint64_t seed, int num_threads) const;
+
+  /// Scan period [s] and the time offset of the last firing from the first.
+  double PeriodSeconds() const { return 1.0 / options_.rotation_rate_hz; }
+  double LastFiringOffsetSeconds() const;
+  const std::vector<double>& elevations_deg() const { return elevations_deg_; }
+  const Options& options() const { return options_; }
+
+ private:
+  Options options_;
+  std::vector<double> elevations_deg_;
+};
+
+}  // namespace slam_mms::sim

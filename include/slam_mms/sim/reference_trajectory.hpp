@@ -1,0 +1,112 @@
+#pragma once
+// ReferenceTrajectory: the simulator's true, smooth motion of the body (IMU) frame in the local ENU
+// world frame, with analytic first and second derivatives so that the simulated IMU (specific force
+// and angular rate), the LiDAR firing poses and the ground truth are mutually consistent.
+//
+// Representation: six uniform cubic B-splines (C2) over time for x, y, z [m] and roll, pitch, yaw
+// [rad] (yaw unwrapped), R_world_body = Rz(yaw) Ry(pitch) Rx(roll) (the KITTI/OXTS convention).
+// Angular rate in the body frame follows analytically from the Euler-angle rates; the acceleration
+// from the position spline's second derivative. The splines are fitted by regularised least squares
+// to pose samples (real KITTI OXTS poses, or the samples of the embedded urban route), which both
+// smooths and interpolates them.
+//
+// Ownership: value type. Thread safety: const methods may be called concurrently.
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <filesystem>
+#include <vector>
+
+#include "slam_mms/core/status.hpp"
+#include "slam_mms/core/timestamp.hpp"
+
+namespace slam_mms::sim {
+
+/// The kinematic state of the body at one time.
+struct BodyState {
+  Eigen::Isometry3d T_world_body = Eigen::Isometry3d::Identity();
+  Eigen::Vector3d v_world_mps = Eigen::Vector3d::Zero();       ///< Velocity in world.
+  Eigen::Vector3d a_world_mps2 = Eigen::Vector3d::Zero();      ///< Kinematic acceleration in world.
+  Eigen::Vector3d omega_body_radps = Eigen::Vector3d::Zero();  ///< Angular rate in body.
+  Eigen::Vector3d rpy_rad = Eigen::Vector3d::Zero();  ///< Roll, pitch, yaw (yaw unwrapped).
+};
+
+/// A pose sample to fit: position of the body in world and its roll/pitch/yaw (KITTI convention).
+struct PoseSample {
+  double t_s = 0.0;  ///< Seconds since the trajectory's epoch.
+  Eigen::Vector3d p_world = Eigen::Vector3d::Zero();
+  Eigen::Vector3d rpy_rad = Eigen::Vector3d::Zero();
+};
+
+class ReferenceTrajectory {
+ public:
+  struct FitOptions {
+    double knot_spacing_s = 0.1;     ///< Spline knot interval [s]; > 0.
+    double position_sigma_m = 0.02;  ///< Expected noise of the sampled positions [m]; > 0.
+    double angle_sigma_rad = 0.002;  ///< Expected noise of the sampled angles [rad]; > 0.
+    /// White-noise acceleration prior (smoothing) [m/s^2 per sqrt(Hz)] and its angular
+    /// counterpart [rad/s^2 per sqrt(Hz)]; larger follows the samples more closely. > 0.
+    double accel_density = 3.0;
+    double angular_accel_density = 1.0;
+
+    [[nodiscard]] Status Validate() const;
+  };
+
+  ReferenceTrajectory() = default;
+
+  /// Fits the splines to `samples` (time-ordered, at least 4, spanning > 3 knot intervals). Yaw is
+  /// unwrapped first. `epoch` is the absolute time of t_s = 0.
+  [[nodiscard]] static StatusOr<ReferenceTrajectory> Fit(Timestamp epoch,
+                                                         const std::vector<PoseSample>& samples,
+                                                         const FitOptions& options);
+
+  /// The state at `t_s` seconds after the epoch, clamped to [start_s(), end_s()].
+  BodyState Evaluate(double t_s) const;
+  BodyState Evaluate(Timestamp t) const { return Evaluate(t.SecondsSince(epoch_)); }
+  Eigen::Isometry3d Pose(double t_s) const { return Evaluate(t_s).T_world_body; }
+
+  /// Specific force in body (what an accelerometer measures): R^T (a - g), g = (0, 0, -gravity).
+  static Eigen::Vector3d SpecificForceBody(const BodyState& state, double gravity_mps2);
+
+  Timestamp epoch() const { return epoch_; }
+  double start_s() const { return t0_s_; }
+  double end_s() const { return t0_s_ + dt_s_ * static_cast<double>(num_segments_); }
+  double DurationSeconds() const { return end_s() - start_s(); }
+  Timestamp ToTimestamp(double t_s) const { return epoch_.PlusSeconds(t_s); }
+  /// Path length of the positions sampled every `step_s` [m].
+  double PathLength(double step_s = 0.1) const;
+
+ private:
+  Timestamp epoch_;
+  double t0_s_ = 0.0;
+  double dt_s_ = 0.1;
+  int num_segments_ = 0;
+  std::vector<Eigen::Matrix<double, 6, 1>> control_;  // x y z roll pitch yaw
+};
+
+/// Trajectory samples of the embedded default urban drive ("--scenario default"): a rectangular
+/// block loop with turns, two stops and a revisit of the first street, about 1.3 km in about 3
+/// minutes at 30-40 km/h, at 10 Hz. Height, pitch and roll follow a gentle road profile and the
+/// vehicle's accelerations. The route is fixed (the seed varies the world and the sensors, not the
+/// route) so drives with different seeds share their motion.
+std::vector<PoseSample> DefaultUrbanRouteSamples();
+
+/// Pose samples of an unpacked KITTI OXTS drive folder (`<drive>_sync` with oxts/timestamps.txt
+/// and oxts/data/*.txt), converted to local ENU about the WGS-84 origin (lat, lon [deg], h [m])
+/// with GeographicLib; `origin_from_first` replaces the origin by the first record's position.
+/// Records with duplicate or backward stamps are dropped. `epoch` receives the first stamp.
+struct OxtsPoseSamples {
+  Timestamp epoch;
+  std::vector<PoseSample> samples;
+  double origin_latitude_deg = 0.0;
+  double origin_longitude_deg = 0.0;
+  double origin_height_m = 0.0;
+  int num_dropped = 0;
+};
+[[nodiscard]] StatusOr<OxtsPoseSamples> LoadOxtsPoseSamples(const std::filesystem::path& drive_dir,
+                                                            double origin_latitude_deg,
+                                                            double origin_longitude_deg,
+                                                            double origin_height_m,
+                                                            bool origin_from_first);
+
+}  // namespace slam_mms::sim

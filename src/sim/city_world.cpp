@@ -1,0 +1,310 @@
+// CityWorld: mesh helpers, the Embree scene and ray queries.
+#include "slam_mms/sim/city_world.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "sim/city_world_impl.hpp"
+
+namespace slam_mms::sim {
+
+const char* SurfaceClassName(SurfaceClass c) {
+  switch (c) {
+    case SurfaceClass::kRoad: return "road";
+    case SurfaceClass::kMarking: return "marking";
+    case SurfaceClass::kCurb: return "curb";
+    case SurfaceClass::kSidewalk: return "sidewalk";
+    case SurfaceClass::kTerrain: return "terrain";
+    case SurfaceClass::kBuilding: return "building";
+    case SurfaceClass::kPole: return "pole";
+    case SurfaceClass::kTrunk: return "trunk";
+    case SurfaceClass::kFoliage: return "foliage";
+    case SurfaceClass::kCar: return "car";
+    case SurfaceClass::kFence: return "fence";
+    case SurfaceClass::kOther: return "other";
+  }
+  return "other";
+}
+
+void TriangleMesh::AddTriangle(const Eigen::Vector3f& a, const Eigen::Vector3f& b,
+                               const Eigen::Vector3f& c, SurfaceClass cls, float alb) {
+  const int i = static_cast<int>(vertices.size());
+  vertices.push_back(a);
+  vertices.push_back(b);
+  vertices.push_back(c);
+  triangles.emplace_back(i, i + 1, i + 2);
+  classes.push_back(cls);
+  albedo.push_back(alb);
+}
+
+void TriangleMesh::AddBox(const Eigen::Vector3f& center, const Eigen::Matrix3f& R,
+                          const Eigen::Vector3f& h, SurfaceClass cls, float alb) {
+  const int base = static_cast<int>(vertices.size());
+  for (int k = 0; k < 8; ++k) {
+    const Eigen::Vector3f s((k & 1) ? 1.f : -1.f, (k & 2) ? 1.f : -1.f, (k & 4) ? 1.f : -1.f);
+    vertices.push_back(center + R * s.cwiseProduct(h));
+  }
+  static const int kFaces[12][3] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6},
+                                    {0, 1, 4}, {1, 5, 4}, {2, 6, 3}, {3, 6, 7},
+                                    {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+  for (const auto& f : kFaces) {
+    triangles.emplace_back(base + f[0], base + f[1], base + f[2]);
+    classes.push_back(cls);
+    albedo.push_back(alb);
+  }
+}
+
+void TriangleMesh::AddCylinder(const Eigen::Vector3f& base, float radius, float height, int sides,
+                               SurfaceClass cls, float alb) {
+  const int b = static_cast<int>(vertices.size());
+  for (int k = 0; k < sides; ++k) {
+    const float a = 2.0f * static_cast<float>(M_PI) * k / sides;
+    const Eigen::Vector3f o(radius * std::cos(a), radius * std::sin(a), 0.f);
+    vertices.push_back(base + o);
+    vertices.push_back(base + o + Eigen::Vector3f(0, 0, height));
+  }
+  const int top = static_cast<int>(vertices.size());
+  vertices.push_back(base + Eigen::Vector3f(0, 0, height));
+  for (int k = 0; k < sides; ++k) {
+    const int k1 = (k + 1) % sides;
+    triangles.emplace_back(b + 2 * k, b + 2 * k1, b + 2 * k + 1);
+    triangles.emplace_back(b + 2 * k1, b + 2 * k1 + 1, b + 2 * k + 1);
+    triangles.emplace_back(top, b + 2 * k + 1, b + 2 * k1 + 1);
+    for (int r = 0; r < 3; ++r) {
+      classes.push_back(cls);
+      albedo.push_back(alb);
+    }
+  }
+}
+
+void TriangleMesh::Append(const TriangleMesh& o) {
+  const int base = static_cast<int>(vertices.size());
+  vertices.insert(vertices.end(), o.vertices.begin(), o.vertices.end());
+  for (const auto& t : o.triangles) triangles.push_back(t + Eigen::Vector3i::Constant(base));
+  classes.insert(classes.end(), o.classes.begin(), o.classes.end());
+  albedo.insert(albedo.end(), o.albedo.begin(), o.albedo.end());
+}
+
+CityWorld::Impl::~Impl() {
+  if (scene != nullptr) rtcReleaseScene(scene);
+  if (device != nullptr) rtcReleaseDevice(device);
+}
+
+Status CityWorld::Impl::Commit() {
+  if (mesh.triangles.empty()) return InvalidArgumentError("CityWorld: the mesh has no triangles");
+  if (mesh.classes.size() != mesh.triangles.size() || mesh.albedo.size() != mesh.triangles.size()) {
+    return InvalidArgumentError("CityWorld: classes/albedo must have one entry per triangle");
+  }
+  for (const auto& t : mesh.triangles) {
+    if (t.minCoeff() < 0 || t.maxCoeff() >= static_cast<int>(mesh.vertices.size())) {
+      return InvalidArgumentError("CityWorld: a triangle indexes a missing vertex");
+    }
+  }
+  device = rtcNewDevice("threads=1,set_affinity=0");
+  if (device == nullptr) return UnavailableError("CityWorld: rtcNewDevice failed");
+  scene = rtcNewScene(device);
+  rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
+  rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_MEDIUM);
+  RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+  auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(
+      geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh.vertices.size()));
+  auto* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0,
+                                                            RTC_FORMAT_UINT3, 3 * sizeof(unsigned),
+                                                            mesh.triangles.size()));
+  if (vb == nullptr || ib == nullptr)
+    return InternalError("CityWorld: Embree buffer allocation failed");
+  for (size_t i = 0; i < mesh.vertices.size(); ++i) {
+    vb[3 * i] = mesh.vertices[i].x();
+    vb[3 * i + 1] = mesh.vertices[i].y();
+    vb[3 * i + 2] = mesh.vertices[i].z();
+  }
+  for (size_t i = 0; i < mesh.triangles.size(); ++i) {
+    for (int k = 0; k < 3; ++k) ib[3 * i + k] = static_cast<unsigned>(mesh.triangles[i](k));
+  }
+  rtcCommitGeometry(geom);
+  rtcAttachGeometry(scene, geom);
+  rtcReleaseGeometry(geom);
+  rtcCommitScene(scene);
+  if (rtcGetDeviceError(device) != RTC_ERROR_NONE) {
+    return InternalError("CityWorld: Embree scene build failed");
+  }
+  stats.num_triangles = mesh.triangles.size();
+  return OkStatus();
+}
+
+float CityWorld::Impl::ShadeAlbedo(unsigned prim, float u, float v, SurfaceClass* cls) const {
+  *cls = mesh.classes[prim];
+  float a = mesh.albedo[prim];
+  if (*cls == SurfaceClass::kRoad && prim < num_ground_triangles) {
+    const Eigen::Vector3i& t = mesh.triangles[prim];
+    const float w0 = 1.f - u - v;
+    const float d = w0 * vertex_d[t(0)] + u * vertex_d[t(1)] + v * vertex_d[t(2)];
+    const float s = w0 * vertex_s[t(0)] + u * vertex_s[t(1)] + v * vertex_s[t(2)];
+    const float w = w0 * vertex_w[t(0)] + u * vertex_w[t(1)] + v * vertex_w[t(2)];
+    // Solid edge lines 0.35-0.5 m inside the curb; dashed lines (3 m of 9 m) bounding the lane.
+    const bool edge = d > w - 0.5f && d < w - 0.35f;
+    const bool dash = d > 1.70f && d < 1.83f && std::fmod(std::fabs(s), 9.0f) < 3.0f && w > 4.0f;
+    if (edge || dash) {
+      *cls = SurfaceClass::kMarking;
+      a = 0.85f;
+    }
+  }
+  return a;
+}
+
+double CityWorld::Impl::GroundModelHeight(const Eigen::Vector2d& q, double* d_out,
+                                          const PathSample** street) const {
+  const PathNearest n = path.Nearest(q, 1e4);
+  if (n.segment < 0) return 0.0;
+  const PathSample& s = path.SampleOf(n);
+  if (street != nullptr) *street = &s;
+  if (d_out != nullptr) *d_out = n.distance;
+  const double d = n.distance;
+  // Cambered road (2 %), curb step, sidewalks rising 1 %, lots flat beyond.
+  double z = path.ZRoad(n) - 0.02 * std::min(d, s.half_width);
+  if (d > s.half_width) {
+    z += options.curb_height_m + 0.01 * std::min(d - s.half_width, s.sidewalk);
+  }
+  return z;
+}
+
+Status CityWorld::Options::Validate() const {
+  auto fail = [](const char* name, double v, const char* rule) {
+    std::ostringstream s;
+    s << "CityWorld::Options::" << name << " = " << v << "; " << rule;
+    return InvalidArgumentError(s.str());
+  };
+  if (!(corridor_m >= 10.0)) return fail("corridor_m", corridor_m, "must be >= 10");
+  if (!(ground_cell_m > 0.05 && ground_cell_m <= 2.0))
+    return fail("ground_cell_m", ground_cell_m, "must be in (0.05, 2]");
+  if (!(road_half_width_min_m >= 3.0))
+    return fail("road_half_width_min_m", road_half_width_min_m, "must be >= 3");
+  if (!(road_half_width_max_m >= road_half_width_min_m))
+    return fail("road_half_width_max_m", road_half_width_max_m, "must be >= road_half_width_min_m");
+  if (!(sidewalk_width_min_m >= 0.5))
+    return fail("sidewalk_width_min_m", sidewalk_width_min_m, "must be >= 0.5");
+  if (!(sidewalk_width_max_m >= sidewalk_width_min_m))
+    return fail("sidewalk_width_max_m", sidewalk_width_max_m, "must be >= sidewalk_width_min_m");
+  if (!(curb_height_m >= 0.0 && curb_height_m < 0.5))
+    return fail("curb_height_m", curb_height_m, "must be in [0, 0.5)");
+  if (!(building_height_min_m > 2.0))
+    return fail("building_height_min_m", building_height_min_m, "must be > 2");
+  if (!(building_height_max_m >= building_height_min_m))
+    return fail("building_height_max_m", building_height_max_m, "must be >= building_height_min_m");
+  for (auto [name, p] :
+       {std::pair<const char*, double>{"building_probability", building_probability},
+        {"tree_probability", tree_probability},
+        {"parked_car_probability", parked_car_probability}}) {
+    if (!(p >= 0.0 && p <= 1.0)) return fail(name, p, "must be in [0, 1]");
+  }
+  if (!(pole_spacing_m >= 5.0)) return fail("pole_spacing_m", pole_spacing_m, "must be >= 5");
+  if (!(body_height_above_road_m > 0.0))
+    return fail("body_height_above_road_m", body_height_above_road_m, "must be > 0");
+  return OkStatus();
+}
+
+CityWorld::CityWorld(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+CityWorld::CityWorld(CityWorld&&) noexcept = default;
+CityWorld& CityWorld::operator=(CityWorld&&) noexcept = default;
+CityWorld::~CityWorld() = default;
+
+StatusOr<CityWorld> CityWorld::Build(const ReferenceTrajectory& trajectory,
+                                     const Options& options) {
+  return Build(trajectory, options, trajectory.start_s(), trajectory.end_s());
+}
+
+StatusOr<CityWorld> CityWorld::Build(const ReferenceTrajectory& trajectory, const Options& options,
+                                     double t_begin_s, double t_end_s) {
+  SLAM_MMS_RETURN_IF_ERROR(options.Validate());
+  if (!(t_end_s > t_begin_s))
+    return InvalidArgumentError("CityWorld::Build: t_end_s must be > t_begin_s");
+  auto impl = std::make_unique<Impl>();
+  impl->options = options;
+  SLAM_MMS_RETURN_IF_ERROR(GenerateCity(trajectory, std::max(t_begin_s, trajectory.start_s()),
+                                        std::min(t_end_s, trajectory.end_s()), impl.get()));
+  SLAM_MMS_RETURN_IF_ERROR(impl->Commit());
+  return CityWorld(std::move(impl));
+}
+
+StatusOr<CityWorld> CityWorld::FromMesh(TriangleMesh mesh) {
+  auto impl = std::make_unique<Impl>();
+  impl->mesh = std::move(mesh);
+  SLAM_MMS_RETURN_IF_ERROR(impl->Commit());
+  return CityWorld(std::move(impl));
+}
+
+void CityWorld::Intersect(const Eigen::Vector3f* origins, const Eigen::Vector3f* directions,
+                          size_t n, float min_range_m, float max_range_m, RayHit* hits) const {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  alignas(64) RTCRayHit16 rh;
+  alignas(64) int valid[16];
+  for (size_t start = 0; start < n; start += 16) {
+    const size_t m = std::min<size_t>(16, n - start);
+    for (size_t k = 0; k < 16; ++k) {
+      const size_t i = start + std::min(k, m - 1);
+      valid[k] = k < m ? -1 : 0;
+      rh.ray.org_x[k] = origins[i].x();
+      rh.ray.org_y[k] = origins[i].y();
+      rh.ray.org_z[k] = origins[i].z();
+      rh.ray.dir_x[k] = directions[i].x();
+      rh.ray.dir_y[k] = directions[i].y();
+      rh.ray.dir_z[k] = directions[i].z();
+      rh.ray.tnear[k] = min_range_m;
+      rh.ray.tfar[k] = max_range_m;
+      rh.ray.time[k] = 0.f;
+      rh.ray.mask[k] = 0xFFFFFFFFu;
+      rh.ray.id[k] = static_cast<unsigned>(k);
+      rh.ray.flags[k] = 0;
+      rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+      rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+    }
+    rtcIntersect16(valid, impl_->scene, &context, &rh);
+    for (size_t k = 0; k < m; ++k) {
+      RayHit& h = hits[start + k];
+      if (rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) {
+        h = RayHit{};
+        continue;
+      }
+      h.range_m = rh.ray.tfar[k];
+      Eigen::Vector3f ng(rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]);
+      const float len = ng.norm();
+      ng = len > 0 ? Eigen::Vector3f(ng / len) : Eigen::Vector3f::UnitZ();
+      if (ng.dot(directions[start + k]) > 0.f) ng = -ng;
+      h.normal_world = ng;
+      h.albedo = impl_->ShadeAlbedo(rh.hit.primID[k], rh.hit.u[k], rh.hit.v[k], &h.surface);
+    }
+  }
+}
+
+double CityWorld::SkyBlockage(const Eigen::Vector3d& p_world, int num_rays,
+                              double min_elevation_deg) const {
+  if (num_rays <= 0) return 0.0;
+  std::vector<Eigen::Vector3f> o(num_rays, p_world.cast<float>()), d(num_rays);
+  const double golden = M_PI * (3.0 - std::sqrt(5.0));
+  const double s0 = std::sin(min_elevation_deg * M_PI / 180.0);
+  for (int i = 0; i < num_rays; ++i) {
+    const double sz = s0 + (1.0 - s0) * (i + 0.5) / num_rays;  // uniform in solid angle
+    const double r = std::sqrt(std::max(0.0, 1.0 - sz * sz));
+    const double az = golden * i;
+    d[i] = Eigen::Vector3f(static_cast<float>(r * std::cos(az)),
+                           static_cast<float>(r * std::sin(az)), static_cast<float>(sz));
+  }
+  std::vector<RayHit> h(num_rays);
+  Intersect(o.data(), d.data(), num_rays, 0.05f, 300.f, h.data());
+  int blocked = 0;
+  for (const auto& x : h) blocked += x.range_m > 0 ? 1 : 0;
+  return static_cast<double>(blocked) / num_rays;
+}
+
+double CityWorld::GroundHeight(double x, double y) const {
+  if (!impl_->has_path) return 0.0;
+  return impl_->GroundModelHeight(Eigen::Vector2d(x, y), nullptr, nullptr);
+}
+
+const TriangleMesh& CityWorld::mesh() const { return impl_->mesh; }
+const CityWorld::Stats& CityWorld::stats() const { return impl_->stats; }
+
+}  // namespace slam_mms::sim

@@ -1,0 +1,45 @@
+#pragma once
+// CityWorld internals shared by city_world.cpp (mesh, Embree, queries) and city_generator.cpp.
+#include <embree3/rtcore.h>
+
+#include <vector>
+
+#include "sim/path_index.hpp"
+#include "slam_mms/sim/city_world.hpp"
+
+namespace slam_mms::sim {
+
+struct CityWorld::Impl {
+  Options options;
+  Stats stats;
+  TriangleMesh mesh;
+  // Ground vertices come first in `mesh`; for them: distance to the path, canonical arc length and
+  // the road half width (lane markings are shaded from these).
+  size_t num_ground_vertices = 0;
+  size_t num_ground_triangles = 0;
+  std::vector<float> vertex_d, vertex_s, vertex_w;
+  bool has_path = false;
+  PathIndex path;
+
+  RTCDevice device = nullptr;
+  RTCScene scene = nullptr;
+
+  Impl() = default;
+  Impl(const Impl&) = delete;
+  Impl& operator=(const Impl&) = delete;
+  ~Impl();
+
+  /// Builds the Embree scene from `mesh`.
+  Status Commit();
+  /// Albedo at a hit on triangle `prim` with barycentrics (u, v).
+  float ShadeAlbedo(unsigned prim, float u, float v, SurfaceClass* cls) const;
+  /// Ground height model at (x, y) without curb snapping.
+  double GroundModelHeight(const Eigen::Vector2d& q, double* d_out,
+                           const PathSample** street) const;
+};
+
+/// Generates the procedural city into `impl` (path, ground, objects); does not commit.
+Status GenerateCity(const ReferenceTrajectory& trajectory, double t_begin_s, double t_end_s,
+                    CityWorld::Impl* impl);
+
+}  // namespace slam_mms::sim

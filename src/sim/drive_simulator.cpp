@@ -1,0 +1,289 @@
+// DriveSimulator: trajectory + world + sensors -> KITTI raw drive with ground truth.
+#include "slam_mms/sim/drive_simulator.hpp"
+
+#include <GeographicLib/LocalCartesian.hpp>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <unordered_map>
+
+#include "sim/drive_outputs.hpp"
+#include "sim/oxts_synthesis.hpp"
+#include "sim/random.hpp"
+#include "slam_mms/core/logging.hpp"
+#include "slam_mms/core/trajectory.hpp"
+#include "slam_mms/io/kitti_raw_writer.hpp"
+#include "slam_mms/io/kitti_timestamp.hpp"
+#include "slam_mms/io/map_io.hpp"
+#include "slam_mms/io/trajectory_io.hpp"
+
+namespace slam_mms::sim {
+
+Eigen::Isometry3d KittiTLidarBody() {
+  Eigen::Matrix3d R;
+  R << 9.999976e-01, 7.553071e-04, -2.035826e-03, -7.854027e-04, 9.998898e-01, -1.482298e-02,
+      2.024406e-03, 1.482454e-02, 9.998881e-01;
+  // Re-orthonormalise (the file's 7 digits leave ~1e-7 non-orthogonality).
+  const Eigen::Quaterniond q(R);
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = q.normalized().toRotationMatrix();
+  T.translation() = Eigen::Vector3d(-8.086759e-01, 3.195559e-01, -7.997231e-01);
+  return T;
+}
+
+Status DriveSimulator::Options::Validate() const {
+  auto fail = [](const std::string& name, const std::string& v, const char* rule) {
+    return InvalidArgumentError("DriveSimulator::Options::" + name + " = " + v + "; " + rule);
+  };
+  if (oxts_drive_dir.empty() && scenario != "default")
+    return fail("scenario", "'" + scenario + "'", "must be \"default\" (or set oxts_drive_dir)");
+  if (!(duration_s >= 0.0)) return fail("duration_s", std::to_string(duration_s), "must be >= 0");
+  if (!(lead_in_s >= 0.0)) return fail("lead_in_s", std::to_string(lead_in_s), "must be >= 0");
+  if (!(std::abs(origin_latitude_deg) <= 90.0))
+    return fail("origin_latitude_deg", std::to_string(origin_latitude_deg), "must be in [-90, 90]");
+  if (!(std::abs(origin_longitude_deg) <= 180.0))
+    return fail("origin_longitude_deg", std::to_string(origin_longitude_deg),
+                "must be in [-180, 180]");
+  if (!(gravity_mps2 > 0.0))
+    return fail("gravity_mps2", std::to_string(gravity_mps2), "must be > 0");
+  if (num_threads < 1) return fail("num_threads", std::to_string(num_threads), "must be >= 1");
+  if (!(scene_cloud_voxel_m > 0.0))
+    return fail("scene_cloud_voxel_m", std::to_string(scene_cloud_voxel_m), "must be > 0");
+  if (!(ins_roll_pitch_sigma_rad >= 0.0 && ins_yaw_sigma_rad >= 0.0 &&
+        ins_velocity_sigma_mps >= 0.0))
+    return fail("ins_*_sigma", "negative", "must be >= 0");
+  if (!date.empty() && (date.size() != 10 || date[4] != '_' || date[7] != '_'))
+    return fail("date", "'" + date + "'", "must look like 2011_09_26");
+  if (!T_lidar_body.matrix().allFinite())
+    return fail("T_lidar_body", "non-finite", "must be finite");
+  SLAM_MMS_RETURN_IF_ERROR(fit.Validate());
+  SLAM_MMS_RETURN_IF_ERROR(world.Validate());
+  SLAM_MMS_RETURN_IF_ERROR(lidar.Validate());
+  SLAM_MMS_RETURN_IF_ERROR(imu.Validate());
+  SLAM_MMS_RETURN_IF_ERROR(gnss.Validate());
+  if (std::abs(imu.gravity_mps2 - gravity_mps2) > 1e-12)
+    return fail("imu.gravity_mps2", std::to_string(imu.gravity_mps2), "must equal gravity_mps2");
+  return OkStatus();
+}
+
+struct DriveSimulator::Impl {
+  Options options;
+  ReferenceTrajectory trajectory;
+  std::unique_ptr<CityWorld> world;
+  double first_scan_s = 0.0;
+  int num_scans = 0;
+  double seconds_world = 0.0;
+};
+
+namespace {
+
+double Seconds(std::chrono::steady_clock::time_point a) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count();
+}
+
+// "2011_09_30_drive_0027_sync" -> date, id.
+bool ParseDriveName(const std::string& name, std::string* date, int* id) {
+  if (name.size() < 21 || name.compare(10, 7, "_drive_") != 0) return false;
+  *date = name.substr(0, 10);
+  try {
+    *id = std::stoi(name.substr(17, 4));
+  } catch (...) {
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+DriveSimulator::DriveSimulator(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+DriveSimulator::DriveSimulator(DriveSimulator&&) noexcept = default;
+DriveSimulator& DriveSimulator::operator=(DriveSimulator&&) noexcept = default;
+DriveSimulator::~DriveSimulator() = default;
+
+StatusOr<DriveSimulator> DriveSimulator::Create(const Options& options_in) {
+  SLAM_MMS_RETURN_IF_ERROR(options_in.Validate());
+  auto impl = std::make_unique<Impl>();
+  Options& o = impl->options;
+  o = options_in;
+  o.world.seed = MixSeed(o.seed, 10);
+  Timestamp epoch;
+  std::vector<PoseSample> samples;
+  if (!o.oxts_drive_dir.empty()) {
+    SLAM_MMS_ASSIGN_OR_RETURN(
+        OxtsPoseSamples loaded,
+        LoadOxtsPoseSamples(o.oxts_drive_dir, o.origin_latitude_deg, o.origin_longitude_deg,
+                            o.origin_height_m, o.origin_from_oxts));
+    epoch = loaded.epoch;
+    samples = std::move(loaded.samples);
+    o.origin_latitude_deg = loaded.origin_latitude_deg;
+    o.origin_longitude_deg = loaded.origin_longitude_deg;
+    o.origin_height_m = loaded.origin_height_m;
+    std::string name = o.oxts_drive_dir.filename().string();
+    if (name.empty()) name = o.oxts_drive_dir.parent_path().filename().string();
+    std::string date;
+    int id = 0;
+    const bool parsed = ParseDriveName(name, &date, &id);
+    if (o.date.empty()) o.date = parsed ? date : "2011_01_01";
+    if (o.drive_id < 0) o.drive_id = parsed ? id : 1;
+    if (loaded.num_dropped > 0) {
+      SLAM_MMS_LOG(kInfo) << "sim: dropped " << loaded.num_dropped << " OXTS records of " << name;
+    }
+  } else {
+    SLAM_MMS_ASSIGN_OR_RETURN(epoch, ParseKittiTimestamp(o.start_time));
+    samples = DefaultUrbanRouteSamples();
+    if (o.date.empty()) o.date = "2026_01_15";
+    if (o.drive_id < 0) o.drive_id = 1;
+  }
+  SLAM_MMS_ASSIGN_OR_RETURN(impl->trajectory, ReferenceTrajectory::Fit(epoch, samples, o.fit));
+  const ReferenceTrajectory& traj = impl->trajectory;
+  // Timeline: the first scan after the lead-in, then scans back to back.
+  Hdl64Lidar lidar(o.lidar);
+  const double period = lidar.PeriodSeconds();
+  impl->first_scan_s = traj.start_s() + o.lead_in_s;
+  const double usable = traj.end_s() - 0.05 - impl->first_scan_s - lidar.LastFiringOffsetSeconds();
+  if (usable < 0.0) {
+    return InvalidArgumentError("DriveSimulator: the trajectory (" +
+                                std::to_string(traj.DurationSeconds()) +
+                                " s) is too short for the lead-in and one scan");
+  }
+  int n = static_cast<int>(std::floor(usable / period + 1e-9)) + 1;
+  if (o.duration_s > 0.0)
+    n = std::min(n, std::max(1, static_cast<int>(std::floor(o.duration_s / period + 1e-9))));
+  impl->num_scans = n;
+  const double last_end = impl->first_scan_s + (n - 1) * period + lidar.LastFiringOffsetSeconds();
+  const auto t0 = std::chrono::steady_clock::now();
+  SLAM_MMS_ASSIGN_OR_RETURN(
+      CityWorld world,
+      CityWorld::Build(traj, o.world, traj.start_s(), std::min(traj.end_s(), last_end + 1.0)));
+  impl->world = std::make_unique<CityWorld>(std::move(world));
+  impl->seconds_world = Seconds(t0);
+  return DriveSimulator(std::move(impl));
+}
+
+const ReferenceTrajectory& DriveSimulator::trajectory() const { return impl_->trajectory; }
+const CityWorld& DriveSimulator::world() const { return *impl_->world; }
+const DriveSimulator::Options& DriveSimulator::options() const { return impl_->options; }
+double DriveSimulator::first_scan_s() const { return impl_->first_scan_s; }
+int DriveSimulator::num_scans() const { return impl_->num_scans; }
+double DriveSimulator::seconds_world_build() const { return impl_->seconds_world; }
+
+StatusOr<DriveSimulator::Summary> DriveSimulator::Run(const std::filesystem::path& out_dir,
+                                                      const Progress& progress) {
+  const auto t_run = std::chrono::steady_clock::now();
+  const Options& o = impl_->options;
+  const ReferenceTrajectory& traj = impl_->trajectory;
+  const CityWorld& world = *impl_->world;
+  Summary summary;
+  char drive_name[64];
+  std::snprintf(drive_name, sizeof(drive_name), "%s_drive_%04d_sync", o.date.c_str(), o.drive_id);
+  summary.drive_name = drive_name;
+  summary.date_dir = out_dir / o.date;
+  summary.drive_dir = summary.date_dir / drive_name;
+  KittiRawWriter::Options wopt;
+  wopt.overwrite = o.overwrite;
+  SLAM_MMS_ASSIGN_OR_RETURN(KittiRawWriter writer, KittiRawWriter::Create(summary.drive_dir, wopt));
+  SLAM_MMS_RETURN_IF_ERROR(writer.WriteCalibration(o.T_lidar_body));
+  const std::filesystem::path gt_dir = summary.drive_dir / "ground_truth";
+  std::error_code ec;
+  std::filesystem::create_directories(gt_dir, ec);
+  if (ec) return InternalError("cannot create " + gt_dir.string() + ": " + ec.message());
+
+  Hdl64Lidar lidar(o.lidar);
+  const double period = lidar.PeriodSeconds();
+  const int n_scans = impl_->num_scans;
+  const double first = impl_->first_scan_s;
+  const double last_end = first + (n_scans - 1) * period + lidar.LastFiringOffsetSeconds();
+  const Eigen::Isometry3d T_body_lidar = o.T_lidar_body.inverse();
+
+  // ---- 100 Hz IMU / GNSS / POS records ---------------------------------------------------------
+  GeographicLib::LocalCartesian enu(o.origin_latitude_deg, o.origin_longitude_deg,
+                                    o.origin_height_m);
+  ImuSimulator imu(o.imu, MixSeed(o.seed, 20));
+  GnssSimulator gnss(o.gnss, MixSeed(o.seed, 30));
+  InsErrorProcess ins(o.ins_roll_pitch_sigma_rad, o.ins_yaw_sigma_rad, o.ins_velocity_sigma_mps,
+                      MixSeed(o.seed, 40));
+  const double imu_dt = 1.0 / o.imu.rate_hz;
+  std::vector<double> rec_t;
+  std::vector<OxtsRecord> records;
+  GroundTruthLog log;
+  double blockage = 0.0, next_blockage_t = -1e9;
+  int counts[4] = {0, 0, 0, 0};
+  for (int i = 0;; ++i) {
+    const double t = traj.start_s() + i * imu_dt;
+    if (t > std::min(traj.end_s(), last_end + 0.5) + 1e-9) break;
+    const BodyState state = traj.Evaluate(t);
+    const Timestamp stamp = traj.ToTimestamp(t);
+    const ImuSample meas = imu.Measure(state, stamp);
+    if (t >= next_blockage_t) {  // sky view of the antenna (0.75 m above the IMU), 2 Hz
+      blockage = world.SkyBlockage(state.T_world_body * Eigen::Vector3d(0.0, 0.0, 0.75));
+      next_blockage_t = t + 0.5;
+    }
+    const GnssSample g = gnss.Step(t - first, blockage);
+    ins.Step(imu_dt, g.state != GnssState::kNone);
+    records.push_back(SynthesizeOxts(state, meas, g, ins, enu));
+    rec_t.push_back(t);
+    if (t >= first && t <= last_end) ++counts[static_cast<int>(g.state)];
+    SLAM_MMS_RETURN_IF_ERROR(writer.AddImuOxts(stamp, records.back()));
+    log.Add(stamp, state, ImuSimulator::TrueMeasurement(state, stamp, o.gravity_mps2), imu, g);
+  }
+  summary.num_imu_records = static_cast<int>(records.size());
+  const int total_in_span = counts[0] + counts[1] + counts[2] + counts[3];
+  if (total_in_span > 0) {
+    summary.fraction_none = static_cast<double>(counts[0]) / total_in_span;
+    summary.fraction_sps = static_cast<double>(counts[1]) / total_in_span;
+    summary.fraction_float = static_cast<double>(counts[2]) / total_in_span;
+    summary.fraction_fixed = static_cast<double>(counts[3]) / total_in_span;
+  }
+
+  // ---- scans --------------------------------------------------------------------------------
+  SceneCloudAccumulator scene(o.scene_cloud_voxel_m);
+  Trajectory gt_start, gt_trigger, gt_end;
+  for (int k = 0; k < n_scans; ++k) {
+    const double ts = first + k * period;
+    auto t_l = std::chrono::steady_clock::now();
+    Hdl64Lidar::Output out =
+        lidar.Simulate(world, traj, T_body_lidar, ts, k, MixSeed(o.seed, 50), o.num_threads);
+    summary.seconds_lidar += Seconds(t_l);
+    auto t_w = std::chrono::steady_clock::now();
+    if (o.write_scene_cloud) scene.Add(out.p_world_exact, out.scan.cloud.intensities());
+    summary.num_points += out.scan.cloud.size();
+    SLAM_MMS_RETURN_IF_ERROR(writer.AddScan(out.scan));
+    // The 10 Hz sync record: the 100 Hz record nearest the trigger.
+    const double tt = ts + 0.5 * period;
+    const size_t j = static_cast<size_t>(std::clamp<long>(
+        std::lround((tt - traj.start_s()) / imu_dt), 0L, static_cast<long>(records.size()) - 1));
+    SLAM_MMS_RETURN_IF_ERROR(writer.AddOxts(traj.ToTimestamp(rec_t[j]), records[j]));
+    SLAM_MMS_RETURN_IF_ERROR(gt_start.Add(out.scan.stamp_start, traj.Pose(ts)));
+    SLAM_MMS_RETURN_IF_ERROR(gt_trigger.Add(out.scan.stamp_trigger, traj.Pose(tt)));
+    SLAM_MMS_RETURN_IF_ERROR(
+        gt_end.Add(out.scan.stamp_end, traj.Pose(ts + lidar.LastFiringOffsetSeconds())));
+    summary.seconds_writing += Seconds(t_w);
+    if (progress) progress(k + 1, n_scans);
+  }
+  auto t_w = std::chrono::steady_clock::now();
+  SLAM_MMS_RETURN_IF_ERROR(writer.Finish());
+  summary.num_scans = n_scans;
+  summary.simulated_seconds = last_end - first;
+  for (double t = first + 0.1; t <= last_end + 1e-9; t += 0.1)
+    summary.path_length_m += (traj.Pose(t).translation() - traj.Pose(t - 0.1).translation()).norm();
+
+  // ---- ground truth -------------------------------------------------------------------------
+  SLAM_MMS_RETURN_IF_ERROR(WriteTrajectoryTum(log.poses, gt_dir / "poses_100hz.tum"));
+  SLAM_MMS_RETURN_IF_ERROR(WriteTrajectoryTum(gt_start, gt_dir / "scan_start.tum"));
+  SLAM_MMS_RETURN_IF_ERROR(WriteTrajectoryTum(gt_trigger, gt_dir / "scan_trigger.tum"));
+  SLAM_MMS_RETURN_IF_ERROR(WriteTrajectoryTum(gt_end, gt_dir / "scan_end.tum"));
+  SLAM_MMS_RETURN_IF_ERROR(log.WriteCsv(gt_dir));
+  if (o.write_scene_cloud) {
+    MapCloud map = scene.Take();
+    summary.num_scene_points = map.cloud.size();
+    SLAM_MMS_RETURN_IF_ERROR(WritePly(map, gt_dir / "scene_points.ply"));
+  }
+  summary.seconds_writing += Seconds(t_w);
+  summary.seconds_total = Seconds(t_run);
+  SLAM_MMS_RETURN_IF_ERROR(WriteScenarioJson(o, *this, summary, gt_dir / "scenario.json"));
+  return summary;
+}
+
+}  // namespace slam_mms::sim

@@ -1,0 +1,135 @@
+// ReferenceTrajectory: analytic derivatives and the IMU they produce are consistent with the poses.
+#include "slam_mms/sim/reference_trajectory.hpp"
+
+#include <gtest/gtest.h>
+
+#include "slam_mms/core/lie.hpp"
+#include "slam_mms/sim/imu_simulator.hpp"
+
+namespace slam_mms::sim {
+namespace {
+
+ReferenceTrajectory DefaultTrajectory() {
+  auto traj = ReferenceTrajectory::Fit(Timestamp::FromSeconds(1.7e9), DefaultUrbanRouteSamples(),
+                                       ReferenceTrajectory::FitOptions());
+  EXPECT_TRUE(traj.ok()) << traj.status().ToString();
+  return *traj;
+}
+
+TEST(ReferenceTrajectoryTest, DefaultRouteIsAFewMinutesWithALoop) {
+  const auto samples = DefaultUrbanRouteSamples();
+  ASSERT_GT(samples.size(), 100u);
+  const double duration = samples.back().t_s - samples.front().t_s;
+  EXPECT_GT(duration, 120.0);
+  EXPECT_LT(duration, 300.0);
+  const ReferenceTrajectory traj = DefaultTrajectory();
+  EXPECT_GT(traj.PathLength(), 1200.0);
+  // The fit follows the route samples closely.
+  double max_err = 0.0;
+  for (const auto& s : samples)
+    max_err = std::max(max_err, (traj.Pose(s.t_s).translation() - s.p_world).norm());
+  EXPECT_LT(max_err, 0.15);
+  // The loop: a later part of the drive passes within 1 m of the start street, > 60 s later.
+  const Eigen::Vector3d p10 = traj.Pose(12.0).translation();
+  bool revisited = false;
+  for (double t = 80.0; t < traj.end_s(); t += 0.1)
+    revisited |= (traj.Pose(t).translation() - p10).head<2>().norm() < 1.0;
+  EXPECT_TRUE(revisited);
+  // Stops: the speed falls to zero somewhere in the middle of the drive.
+  int stopped_samples = 0;
+  for (double t = 20.0; t < traj.end_s() - 5.0; t += 0.1)
+    stopped_samples += traj.Evaluate(t).v_world_mps.norm() < 0.05 ? 1 : 0;
+  EXPECT_GT(stopped_samples, 50);
+}
+
+TEST(ReferenceTrajectoryTest, DerivativesMatchFiniteDifferences) {
+  const ReferenceTrajectory traj = DefaultTrajectory();
+  const double h = 1e-4;
+  for (double t = 5.037; t < traj.end_s() - 1.0; t += 7.3) {  // off the knots (jerk jumps there)
+    const BodyState s = traj.Evaluate(t);
+    const Eigen::Vector3d v_fd =
+        (traj.Pose(t + h).translation() - traj.Pose(t - h).translation()) / (2 * h);
+    EXPECT_LT((v_fd - s.v_world_mps).norm(), 1e-5) << "t=" << t;
+    const Eigen::Vector3d a_fd =
+        (traj.Evaluate(t + h).v_world_mps - traj.Evaluate(t - h).v_world_mps) / (2 * h);
+    EXPECT_LT((a_fd - s.a_world_mps2).norm(), 1e-4) << "t=" << t;
+    const Eigen::Vector3d w_fd =
+        so3::Log(traj.Pose(t - h).linear().transpose() * traj.Pose(t + h).linear()) / (2 * h);
+    EXPECT_LT((w_fd - s.omega_body_radps).norm(), 1e-6) << "t=" << t;
+  }
+}
+
+// Catmull-Rom interpolation of uniformly sampled vectors at fractional index x.
+Eigen::Vector3d Interp(const std::vector<Eigen::Vector3d>& y, double x) {
+  const int i = std::clamp(static_cast<int>(std::floor(x)), 1, static_cast<int>(y.size()) - 3);
+  const double u = x - i;
+  const Eigen::Vector3d &p0 = y[i - 1], &p1 = y[i], &p2 = y[i + 1], &p3 = y[i + 2];
+  return 0.5 * ((2 * p1) + (-p0 + p2) * u + (2 * p0 - 5 * p1 + 4 * p2 - p3) * u * u +
+                (-p0 + 3 * p1 - 3 * p2 + p3) * u * u * u);
+}
+
+TEST(ReferenceTrajectoryTest, ZeroNoiseImuIntegratesBackOntoGroundTruth) {
+  const ReferenceTrajectory traj = DefaultTrajectory();
+  const double g = 9.81, dt = 0.01;
+  ImuSimulator imu(ImuSimulator::Options::ForGrade(ImuGrade::kPerfect), 7);
+  // 10 s through the first corner (turn, braking and acceleration).
+  const double t0 = 28.0;
+  const int n = 1000;
+  std::vector<Eigen::Vector3d> f, w;
+  for (int k = -1; k <= n + 2; ++k) {
+    const double t = t0 + k * dt;
+    const ImuSample m = imu.Measure(traj.Evaluate(t), traj.ToTimestamp(t));
+    f.push_back(m.accel_mps2);
+    w.push_back(m.gyro_radps);
+  }
+  double max_yaw_rate = 0.0;
+  for (const auto& x : w) max_yaw_rate = std::max(max_yaw_rate, std::abs(x.z()));
+  EXPECT_GT(max_yaw_rate, 0.3) << "the window must contain a turn";
+  // RK4 strapdown integration of the samples (values between samples by Catmull-Rom).
+  const BodyState s0 = traj.Evaluate(t0);
+  Eigen::Quaterniond q(s0.T_world_body.linear());
+  Eigen::Vector3d v = s0.v_world_mps, p = s0.T_world_body.translation();
+  const Eigen::Vector3d gw(0, 0, -g);
+  struct D {
+    Eigen::Vector4d dq;
+    Eigen::Vector3d dv, dp;
+  };
+  auto deriv = [&](const Eigen::Quaterniond& qq, const Eigen::Vector3d& vv, double x) {
+    const Eigen::Vector3d wi = Interp(w, x + 1), fi = Interp(f, x + 1);
+    const Eigen::Quaterniond dq = qq * Eigen::Quaterniond(0, wi.x(), wi.y(), wi.z());
+    D d;
+    d.dq = 0.5 * dq.coeffs();
+    d.dv = qq.normalized() * fi + gw;
+    d.dp = vv;
+    return d;
+  };
+  double max_err = 0.0;
+  for (int k = 0; k < n; ++k) {
+    auto add = [](const Eigen::Quaterniond& a, const Eigen::Vector4d& d, double s) {
+      return Eigen::Quaterniond(Eigen::Vector4d(a.coeffs() + s * d));
+    };
+    const D k1 = deriv(q, v, k);
+    const D k2 = deriv(add(q, k1.dq, dt / 2), v + dt / 2 * k1.dv, k + 0.5);
+    const D k3 = deriv(add(q, k2.dq, dt / 2), v + dt / 2 * k2.dv, k + 0.5);
+    const D k4 = deriv(add(q, k3.dq, dt), v + dt * k3.dv, k + 1.0);
+    q = add(q, (k1.dq + 2 * k2.dq + 2 * k3.dq + k4.dq) / 6.0, dt).normalized();
+    p += dt / 6.0 * (k1.dp + 2 * k2.dp + 2 * k3.dp + k4.dp);
+    v += dt / 6.0 * (k1.dv + 2 * k2.dv + 2 * k3.dv + k4.dv);
+    max_err = std::max(max_err, (p - traj.Pose(t0 + (k + 1) * dt).translation()).norm());
+  }
+  const Eigen::Isometry3d T_end = traj.Pose(t0 + n * dt);
+  EXPECT_LT(max_err, 0.01) << "position error over 10 s";
+  EXPECT_LT(RotationAngle(q.toRotationMatrix().transpose() * T_end.linear()), 1e-4);
+  RecordProperty("max_position_error_m", std::to_string(max_err));
+}
+
+TEST(ReferenceTrajectoryTest, FitRejectsBadInput) {
+  std::vector<PoseSample> few(3);
+  EXPECT_FALSE(ReferenceTrajectory::Fit(Timestamp(), few, {}).ok());
+  ReferenceTrajectory::FitOptions o;
+  o.knot_spacing_s = 0.0;
+  EXPECT_FALSE(o.Validate().ok());
+}
+
+}  // namespace
+}  // namespace slam_mms::sim

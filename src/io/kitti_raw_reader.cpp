@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <fstream>
 #include <map>
 #include <sstream>
 
@@ -19,6 +20,9 @@ using io_internal::ReadTimestampFile;
 namespace {
 
 constexpr int kKittiNameDigits = 10;
+
+// Reads a .bin or .txt scan into x y z reflectance quadruples (non-finite values kept).
+Status ReadRawScan(const fs::path& file, std::vector<float>* xyzr);
 
 // "0000000012.bin" -> 12; -1 when the stem is not 10 digits.
 int64_t FileNumber(const fs::path& file) {
@@ -368,8 +372,10 @@ StatusOr<Scan> KittiRawReader::ReadScan(size_t i) const {
                            std::to_string(impl_->frames.size()) + " scans");
   }
   const Impl::Frame& frame = impl_->frames[i];
-  SLAM_MMS_ASSIGN_OR_RETURN(PointCloud raw, ReadKittiScanFile(frame.file));
-  if (raw.empty()) return DataLossError(frame.file.string() + ": scan contains no points");
+  std::vector<float> xyzr;
+  SLAM_MMS_RETURN_IF_ERROR(ReadRawScan(frame.file, &xyzr));
+  const size_t n = xyzr.size() / 4;
+  if (n == 0) return DataLossError(frame.file.string() + ": scan contains no points");
 
   Scan scan;
   scan.index = frame.index;
@@ -383,87 +389,93 @@ StatusOr<Scan> KittiRawReader::ReadScan(size_t i) const {
   const double angle = o.vertical_correction_deg * M_PI / 180.0;
   const Eigen::Vector3d z_axis = Eigen::Vector3d::UnitZ();
   PointCloud& cloud = scan.cloud;
-  cloud.reserve(raw.size());
-  size_t dropped = 0;
-  const auto& pts = raw.points();
-  const auto& refl = raw.intensities();
-  for (size_t k = 0; k < raw.size(); ++k) {
-    const Eigen::Vector3f& p = pts[k];
-    if (!p.allFinite() || !std::isfinite(refl[k])) {
-      ++dropped;
+  cloud.resize(n);
+  auto& out_pts = cloud.points();
+  auto& out_refl = cloud.intensities();
+  auto& out_time = cloud.time_offsets_s();
+  size_t kept = 0;
+  for (size_t k = 0; k < n; ++k) {
+    const float* v = &xyzr[4 * k];
+    if (!std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2]) ||
+        !std::isfinite(v[3])) {
       continue;
     }
-    Eigen::Vector3f q = p;
+    Eigen::Vector3f q(v[0], v[1], v[2]);
     if (o.vertical_angle_correction) {
-      const Eigen::Vector3d pd = p.cast<double>();
+      const Eigen::Vector3d pd = q.cast<double>();
       const Eigen::Vector3d axis = pd.cross(z_axis);
-      const double n = axis.norm();
-      if (n > 1e-9) q = (Eigen::AngleAxisd(angle, axis / n) * pd).cast<float>();
+      const double norm = axis.norm();
+      if (norm > 1e-9) q = (Eigen::AngleAxisd(angle, axis / norm) * pd).cast<float>();
     }
-    float dt = 0.0f;
-    if (o.per_point_time) {
-      dt = static_cast<float>(KittiAzimuthFraction(p.x(), p.y(), o.spin) * duration_s);
-    }
-    cloud.Add(q, refl[k], dt);
+    out_pts[kept] = q;
+    out_refl[kept] = v[3];
+    // Azimuth of the recorded point (the vertical correction keeps it).
+    out_time[kept] = o.per_point_time
+                         ? static_cast<float>(KittiAzimuthFraction(v[0], v[1], o.spin) * duration_s)
+                         : 0.0f;
+    ++kept;
   }
+  const size_t dropped = n - kept;
+  cloud.resize(kept);
   if (dropped > 0) {
     impl_->dropped += dropped;
-    SLAM_MMS_LOG(kWarning) << frame.file.string() << ": dropped " << dropped << " of " << raw.size()
+    SLAM_MMS_LOG(kWarning) << frame.file.string() << ": dropped " << dropped << " of " << n
                            << " points with NaN/Inf values";
   }
   if (cloud.empty()) {
-    return DataLossError(frame.file.string() + ": scan has no finite point (" +
-                         std::to_string(raw.size()) + " points, all NaN/Inf)");
+    return DataLossError(frame.file.string() + ": scan has no finite point (" + std::to_string(n) +
+                         " points, all NaN/Inf)");
   }
   return scan;
 }
 
 // ---------------------------------------------------------------------------------------------
-StatusOr<PointCloud> ReadKittiScanFile(const fs::path& file) {
-  PointCloud cloud;
+namespace {
+
+Status ReadRawScan(const fs::path& file, std::vector<float>* xyzr) {
+  xyzr->clear();
   if (file.extension() == ".bin") {
-    SLAM_MMS_ASSIGN_OR_RETURN(const std::string bytes, io_internal::ReadFileBytes(file));
-    if (bytes.size() % 16 != 0) {
-      return DataLossError(file.string() + ": size " + std::to_string(bytes.size()) +
+    std::ifstream in(file, std::ios::binary);
+    if (!in) return NotFoundError("cannot open " + file.string());
+    in.seekg(0, std::ios::end);
+    const std::streamoff size = in.tellg();
+    if (size < 0) return DataLossError("cannot determine the size of " + file.string());
+    if (size % 16 != 0) {
+      return DataLossError(file.string() + ": size " + std::to_string(size) +
                            " bytes is not a multiple of 16 (float32 x y z reflectance per point)");
     }
-    const size_t n = bytes.size() / 16;
-    cloud.resize(n);
-    auto& pts = cloud.points();
-    auto& refl = cloud.intensities();
-    static_assert(sizeof(float) == 4, "float32 required");
-    for (size_t k = 0; k < n; ++k) {
-      float v[4];
-      std::memcpy(v, bytes.data() + 16 * k, 16);
-#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_BIG_ENDIAN__
-      for (float& f : v) {
-        uint32_t u;
-        std::memcpy(&u, &f, 4);
-        u = __builtin_bswap32(u);
-        std::memcpy(&f, &u, 4);
-      }
-#endif
-      pts[k] = Eigen::Vector3f(v[0], v[1], v[2]);
-      refl[k] = v[3];
+    xyzr->resize(static_cast<size_t>(size) / 4);
+    in.seekg(0, std::ios::beg);
+    if (size > 0 && !in.read(reinterpret_cast<char*>(xyzr->data()), size)) {
+      return DataLossError("cannot read " + std::to_string(size) + " bytes from " + file.string());
     }
-    return cloud;
+    static_assert(sizeof(float) == 4, "float32 required");
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_BIG_ENDIAN__
+    for (float& f : *xyzr) {
+      uint32_t u;
+      std::memcpy(&u, &f, 4);
+      u = __builtin_bswap32(u);
+      std::memcpy(&f, &u, 4);
+    }
+#endif
+    return OkStatus();
   }
   if (file.extension() == ".txt") {
     SLAM_MMS_ASSIGN_OR_RETURN(const auto lines, ReadLines(file));
-    cloud.reserve(lines.size());
+    xyzr->reserve(4 * lines.size());
     for (size_t l = 0; l < lines.size(); ++l) {
       if (io_internal::IsBlank(lines[l])) continue;
-      float v[4];
       const char* p = lines[l].c_str();
       for (int f = 0; f < 4; ++f) {
         char* end = nullptr;
-        v[f] = std::strtof(p, &end);
+        const float v = std::strtof(p, &end);
         if (end == p) {
           static constexpr const char* kNames[4] = {"x", "y", "z", "reflectance"};
           return DataLossError(file.string() + ":" + std::to_string(l + 1) + ": field " +
                                std::to_string(f + 1) + " (" + kNames[f] +
                                ") missing or not a number");
         }
+        xyzr->push_back(v);
         p = end;
       }
       while (*p != '\0' && std::isspace(static_cast<unsigned char>(*p))) ++p;
@@ -471,11 +483,25 @@ StatusOr<PointCloud> ReadKittiScanFile(const fs::path& file) {
         return DataLossError(file.string() + ":" + std::to_string(l + 1) +
                              ": more than 4 numbers (x y z reflectance) on the line");
       }
-      cloud.Add(Eigen::Vector3f(v[0], v[1], v[2]), v[3], 0.0f);
     }
-    return cloud;
+    return OkStatus();
   }
   return InvalidArgumentError(file.string() + ": unknown scan file extension (.bin or .txt)");
+}
+
+}  // namespace
+
+StatusOr<PointCloud> ReadKittiScanFile(const fs::path& file) {
+  std::vector<float> xyzr;
+  SLAM_MMS_RETURN_IF_ERROR(ReadRawScan(file, &xyzr));
+  PointCloud cloud;
+  const size_t n = xyzr.size() / 4;
+  cloud.resize(n);
+  for (size_t k = 0; k < n; ++k) {
+    cloud.points()[k] = Eigen::Vector3f(xyzr[4 * k], xyzr[4 * k + 1], xyzr[4 * k + 2]);
+    cloud.intensities()[k] = xyzr[4 * k + 3];
+  }
+  return cloud;
 }
 
 StatusOr<Eigen::Isometry3d> ReadKittiRigidCalibration(const fs::path& file) {

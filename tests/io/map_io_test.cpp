@@ -260,6 +260,42 @@ TEST_F(MapIoTest, LasSouthernHemisphereAndForcedZone) {
   EXPECT_NEAR(lon, lon33, 2e-8);
 }
 
+// Golden values from PROJ 9.1 (independent of GeographicLib): `projinfo EPSG:32632 -o WKT1_GDAL`
+// and `echo "lat lon h" | cs2cs -f %.4f EPSG:4326 EPSG:326zz/327zz`.
+TEST(UtmWktTest, MatchesProjWkt1Gdal) {
+  EXPECT_EQ(UtmZoneWkt(32, true),
+            "PROJCS[\"WGS 84 / UTM zone 32N\",GEOGCS[\"WGS 84\",DATUM[\"WGS_1984\",SPHEROID["
+            "\"WGS 84\",6378137,298.257223563,AUTHORITY[\"EPSG\",\"7030\"]],AUTHORITY[\"EPSG\","
+            "\"6326\"]],PRIMEM[\"Greenwich\",0,AUTHORITY[\"EPSG\",\"8901\"]],UNIT[\"degree\","
+            "0.0174532925199433,AUTHORITY[\"EPSG\",\"9122\"]],AUTHORITY[\"EPSG\",\"4326\"]],"
+            "PROJECTION[\"Transverse_Mercator\"],PARAMETER[\"latitude_of_origin\",0],PARAMETER["
+            "\"central_meridian\",9],PARAMETER[\"scale_factor\",0.9996],PARAMETER[\"false_"
+            "easting\",500000],PARAMETER[\"false_northing\",0],UNIT[\"metre\",1,AUTHORITY["
+            "\"EPSG\",\"9001\"]],AXIS[\"Easting\",EAST],AXIS[\"Northing\",NORTH],AUTHORITY["
+            "\"EPSG\",\"32632\"]]");
+}
+
+TEST_F(MapIoTest, LasOriginMatchesProj) {
+  struct Case {
+    GeoOrigin origin;
+    double easting, northing;
+  };
+  const Case cases[] = {
+      {{49.013141872681, 8.4378138518088, 114.06644439697}, 458891.1966, 5429068.9448},
+      {{-33.92, 18.42, 10.0}, 261488.8264, 6243716.3330}};
+  for (const Case& c : cases) {
+    MapCloud map;
+    map.cloud.Add(Eigen::Vector3f::Zero(), 1.0f);
+    ASSERT_TRUE(WriteLas(map, c.origin, tmp_ / "o.las").ok());
+    auto las = ReadLas(tmp_ / "o.las");
+    ASSERT_TRUE(las.ok());
+    EXPECT_NEAR(las->points_utm[0].x(), c.easting, 0.0011);
+    EXPECT_NEAR(las->points_utm[0].y(), c.northing, 0.0011);
+    EXPECT_NEAR(las->points_utm[0].z(), c.origin.height_m, 0.0011);
+    EXPECT_EQ(las->intensities[0], 65535);
+  }
+}
+
 TEST_F(MapIoTest, LasErrors) {
   const MapCloud map = RandomMap(10, false, 7);
   EXPECT_EQ(WriteLas(map, GeoOrigin{85.0, 0.0, 0.0}, tmp_ / "x.las").code(),

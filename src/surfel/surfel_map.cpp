@@ -32,6 +32,9 @@ Status SurfelMapOptions::Validate() const {
   if (!(max_radius_m >= min_radius_m)) {
     return FieldError("max_radius_m", max_radius_m, "must be >= min_radius_m");
   }
+  if (!(min_radius_cos > 0.0 && min_radius_cos <= 1.0)) {
+    return FieldError("min_radius_cos", min_radius_cos, "must be in (0, 1]");
+  }
   if (!(min_creation_cos >= 0.0 && min_creation_cos < 1.0)) {
     return FieldError("min_creation_cos", min_creation_cos, "must be in [0, 1)");
   }
@@ -66,6 +69,7 @@ SurfelMap::Impl::Impl(const SurfelMapOptions& o)
       pool(o.renderer.num_threads),
       removed_per_thread(static_cast<size_t>(o.renderer.num_threads)),
       moved_per_thread(static_cast<size_t>(o.renderer.num_threads)),
+      integrated_per_thread(static_cast<size_t>(o.renderer.num_threads)),
       confirmed_per_thread(static_cast<size_t>(o.renderer.num_threads)) {
   renderer = own_renderer.get();
 }
@@ -311,8 +315,9 @@ StatusOr<SurfelIntegrationStats> SurfelMap::Integrate(const VertexNormalMap& sca
   const float pixel_size = static_cast<float>(
       std::max(std::tan(0.5 * (po.fov_up_deg - po.fov_down_deg) * M_PI / 180.0 / rows),
                std::tan(M_PI / cols)));
+  const float min_radius_cos = static_cast<float>(o.min_radius_cos);
   auto new_radius = [&](float range, float cos_incidence) {
-    const float c = std::clamp(cos_incidence, 0.5f, 1.0f);
+    const float c = std::clamp(cos_incidence, min_radius_cos, 1.0f);
     return std::clamp(static_cast<float>(o.radius_factor) * range * pixel_size / c,
                       static_cast<float>(o.min_radius_m), static_cast<float>(o.max_radius_m));
   };
@@ -329,8 +334,10 @@ StatusOr<SurfelIntegrationStats> SurfelMap::Integrate(const VertexNormalMap& sca
   m.pool.Run([&](int ti) {
     std::vector<uint32_t>& removed = m.removed_per_thread[static_cast<size_t>(ti)];
     std::vector<uint32_t>& moved = m.moved_per_thread[static_cast<size_t>(ti)];
+    std::vector<int>& integrated = m.integrated_per_thread[static_cast<size_t>(ti)];
     removed.clear();
     moved.clear();
+    integrated.clear();
     int confirmed = 0;
     const size_t k0 = std::min(n_active, static_cast<size_t>(ti) * chunk);
     const size_t k1 = std::min(n_active, k0 + chunk);
@@ -378,6 +385,7 @@ StatusOr<SurfelIntegrationStats> SurfelMap::Integrate(const VertexNormalMap& sca
               s.updated_ns = stamp.nanoseconds();
               ++s.num_updates;
               ++confirmed;
+              integrated.push_back(i);  // SuMa: the pixel is integrated, no new surfel there
             }
           }
         }
@@ -385,13 +393,16 @@ StatusOr<SurfelIntegrationStats> SurfelMap::Integrate(const VertexNormalMap& sca
       if (!is_confirmed && m.conflict[id]) s.confidence += log_unstable;
       m.conflict[id] = 0;
       if (s.confidence < log_unstable ||
-          (s.confidence < conf_threshold && frame - s.updated_frame >= o.unstable_age_frames)) {
+          (s.confidence <= conf_threshold && frame - s.updated_frame >= o.unstable_age_frames)) {
         removed.push_back(id);
       }
     }
     m.confirmed_per_thread[static_cast<size_t>(ti)] = confirmed;
   });
   for (int c : m.confirmed_per_thread) stats.num_confirmed += c;
+  for (const auto& integrated : m.integrated_per_thread) {
+    for (int i : integrated) m.pixel_state[static_cast<size_t>(i)] = kExplained;
+  }
   for (const auto& removed : m.removed_per_thread) {
     for (uint32_t id : removed) m.RemoveSlot(id);
     stats.num_removed += static_cast<int>(removed.size());

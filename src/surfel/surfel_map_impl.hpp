@@ -36,6 +36,7 @@ struct SurfelMap::Impl {
   std::vector<uint8_t> conflict;     // by surfel id
   std::vector<std::vector<uint32_t>> removed_per_thread;
   std::vector<std::vector<uint32_t>> moved_per_thread;
+  std::vector<std::vector<int>> integrated_per_thread;  // pixels confirmed by a surfel centre
   std::vector<int> confirmed_per_thread;
 };
 

@@ -176,6 +176,36 @@ TEST(SurfelMapTest, DynamicObjectSurfelsAreDropped) {
   EXPECT_LT(box_surfels(), before / 20) << "before " << before;
 }
 
+TEST(SurfelMapTest, NeverConfirmedSurfelsExpireConfirmedOnesStay) {
+  const Scene scene;
+  std::mt19937 rng(8);
+  VertexNormalMap scan, empty;
+  SurfelMap probe;
+  const RangeProjection& proj = probe.renderer().projection();
+  proj.ComputeVertexNormalMap(SimulateScan(scene, proj, PoseAt(0.0), 0.01, &rng), &scan);
+  empty.Reset(proj.rows(), proj.cols());
+  for (bool confirm : {false, true}) {
+    SurfelMap map;
+    int f = 0;
+    ASSERT_TRUE(map.Integrate(scan, PoseAt(0.0), Timestamp::FromNanoseconds(++f)).ok());
+    if (confirm) {
+      ASSERT_TRUE(map.Integrate(scan, PoseAt(0.0), Timestamp::FromNanoseconds(++f)).ok());
+    }
+    const size_t n = map.size();
+    ASSERT_GT(n, 100000u);
+    for (int k = 0; k < 4; ++k) {
+      auto s = map.Integrate(empty, PoseAt(0.0), Timestamp::FromNanoseconds(++f));
+      ASSERT_TRUE(s.ok());
+      EXPECT_EQ(s->num_created, 0);
+    }
+    if (confirm) {
+      EXPECT_GT(map.size(), n * 9 / 10);  // confirmed once: l > 0, kept while unseen
+    } else {
+      EXPECT_EQ(map.size(), 0u);  // seen once, never confirmed: gone after unstable_age_frames
+    }
+  }
+}
+
 TEST(SurfelMapTest, SelectActiveMatchesBruteForce) {
   SurfelMapOptions o;
   o.index_cell_size_m = 3.0;

@@ -14,18 +14,21 @@
 //      surfel is an occlusion, not evidence against it, so it is not counted here.)
 //   4. Per active surfel: project its centre into the scan; if that pixel's measurement is
 //   compatible
-//      (same gates) the surfel is CONFIRMED: log-odds l += ln(p/(1-p)) - l_prior with
-//      p = p_stable * exp(-a^2/sigma_angle^2) * exp(-d^2/sigma_distance^2) clamped to [1-p_stable,
-//      1), radius := min(radius, r_new), and if it is younger than max_update_age_frames its
-//      position and normal become the running weighted average with the measurement (weight
-//      min(updates+1, max_weight); SuMa's slerp NaN avoided by averaging and renormalising).
-//      Otherwise, with a conflict, l += ln(p_unstable / p_stable) (SuMa's log_unstable). l is
-//      capped at max_confidence.
-//   5. Drop unstable surfels: l < ln((1-p_stable)/p_stable), or l < confidence_threshold and not
-//      confirmed for unstable_age_frames integrations (SuMa's rules).
+//      (same gates) the surfel is CONFIRMED (and that pixel counts as explained, as in SuMa):
+//      log-odds l += ln(p/(1-p)) - l_prior with p = p_stable * exp(-a^2/sigma_angle^2) *
+//      exp(-d^2/sigma_distance^2) clamped to [1-p_stable, 1), radius := min(radius, r_new), and if
+//      it is younger than max_update_age_frames its position and normal become the running weighted
+//      average with the measurement (weight min(updates+1, max_weight); SuMa's slerp NaN avoided by
+//      averaging and renormalising). Otherwise, with a conflict, l += ln(p_unstable / p_stable)
+//      (SuMa's log_unstable). l is capped at max_confidence.
+//   5. Drop unstable surfels: l < ln((1-p_stable)/p_stable), or l <= confidence_threshold and not
+//      confirmed for unstable_age_frames integrations. (SuMa tests l < threshold there, so a new
+//      surfel (l = 0) that is never confirmed lives forever; with "<=" one-off noise surfels die
+//      after unstable_age_frames, which keeps the active map, and its render time, bounded.)
 //   6. Create a surfel for each unexplained pixel with a normal facing the sensor:
-//      radius = radius_factor * range * pixel_size / clamp(cos(incidence), 0.5, 1) clamped to
-//      [min_radius_m, max_radius_m], pixel_size = max(tan(vfov / 2 rows), tan(pi / cols)); l = 0.
+//      radius = radius_factor * range * pixel_size / clamp(cos(incidence), min_radius_cos, 1)
+//      within [min_radius_m, max_radius_m], pixel_size = max(tan(vfov / 2 rows), tan(pi / cols)); l
+//      = 0.
 //
 // Storage: a slot vector; a surfel's id is its slot and stays valid until the surfel is removed
 // (slots of removed surfels are reused by later creations). Positions are in the map ("world")
@@ -59,6 +62,8 @@ struct SurfelMapOptions {
   double radius_factor = 1.41;
   double min_radius_m = 0.05;
   double max_radius_m = 1.0;
+  /// The incidence cosine in the radius formula is clamped to [min_radius_cos, 1] (SuMa: 0.5).
+  double min_radius_cos = 0.5;
   double min_creation_cos = 0.01;  ///< New surfel only if n . (-v/|v|) > this (SuMa 0.01).
   // Stability log-odds (SuMa p_stable 0.6, prior 0.5, sigma 1 / 1, threshold 0, age 3, cap 20).
   double p_stable = 0.6;

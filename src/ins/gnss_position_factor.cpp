@@ -44,8 +44,9 @@ bool GnssPositionFactor::Evaluate(double const* const* parameters, double* resid
     Eigen::Map<Eigen::Matrix<double, 3, 7, Eigen::RowMajor>> J(jacobians[0]);
     J.leftCols<3>() = sqrt_info_;
     // R Exp(dtheta) t ~= R t - R [t]x dtheta.
-    J.rightCols<4>() =
-        -sqrt_info_ * R * so3::Hat(t_body_antenna_) * QuaternionRightTangentToAmbient(q);
+    J.rightCols<4>() = -sqrt_info_ * R * so3::Hat(t_body_antenna_) *
+                       QuaternionRightTangentToAmbient(q) /
+                       Eigen::Map<const Eigen::Vector4d>(parameters[0] + 3).norm();
   }
   return true;
 }

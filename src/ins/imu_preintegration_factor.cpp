@@ -15,10 +15,12 @@ using Matrix15x3R = Eigen::Matrix<double, 15, 3, Eigen::RowMajor>;
 using Matrix15x6R = Eigen::Matrix<double, 15, 6, Eigen::RowMajor>;
 
 // Jacobian w.r.t. the local pose tangent [dp (world, additive), dtheta (right)] -> ambient 7-block.
-void LocalPoseToAmbient(const Matrix15x6& J_local, const Eigen::Quaterniond& q, double* out) {
+// The residual reads the normalised quaternion, so the ambient Jacobian carries 1 / |q_ambient|.
+void LocalPoseToAmbient(const Matrix15x6& J_local, const Eigen::Quaterniond& q, double q_norm,
+                        double* out) {
   Eigen::Map<Matrix15x7R> J(out);
   J.leftCols<3>() = J_local.leftCols<3>();
-  J.rightCols<4>() = J_local.rightCols<3>() * QuaternionRightTangentToAmbient(q);
+  J.rightCols<4>() = J_local.rightCols<3>() * QuaternionRightTangentToAmbient(q) / q_norm;
 }
 }  // namespace
 
@@ -84,6 +86,8 @@ bool ImuPreintegrationFactor::Evaluate(double const* const* parameters, double* 
   const Eigen::Map<const Eigen::Vector3d> ba_j(parameters[5]);
   const Eigen::Map<const Eigen::Vector3d> bg_j(parameters[5] + 3);
 
+  const double qn_i = Eigen::Map<const Eigen::Vector4d>(parameters[0] + 3).norm();
+  const double qn_j = Eigen::Map<const Eigen::Vector4d>(parameters[3] + 3).norm();
   const Eigen::Matrix3d R_i = q_i.toRotationMatrix();
   const Eigen::Matrix3d R_j = q_j.toRotationMatrix();
   const Eigen::Matrix3d Rt_i = R_i.transpose();
@@ -121,7 +125,7 @@ bool ImuPreintegrationFactor::Evaluate(double const* const* parameters, double* 
     J.block<3, 3>(3, 3) = so3::Hat(v_term);
     J.block<3, 3>(6, 0) = -Rt_i;
     J.block<3, 3>(6, 3) = so3::Hat(p_term);
-    LocalPoseToAmbient(sqrt_info_ * J, q_i, jacobians[0]);
+    LocalPoseToAmbient(sqrt_info_ * J, q_i, qn_i, jacobians[0]);
   }
   if (jacobians[1] != nullptr) {  // v_i
     Matrix15x3R J = Matrix15x3R::Zero();
@@ -146,7 +150,7 @@ bool ImuPreintegrationFactor::Evaluate(double const* const* parameters, double* 
     Matrix15x6 J = Matrix15x6::Zero();
     J.block<3, 3>(0, 3) = Jr_inv;
     J.block<3, 3>(6, 0) = Rt_i;
-    LocalPoseToAmbient(sqrt_info_ * J, q_j, jacobians[3]);
+    LocalPoseToAmbient(sqrt_info_ * J, q_j, qn_j, jacobians[3]);
   }
   if (jacobians[4] != nullptr) {  // v_j
     Matrix15x3R J = Matrix15x3R::Zero();

@@ -165,6 +165,15 @@ TEST(ImuPreintegrationFactorTest, JacobiansMatchNumericDifferentiation) {
           << J.analytic << "\nnumeric\n"
           << J.numeric;
     }
+    // Ambient Jacobians also hold for a non-unit quaternion block (the residual normalises it).
+    for (int block : {0, 3}) {
+      std::vector<std::vector<double>> scaled = params;
+      for (int k = 3; k < 7; ++k) scaled[block][k] *= 1.3;
+      const auto J = testing::CompareJacobian(**factor, scaled, block, nullptr, 1e-6);
+      const double scale = std::max(1.0, J.numeric.cwiseAbs().maxCoeff());
+      EXPECT_LT((J.analytic - J.numeric).cwiseAbs().maxCoeff(), 1e-5 * scale)
+          << "ambient " << block;
+    }
   }
 }
 
@@ -186,6 +195,10 @@ TEST(GnssPositionFactorTest, JacobianMatchesNumericDifferentiationAndResidual) {
     const auto J = testing::CompareJacobian(**f, params, 0, pose_manifold.get(), 1e-6);
     EXPECT_LT((J.analytic - J.numeric).cwiseAbs().maxCoeff(), 1e-6) << J.analytic << "\n"
                                                                     << J.numeric;
+    std::vector<std::vector<double>> scaled = params;
+    for (int k = 3; k < 7; ++k) scaled[0][k] *= 0.8;
+    const auto Ja = testing::CompareJacobian(**f, scaled, 0, nullptr, 1e-6);
+    EXPECT_LT((Ja.analytic - Ja.numeric).cwiseAbs().maxCoeff(), 1e-6) << "ambient";
     // Whitened residual: r^T r == e^T cov^-1 e (eq 24 with the lever arm).
     const Eigen::Vector3d e = T * lever - z;
     const Eigen::VectorXd r = testing::EvaluateResidual(**f, params);

@@ -77,7 +77,8 @@ inline Eigen::Isometry3d PoseFromBlock(const PoseBlock& b) { return PoseFromBloc
 /// R = R_hat * Exp(delta_theta) (the library's convention): delta_theta ~= 2 vec(q_hat^-1 * q').
 /// A cost function that has its Jacobian J_theta (rows x 3) with respect to delta_theta returns
 /// J_theta * QuaternionRightTangentToAmbient(q) as the Jacobian with respect to the 4 quaternion
-/// numbers [qx, qy, qz, qw]; Ceres then multiplies by the manifold's PlusJacobian.
+/// numbers [qx, qy, qz, qw] (divided by |q| when the cost reads the normalised quaternion of a
+/// non-unit block); Ceres then multiplies by the manifold's PlusJacobian.
 inline Eigen::Matrix<double, 3, 4> QuaternionRightTangentToAmbient(const Eigen::Quaterniond& q) {
   Eigen::Matrix<double, 3, 4> J;
   const Eigen::Vector3d v = q.vec();

@@ -31,30 +31,44 @@ inline float FastAtan2(float y, float x) {
   return y < 0.0f ? -r : r;
 }
 
-// Upper triangle of H (21), g (6) and statistics, in double; J and r in float.
+// Upper triangle of H (21), g (6) and statistics. Per point the products are summed in float over
+// blocks of kBlock points (vectorisable), then flushed into double accumulators, so precision stays
+// that of double sums of float terms while the hot loop stays in float.
 struct Accumulator {
+  static constexpr int kBlock = 128;
   double H[21];
   double g[6];
   double weighted_r2, r2;
   double m2[3];
   size_t inliers, candidates;
+  float hf[21 + 6 + 2 + 3];  // block sums: H, g, w r^2, r^2, p.^2
+  int in_block;
 
   void Zero() { *this = Accumulator{}; }
   inline void Add(const Eigen::Matrix<float, 6, 1>& J, float r, float w, const Eigen::Vector3f& p) {
-    double wj[6];
-    for (int i = 0; i < 6; ++i) wj[i] = static_cast<double>(w * J[i]);
+    float wj[6];
+    for (int i = 0; i < 6; ++i) wj[i] = w * J[i];
     int k = 0;
     for (int i = 0; i < 6; ++i) {
-      for (int j = i; j < 6; ++j) H[k++] += wj[i] * static_cast<double>(J[j]);
+      for (int j = i; j < 6; ++j) hf[k++] += wj[i] * J[j];
     }
-    for (int i = 0; i < 6; ++i) g[i] += wj[i] * static_cast<double>(r);
-    const double wr = static_cast<double>(w * r);
-    weighted_r2 += wr * static_cast<double>(r);
-    r2 += static_cast<double>(r * r);
-    m2[0] += static_cast<double>(p.x() * p.x());
-    m2[1] += static_cast<double>(p.y() * p.y());
-    m2[2] += static_cast<double>(p.z() * p.z());
+    for (int i = 0; i < 6; ++i) hf[21 + i] += wj[i] * r;
+    hf[27] += w * r * r;
+    hf[28] += r * r;
+    hf[29] += p.x() * p.x();
+    hf[30] += p.y() * p.y();
+    hf[31] += p.z() * p.z();
     ++inliers;
+    if (++in_block == kBlock) Flush();
+  }
+  void Flush() {
+    for (int i = 0; i < 21; ++i) H[i] += static_cast<double>(hf[i]);
+    for (int i = 0; i < 6; ++i) g[i] += static_cast<double>(hf[21 + i]);
+    weighted_r2 += static_cast<double>(hf[27]);
+    r2 += static_cast<double>(hf[28]);
+    for (int i = 0; i < 3; ++i) m2[i] += static_cast<double>(hf[29 + i]);
+    for (float& x : hf) x = 0.0f;
+    in_block = 0;
   }
   void AddTo(NormalEquations* eq) const {
     int k = 0;
@@ -116,7 +130,10 @@ struct ProjectiveIcp::Impl {
   RangeProjectionOptions projection;
   WorkerPool pool;
   std::vector<Accumulator> per_thread;
-  std::vector<int32_t> valid;  // scan pixels with vertex and normal (scratch)
+  struct ScanPoint {
+    Eigen::Vector3f v, n;  // scan vertex and normal (scan frame)
+  };
+  std::vector<ScanPoint> valid;  // packed scan pixels with vertex and normal (scratch)
 };
 
 ProjectiveIcp::ProjectiveIcp() : impl_(std::make_unique<Impl>(RangeProjection(), Options())) {}
@@ -154,7 +171,9 @@ StatusOr<RegistrationResult> ProjectiveIcp::Align(const VertexNormalMap& scan,
   int count = 0;
   for (int i = 0; i < scan.size(); ++i) {
     if (!scan.HasVertex(i) || !scan.HasNormal(i)) continue;
-    if (count++ % stride == 0) m.valid.push_back(i);
+    if (count++ % stride == 0) {
+      m.valid.push_back({scan.vertex[static_cast<size_t>(i)], scan.normal[static_cast<size_t>(i)]});
+    }
   }
 
   const float rows = static_cast<float>(model.rows);
@@ -187,8 +206,7 @@ StatusOr<RegistrationResult> ProjectiveIcp::Align(const VertexNormalMap& scan,
       m.pool.Range(th, m.valid.size(), &begin, &end);
       acc.candidates = end - begin;
       for (size_t k = begin; k < end; ++k) {
-        const size_t i = static_cast<size_t>(m.valid[k]);
-        const Eigen::Vector3f& v_s = scan.vertex[i];
+        const Eigen::Vector3f& v_s = m.valid[k].v;
         const Eigen::Vector3f q = R * v_s + t;
         // Spherical projection (RangeProjection's mapping) of q into the model image.
         const float xy = std::sqrt(q.x() * q.x() + q.y() * q.y());
@@ -207,13 +225,14 @@ StatusOr<RegistrationResult> ProjectiveIcp::Align(const VertexNormalMap& scan,
         const Eigen::Vector3f& v_m = model.vertex[j];
         const Eigen::Vector3f diff = q - v_m;
         if (diff.squaredNorm() > max_d2) continue;
-        if (n_m.dot(R * scan.normal[i]) < min_cos) continue;
+        if (n_m.dot(R * m.valid[k].n) < min_cos) continue;
         Eigen::Matrix<float, 6, 1> J;
         const float r = PointToPlaneResidual<float>(R, t, v_s, v_m, n_m, &J);  // eq 15
         const float a = std::abs(r);
         const float w = (huber <= 0.0f || a <= huber) ? 1.0f : huber / a;
         acc.Add(J, r, w, v_s);
       }
+      acc.Flush();
     };
     m.pool.Run(job);
     for (const auto& acc : m.per_thread) acc.AddTo(eq);

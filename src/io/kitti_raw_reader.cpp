@@ -387,7 +387,12 @@ StatusOr<Scan> KittiRawReader::ReadScan(size_t i) const {
   const Options& o = impl_->options;
   const double duration_s = frame.end.SecondsSince(frame.start);
   const double angle = o.vertical_correction_deg * M_PI / 180.0;
-  const Eigen::Vector3d z_axis = Eigen::Vector3d::UnitZ();
+  const double cos_a = std::cos(angle);
+  const double sin_a = std::sin(angle);
+  // Clockwise: t = 0.5 (1 - atan2(y, x)/pi); counter-clockwise: 0.5 (1 + atan2(y, x)/pi).
+  const float time_sign = o.spin == SpinDirection::kClockwise ? -1.0f : 1.0f;
+  const auto half_duration = static_cast<float>(0.5 * duration_s);
+  constexpr auto kInvPi = static_cast<float>(1.0 / M_PI);
   PointCloud& cloud = scan.cloud;
   cloud.resize(n);
   auto& out_pts = cloud.points();
@@ -402,17 +407,25 @@ StatusOr<Scan> KittiRawReader::ReadScan(size_t i) const {
     }
     Eigen::Vector3f q(v[0], v[1], v[2]);
     if (o.vertical_angle_correction) {
-      const Eigen::Vector3d pd = q.cast<double>();
-      const Eigen::Vector3d axis = pd.cross(z_axis);
-      const double norm = axis.norm();
-      if (norm > 1e-9) q = (Eigen::AngleAxisd(angle, axis / norm) * pd).cast<float>();
+      // Rotation by `angle` about k = (p x z)/|p x z| (KISS-ICP). k is orthogonal to p, so
+      // Rodrigues reduces to p cos(a) + (k x p) sin(a), with k x p = (-x z, -y z, x^2 + y^2)/r.
+      const double x = v[0], y = v[1], z = v[2];
+      const double r = std::sqrt(x * x + y * y);
+      if (r > 1e-9) {
+        q = Eigen::Vector3d(x * cos_a - sin_a * x * z / r, y * cos_a - sin_a * y * z / r,
+                            z * cos_a + sin_a * r)
+                .cast<float>();
+      }
     }
     out_pts[kept] = q;
     out_refl[kept] = v[3];
     // Azimuth of the recorded point (the vertical correction keeps it).
-    out_time[kept] = o.per_point_time
-                         ? static_cast<float>(KittiAzimuthFraction(v[0], v[1], o.spin) * duration_s)
-                         : 0.0f;
+    if (o.per_point_time) {
+      const float f = 1.0f + time_sign * std::atan2(v[1], v[0]) * kInvPi;  // [0, 2] up to rounding
+      out_time[kept] = half_duration * std::min(2.0f, std::max(0.0f, f));
+    } else {
+      out_time[kept] = 0.0f;
+    }
     ++kept;
   }
   const size_t dropped = n - kept;

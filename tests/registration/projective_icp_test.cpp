@@ -7,6 +7,7 @@
 #include "registration/synthetic_scene.hpp"
 #include "slam_mms/core/lie.hpp"
 #include "slam_mms/registration/point_icp.hpp"
+#include "slam_mms/surfel/cpu_surfel_renderer.hpp"
 
 namespace slam_mms {
 namespace {
@@ -146,6 +147,53 @@ TEST_F(ProjectiveIcpTest, TunnelIsDegenerateAlongItsAxis) {
   EXPECT_LT(std::abs(err.translation().y()), 0.01);
   EXPECT_LT(std::abs(err.translation().z()), 0.01);
   EXPECT_NEAR(err.translation().x(), 0.3, 0.05);
+}
+
+// Frame-to-model as the pipeline does it: surfels made from two scans (SuMa's radius rule), the
+// model rendered once at the model pose by the surfel module's CpuSurfelRenderer, then
+// ProjectiveIcp.
+TEST_F(ProjectiveIcpTest, RegistersAgainstCpuSurfelRendererModel) {
+  const testing::Scene scene = MakeStreetScene();
+  std::vector<Surfel> surfels;
+  const double pixel_size =
+      std::max(std::tan(0.5 * 28.0 * M_PI / 180.0 / proj_.rows()), std::tan(M_PI / proj_.cols()));
+  for (int i = 0; i < 2; ++i) {
+    const Eigen::Isometry3d T_world_s =
+        MakeIsometry(Eigen::Matrix3d::Identity(), Eigen::Vector3d(-1.0 * i, 0.5 * i, 0.0));
+    const VertexNormalMap m = ScanMap(SimulateScan(scene, proj_, T_world_s, 0.005, 20 + i));
+    for (int p = 0; p < m.size(); ++p) {
+      if (!m.HasVertex(p) || !m.HasNormal(p)) continue;
+      const Eigen::Vector3f v = m.vertex[static_cast<size_t>(p)];
+      const Eigen::Vector3f n = m.normal[static_cast<size_t>(p)];
+      const double d = v.norm();
+      const double cos_inc = std::clamp(static_cast<double>(-n.dot(v)) / d, 0.5, 1.0);
+      Surfel s;
+      s.position = (T_world_s * v.cast<double>()).cast<float>();
+      s.normal = (T_world_s.linear() * n.cast<double>()).cast<float>();
+      s.radius = static_cast<float>(std::clamp(1.41 * d * pixel_size / cos_inc, 0.05, 1.0));
+      surfels.push_back(s);
+    }
+  }
+  SurfelRendererOptions ro;
+  ro.projection = proj_.options();
+  auto renderer = CpuSurfelRenderer::Create(ro).value();
+  VertexNormalMap model;
+  ASSERT_TRUE(
+      renderer->Render(SurfelRenderInput::All(surfels), Eigen::Isometry3d::Identity(), &model)
+          .ok());
+  const Eigen::Isometry3d T_world_scan =
+      MakeIsometry(FromRollPitchYaw(0.01, -0.02, 0.05), Eigen::Vector3d(1.2, 0.3, 0.05));
+  const VertexNormalMap scan = ScanMap(SimulateScan(scene, proj_, T_world_scan, 0.01, 22));
+  auto icp = ProjectiveIcp::Create(proj_, ProjectiveIcp::Options()).value();
+  std::mt19937 rng(17);
+  for (int trial = 0; trial < 3; ++trial) {
+    auto r = icp.Align(scan, model, T_world_scan * Offset(rng, 1.0, 5.0));
+    ASSERT_TRUE(r.ok());
+    EXPECT_TRUE(r->converged()) << IcpTerminationName(r->termination);
+    EXPECT_LT(TranslationError(r->T_target_source, T_world_scan), 0.02) << "trial " << trial;
+    EXPECT_LT(RotationErrorDeg(r->T_target_source, T_world_scan), 0.1) << "trial " << trial;
+    EXPECT_GT(r->inlier_ratio, 0.7);
+  }
 }
 
 TEST_F(ProjectiveIcpTest, AgreesWithPointIcpFrameToFrame) {

@@ -12,6 +12,11 @@ namespace slam_mms {
 namespace {
 
 constexpr uint32_t kNoWinner = std::numeric_limits<uint32_t>::max();
+
+struct DepthWinner {
+  float depth;
+  uint32_t winner;
+};
 // Added to the disc's angular radius: covers the ~1e-5 rad error of FastAtan2.
 constexpr float kAngleMarginRad = 1e-4f;
 // Discs subtending less than this [rad] are bounded by their linearised projection.
@@ -30,28 +35,26 @@ struct CpuSurfelRenderer::Impl {
       : options(o),
         projection(*RangeProjection::Create(o.projection)),
         pool(o.num_threads),
-        depth(static_cast<size_t>(o.num_threads)),
-        winner(static_cast<size_t>(o.num_threads)) {
+        buffers(static_cast<size_t>(o.num_threads)) {
     const size_t n =
         static_cast<size_t>(o.projection.rows) * static_cast<size_t>(o.projection.cols);
-    for (auto& d : depth) d.resize(n);
-    for (auto& w : winner) w.resize(n);
+    for (auto& b : buffers) b.resize(n);
   }
 
   // Splats draw positions [k0, k1) into one thread's buffers.
   void Splat(const SurfelRenderInput& in, const Eigen::Matrix3f& R, const Eigen::Vector3f& t,
-             size_t k0, size_t k1, float* depth_buf, uint32_t* win_buf) const;
+             size_t k0, size_t k1, DepthWinner* buf) const;
 
   SurfelRendererOptions options;
   RangeProjection projection;
   internal::WorkerPool pool;
-  std::vector<std::vector<float>> depth;      // per thread, rows * cols
-  std::vector<std::vector<uint32_t>> winner;  // per thread: draw position of the nearest surfel
+  // Per thread, rows * cols: nearest depth and the draw position of its surfel.
+  std::vector<std::vector<DepthWinner>> buffers;
 };
 
 void CpuSurfelRenderer::Impl::Splat(const SurfelRenderInput& in, const Eigen::Matrix3f& R,
                                     const Eigen::Vector3f& t, size_t k0, size_t k1,
-                                    float* depth_buf, uint32_t* win_buf) const {
+                                    DepthWinner* buf) const {
   const RangeProjectionOptions& po = options.projection;
   const int rows = po.rows;
   const int cols = po.cols;
@@ -66,7 +69,10 @@ void CpuSurfelRenderer::Impl::Splat(const SurfelRenderInput& in, const Eigen::Ma
   const float min_r2 = min_r * min_r;
   const float max_r2 = max_r * max_r;
   const float facing = static_cast<float>(options.min_facing_cos);
-  const Eigen::Vector3f* rays = projection.ray_directions().data();
+  const float* row_cos = projection.row_cos().data();
+  const float* row_sin = projection.row_sin().data();
+  const float* col_cos = projection.col_cos().data();
+  const float* col_sin = projection.col_sin().data();
 
   for (size_t k = k0; k < k1; ++k) {
     const size_t id = in.ids != nullptr ? in.ids[k] : k;
@@ -133,19 +139,30 @@ void CpuSurfelRenderer::Impl::Splat(const SurfelRenderInput& in, const Eigen::Ma
     const float r2 = radius * radius;
     const uint32_t kk = static_cast<uint32_t>(k);
     for (int row = row0; row <= row1; ++row) {
-      const int base = row * cols;
+      // The pixel-centre ray, rebuilt from the small trig tables (bit-identical to the table that
+      // EglSurfelRenderer uploads; the big table would cost a cache miss per pixel).
+      const float cp = row_cos[row];
+      const float sp = row_sin[row];
+      const float nz_sp = n.z() * sp;
+      DepthWinner* line = buf + row * cols;
       for (int c = col0; c <= col1; ++c) {
         const int cw = c < 0 ? c + cols : (c >= cols ? c - cols : c);
-        const int pix = base + cw;
-        const Eigen::Vector3f& ray = rays[pix];
-        const float denom = n.dot(ray);
+        const float rx = cp * col_cos[cw];
+        const float ry = cp * col_sin[cw];
+        const float denom = n.x() * rx + n.y() * ry + nz_sp;
         if (!(denom < 0.0f)) continue;
+        // Division-free early tests (denom < 0): t = n.p / denom < depth <=> n.p > depth * denom,
+        // and |t d - p|^2 <= r^2 <=> |(n.p) d - denom p|^2 <= r^2 denom^2.
+        DepthWinner& dw = line[cw];
+        if (!(n_dot_p > dw.depth * denom)) continue;
+        const float hx = n_dot_p * rx - denom * p.x();
+        const float hy = n_dot_p * ry - denom * p.y();
+        const float hz = n_dot_p * sp - denom * p.z();
+        if (hx * hx + hy * hy + hz * hz > r2 * (denom * denom)) continue;
         const float tt = n_dot_p / denom;
-        if (!(tt < depth_buf[pix])) continue;
-        if ((tt * ray - p).squaredNorm() > r2) continue;
-        if (tt < min_r || tt > max_r) continue;
-        depth_buf[pix] = tt;
-        win_buf[pix] = kk;
+        if (!(tt < dw.depth) || tt < min_r || tt > max_r) continue;
+        dw.depth = tt;
+        dw.winner = kk;
       }
     }
   }
@@ -190,13 +207,12 @@ Status CpuSurfelRenderer::Render(const SurfelRenderInput& input,
 
   // Pass 1: each thread splats its chunk of surfels into its own buffers.
   m.pool.Run([&](int ti) {
-    float* depth_buf = m.depth[static_cast<size_t>(ti)].data();
-    uint32_t* win_buf = m.winner[static_cast<size_t>(ti)].data();
-    std::fill(depth_buf, depth_buf + num_pixels, std::numeric_limits<float>::infinity());
-    std::fill(win_buf, win_buf + num_pixels, kNoWinner);
+    DepthWinner* buf = m.buffers[static_cast<size_t>(ti)].data();
+    std::fill(buf, buf + num_pixels,
+              DepthWinner{std::numeric_limits<float>::infinity(), kNoWinner});
     const size_t k0 = std::min(n, static_cast<size_t>(ti) * chunk);
     const size_t k1 = std::min(n, k0 + chunk);
-    m.Splat(input, R, t, k0, k1, depth_buf, win_buf);
+    m.Splat(input, R, t, k0, k1, buf);
   });
 
   // Pass 2: merge (nearest wins, ties to the earlier draw position) and write each pixel once.
@@ -207,11 +223,11 @@ Status CpuSurfelRenderer::Render(const SurfelRenderInput& input,
     const size_t i0 = std::min(num_pixels, static_cast<size_t>(ti) * pix_chunk);
     const size_t i1 = std::min(num_pixels, i0 + pix_chunk);
     for (size_t i = i0; i < i1; ++i) {
-      float best = m.depth[0][i];
-      uint32_t win = m.winner[0][i];
-      for (size_t j = 1; j < m.depth.size(); ++j) {
-        const float dj = m.depth[j][i];
-        const uint32_t wj = m.winner[j][i];
+      float best = m.buffers[0][i].depth;
+      uint32_t win = m.buffers[0][i].winner;
+      for (size_t j = 1; j < m.buffers.size(); ++j) {
+        const float dj = m.buffers[j][i].depth;
+        const uint32_t wj = m.buffers[j][i].winner;
         if (dj < best || (dj == best && wj < win)) {
           best = dj;
           win = wj;

@@ -60,14 +60,27 @@ RangeProjection::RangeProjection(const RangeProjectionOptions& options) : option
   ray_directions_.resize(static_cast<size_t>(rows) * static_cast<size_t>(cols));
   const double fov_up = options_.fov_up_deg * kPi / 180.0;
   const double fov = (options_.fov_up_deg - options_.fov_down_deg) * kPi / 180.0;
+  row_cos_.resize(static_cast<size_t>(rows));
+  row_sin_.resize(static_cast<size_t>(rows));
+  col_cos_.resize(static_cast<size_t>(cols));
+  col_sin_.resize(static_cast<size_t>(cols));
   for (int r = 0; r < rows; ++r) {
     const double pitch = fov_up - (r + 0.5) / rows * fov;
+    row_cos_[static_cast<size_t>(r)] = static_cast<float>(std::cos(pitch));
+    row_sin_[static_cast<size_t>(r)] = static_cast<float>(std::sin(pitch));
+  }
+  for (int c = 0; c < cols; ++c) {
+    const double yaw = kPi * (1.0 - 2.0 * (c + 0.5) / cols);
+    col_cos_[static_cast<size_t>(c)] = static_cast<float>(std::cos(yaw));
+    col_sin_[static_cast<size_t>(c)] = static_cast<float>(std::sin(yaw));
+  }
+  for (int r = 0; r < rows; ++r) {
+    const float cp = row_cos_[static_cast<size_t>(r)];
+    const float sp = row_sin_[static_cast<size_t>(r)];
     for (int c = 0; c < cols; ++c) {
-      const double yaw = kPi * (1.0 - 2.0 * (c + 0.5) / cols);
       ray_directions_[static_cast<size_t>(r * cols + c)] =
-          Eigen::Vector3d(std::cos(pitch) * std::cos(yaw), std::cos(pitch) * std::sin(yaw),
-                          std::sin(pitch))
-              .cast<float>();
+          Eigen::Vector3f(cp * col_cos_[static_cast<size_t>(c)], cp * col_sin_[static_cast<size_t>(c)],
+                          sp);
     }
   }
 }

@@ -19,19 +19,20 @@ WorkerPool::~WorkerPool() {
   for (auto& t : workers_) t.join();
 }
 
-void WorkerPool::Run(const std::function<void(int)>& fn) {
+void WorkerPool::RunImpl(Trampoline fn, void* ctx) {
   if (workers_.empty()) {
-    fn(0);
+    fn(ctx, 0);
     return;
   }
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    task_ = &fn;
+    task_ = fn;
+    task_ctx_ = ctx;
     pending_ = static_cast<int>(workers_.size());
     ++generation_;
   }
   start_cv_.notify_all();
-  fn(0);
+  fn(ctx, 0);
   std::unique_lock<std::mutex> lock(mutex_);
   done_cv_.wait(lock, [this] { return pending_ == 0; });
   task_ = nullptr;
@@ -40,15 +41,17 @@ void WorkerPool::Run(const std::function<void(int)>& fn) {
 void WorkerPool::WorkerLoop(int index) {
   long long seen = 0;
   for (;;) {
-    const std::function<void(int)>* task = nullptr;
+    Trampoline task = nullptr;
+    void* ctx = nullptr;
     {
       std::unique_lock<std::mutex> lock(mutex_);
       start_cv_.wait(lock, [&] { return stop_ || generation_ != seen; });
       if (stop_) return;
       seen = generation_;
       task = task_;
+      ctx = task_ctx_;
     }
-    (*task)(index);
+    task(ctx, index);
     {
       std::lock_guard<std::mutex> lock(mutex_);
       if (--pending_ == 0) done_cv_.notify_one();

@@ -78,8 +78,15 @@ class RangeProjection {
   const Eigen::Vector3f& RayDirection(int row, int col) const {
     return ray_directions_[static_cast<size_t>(row * options_.cols + col)];
   }
-  /// The whole row-major table of pixel-centre ray directions (rows * cols).
+  /// The whole row-major table of pixel-centre ray directions (rows * cols). Each is exactly
+  /// (row_cos[r] * col_cos[c], row_cos[r] * col_sin[c], row_sin[r]) in float arithmetic, so a
+  /// renderer may rebuild it from the small per-row/per-column tables below bit for bit.
   const std::vector<Eigen::Vector3f>& ray_directions() const { return ray_directions_; }
+  /// cos / sin of the elevation of each row's centre, and of the azimuth of each column's centre.
+  const std::vector<float>& row_cos() const { return row_cos_; }
+  const std::vector<float>& row_sin() const { return row_sin_; }
+  const std::vector<float>& col_cos() const { return col_cos_; }
+  const std::vector<float>& col_sin() const { return col_sin_; }
 
   /// Vertex map of a scan whose points are in the sensor frame (de-skew first): in each pixel the
   /// NEAREST point wins; index = the point's index in `cloud`. Non-finite points are skipped.
@@ -106,6 +113,7 @@ class RangeProjection {
   float fov_up_rad_ = 0.0f;
   float fov_rad_ = 0.0f;
   std::vector<Eigen::Vector3f> ray_directions_;
+  std::vector<float> row_cos_, row_sin_, col_cos_, col_sin_;
 };
 
 }  // namespace slam_mms

@@ -277,8 +277,9 @@ class Generator {
       const PathSample& s = path().SampleOf(n);
       if (n.distance < s.half_width + s.sidewalk + clearance) return false;
     }
-    return occupied_.count(CellKey(static_cast<int64_t>(std::floor(q.x())),
-                                   static_cast<int64_t>(std::floor(q.y())))) == 0;
+    const int64_t key =
+        CellKey(static_cast<int64_t>(std::floor(q.x())), static_cast<int64_t>(std::floor(q.y())));
+    return occupied_.count(key) == 0 && (!check_furniture_ || furniture_.count(key) == 0);
   }
 
   bool RectFree(const Eigen::Vector2d& c, const Eigen::Vector2d& t, double hl, double hd,
@@ -291,6 +292,20 @@ class Generator {
         if (!PointFree(c + t * (-hl + 2 * hl * a / nl) + nrm * (-hd + 2 * hd * b / nd), clearance))
           return false;
     return true;
+  }
+
+  // Street furniture (trees, poles, cars) goes into its own set: it must not block the buildings
+  // behind the sidewalk, but nothing may be placed onto it.
+  void MarkFurniture(const Eigen::Vector2d& c, const Eigen::Vector2d& t, double hl, double hd) {
+    std::swap(occupied_, furniture_);
+    MarkRect(c, t, hl, hd);
+    std::swap(occupied_, furniture_);
+  }
+
+  bool Occupied(const Eigen::Vector2d& q) const {
+    const int64_t key =
+        CellKey(static_cast<int64_t>(std::floor(q.x())), static_cast<int64_t>(std::floor(q.y())));
+    return occupied_.count(key) != 0 || furniture_.count(key) != 0;
   }
 
   void MarkRect(const Eigen::Vector2d& c, const Eigen::Vector2d& t, double hl, double hd) {
@@ -363,8 +378,11 @@ class Generator {
       const double L = length * (attempt == 0 ? 1.0 : attempt == 1 ? 0.6 : 0.35);
       const double D = depth * (attempt == 2 ? 0.6 : 1.0);
       const Eigen::Vector2d c = origin + t * (L / 2) + away * (front_offset + D / 2);
-      if (L < 5.0 || !RectFree(c, t, L / 2, D / 2, 0.3)) continue;
-      MarkRect(c, t, L / 2, D / 2);
+      // Checked and marked 0.6 m inside the footprint so that neighbours may touch (1 m cells);
+      // the street clearance (0.2 m) stays below the 0.3 m gap to the sidewalk.
+      if (L < 5.0 || !RectFree(c, t, L / 2 - 0.6, D / 2 - 0.6, 0.2)) continue;
+      if (!PointFree(c - away * (D / 2), 0.2)) continue;
+      MarkRect(c, t, L / 2 - 0.6, D / 2 - 0.6);
       EmitBuilding(c, t, away, L / 2, D / 2, height);
       return true;
     }
@@ -493,7 +511,7 @@ class Generator {
           double length;
           if (u < o_.building_probability) {
             length = rng_.Uniform(10.0, 32.0);
-            const double setback = rng_.Bernoulli(0.55) ? 0.0 : rng_.Uniform(0.5, 5.0);
+            const double setback = rng_.Bernoulli(0.7) ? 0.0 : rng_.Uniform(0.5, 3.0);
             const double hu = rng_.Uniform();
             const double height =
                 o_.building_height_min_m +
@@ -524,8 +542,8 @@ class Generator {
             if (rng_.Bernoulli(0.6)) {
               const Eigen::Vector2d q =
                   p.p + p.tangent * rng_.Uniform(2.0, length - 2.0) + nrm * (front + 2.5);
-              if (PointFree(q, 0.5)) {
-                MarkRect(q, p.tangent, 0.5, 0.5);
+              if (PointFree(q, 0.5) && !Occupied(q)) {
+                MarkFurniture(q, p.tangent, 0.5, 0.5);
                 EmitTree(q);
               }
             }
@@ -538,10 +556,8 @@ class Generator {
         if (p.s >= next_pole) {
           const Eigen::Vector2d q = p.p + nrm * (w + 0.5);
           const PathNearest n = path().Nearest(q, 30.0);
-          if (n.segment >= 0 && n.distance >= path().SampleOf(n).half_width + 0.3 &&
-              occupied_.count(CellKey(static_cast<int64_t>(std::floor(q.x())),
-                                      static_cast<int64_t>(std::floor(q.y())))) == 0) {
-            MarkRect(q, p.tangent, 0.3, 0.3);
+          if (n.segment >= 0 && n.distance >= path().SampleOf(n).half_width + 0.3 && !Occupied(q)) {
+            MarkFurniture(q, p.tangent, 0.3, 0.3);
             EmitPole(q, p.tangent, -nrm);
           }
           next_pole = p.s + o_.pole_spacing_m * rng_.Uniform(0.6, 1.4);
@@ -559,9 +575,8 @@ class Generator {
           const Eigen::Vector2d q = p.p + nrm * off;
           const PathNearest n = path().Nearest(q, 30.0);
           const bool on_road = n.segment >= 0 && n.distance < path().SampleOf(n).half_width + 0.6;
-          if (!on_road && occupied_.count(CellKey(static_cast<int64_t>(std::floor(q.x())),
-                                                  static_cast<int64_t>(std::floor(q.y())))) == 0) {
-            MarkRect(q, p.tangent, 0.8, 0.8);
+          if (!on_road && !Occupied(q)) {
+            MarkFurniture(q, p.tangent, 0.8, 0.8);
             EmitTree(q);
           }
           next_tree = p.s + rng_.Uniform(7.0, 11.0);
@@ -585,13 +600,11 @@ class Generator {
               if (n.segment < 0 || n.distance < 2.4 ||
                   n.distance > path().SampleOf(n).half_width - 0.05)
                 ok = false;
-              if (occupied_.count(CellKey(static_cast<int64_t>(std::floor(q.x())),
-                                          static_cast<int64_t>(std::floor(q.y())))) != 0)
-                ok = false;
+              if (Occupied(q)) ok = false;
             }
           }
           if (ok) {
-            MarkRect(c, p.tangent, 2.3, 0.95);
+            MarkFurniture(c, p.tangent, 2.3, 0.95);
             EmitCar(c, rng_.Bernoulli(0.8) ? p.tangent : Eigen::Vector2d(-p.tangent));
           }
           next_car = p.s + rng_.Uniform(5.4, 7.0);
@@ -605,7 +618,8 @@ class Generator {
   CityWorld::Impl* impl_;
   const CityWorld::Options& o_;
   Rng rng_;
-  std::unordered_set<int64_t> occupied_;
+  std::unordered_set<int64_t> occupied_, furniture_;
+  bool check_furniture_ = false;
 };
 
 }  // namespace

@@ -153,6 +153,7 @@ Status WriteScenarioJson(const DriveSimulator::Options& o, const DriveSimulator&
     << ", \"min_cos_incidence\": " << Num(l.min_cos_incidence)
     << ", \"reflectance_noise_sigma\": " << Num(l.reflectance_noise_sigma)
     << ", \"elevation_bias_deg\": " << Num(l.elevation_bias_deg)
+    << ", \"dropout_base\": " << Num(l.dropout_base) << ", \"dropout_far\": " << Num(l.dropout_far)
     << ", \"motion_compensated\": false},\n";
   f << "  \"imu\": {\"rate_hz\": " << Num(imu.rate_hz)
     << ", \"gyro_noise_density\": " << Num(imu.gyro_noise_density)

@@ -49,6 +49,10 @@ Status Hdl64Lidar::Options::Validate() const {
     return fail("min_cos_incidence", min_cos_incidence, "must be in [0, 1)");
   if (!(reflectance_noise_sigma >= 0.0))
     return fail("reflectance_noise_sigma", reflectance_noise_sigma, "must be >= 0");
+  if (!(dropout_base >= 0.0 && dropout_base < 1.0))
+    return fail("dropout_base", dropout_base, "must be in [0, 1)");
+  if (!(dropout_far >= 0.0 && dropout_far <= 1.0))
+    return fail("dropout_far", dropout_far, "must be in [0, 1]");
   if (!(std::abs(elevation_bias_deg) < 5.0))
     return fail("elevation_bias_deg", elevation_bias_deg, "must be in (-5, 5)");
   return OkStatus();
@@ -124,6 +128,9 @@ Hdl64Lidar::Output Hdl64Lidar::Simulate(const CityWorld& world,
         const uint64_t key = scan_key ^ (static_cast<uint64_t>(b) << 40) ^ static_cast<uint64_t>(f);
         const double r = h.range_m + options_.range_noise_sigma_m * HashNormal(key);
         if (r < options_.min_range_m || r > options_.max_range_m) continue;
+        const double p_drop = options_.dropout_base + options_.dropout_far * (1.0 - h.albedo) *
+                                                          std::clamp((r - 30.0) / 90.0, 0.0, 1.0);
+        if (p_drop > 0.0 && HashUniform(key ^ 0xD20Bull << 24) < p_drop) continue;
         const size_t idx = static_cast<size_t>(b) * nf + f;
         range[idx] = static_cast<float>(r);
         const double rf = h.albedo * (0.3 + 0.7 * cos_inc) +

@@ -8,7 +8,8 @@
 // azimuth atan2(y, x) = pi - 2 pi j / N and time offset j / (N * rate), which is KITTI's
 // t = 0.5 (-atan2(y, x) / pi + 1) convention. Range noise is Gaussian; returns beyond max_range or
 // grazing the surface (|cos incidence| < min_cos_incidence) are lost; reflectance =
-// albedo (0.3 + 0.7 |cos incidence|) + noise, clamped to [0, 1]. An optional elevation bias writes
+// albedo (0.3 + 0.7 |cos incidence|) + noise, clamped to [0, 1]; returns are randomly lost more
+// often on dark and distant surfaces (see Options::dropout_*). An optional elevation bias writes
 // every point `elevation_bias_deg` lower than the ray that produced it (KITTI's 0.205 deg defect).
 // Points are stored ring by ring (top beam first), each ring in firing order.
 //
@@ -42,6 +43,10 @@ class Hdl64Lidar {
     double min_cos_incidence = 0.02;  ///< Grazing returns below this are lost.
     double reflectance_noise_sigma = 0.02;
     double elevation_bias_deg = 0.0;  ///< KITTI-like: 0.205 (points written this much too low).
+    /// Lost returns: probability dropout_base + dropout_far * (1 - albedo) * clamp((r - 30) / 90,
+    /// 0, 1) (dark and distant surfaces return less often, as in KITTI's ~115-125k points a scan).
+    double dropout_base = 0.03;
+    double dropout_far = 0.6;
 
     [[nodiscard]] Status Validate() const;
   };

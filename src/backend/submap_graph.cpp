@@ -22,6 +22,12 @@ using backend_internal::ValidatePose;
 
 namespace {
 
+struct Sequential {  // A factor between consecutive submaps i -> i+1.
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  Matrix6d covariance = Matrix6d::Identity();
+  bool reckon = false;
+};
+
 struct Node {
   SubmapId id = 0;
   size_t index = 0;
@@ -72,6 +78,7 @@ struct SubmapGraph::Impl {
   int num_gnss = 0;
   int last_free = 0;
   std::optional<size_t> pending_loop_from;  // Oldest node index touched by loops since last solve.
+  std::map<size_t, Sequential> sequential;  // Keyed by the index of the older node.
 
   explicit Impl(const Options& o) : options(o) {
     ceres::Problem::Options po;
@@ -103,6 +110,55 @@ struct SubmapGraph::Impl {
     problem->AddResidualBlock(cost.release(), loss.NewLossFunction(), nodes_ab.first->pose.data(),
                               nodes_ab.second->pose.data());
     return OkStatus();
+  }
+
+  // Remembers a reckon/registration factor between consecutive submaps for the loop check
+  // (a reckon factor wins over a registration one).
+  void RecordSequential(SubmapId a, SubmapId b, const Eigen::Isometry3d& T_a_b,
+                        const Matrix6d& covariance, bool reckon) {
+    const size_t ia = Find(a)->index, ib = Find(b)->index;
+    if (ib != ia + 1) return;
+    auto it = sequential.find(ia);
+    if (it != sequential.end() && it->second.reckon && !reckon) return;
+    sequential[ia] = Sequential{T_a_b, covariance, reckon};
+  }
+
+  // T_a_b and its covariance composed from the sequential factors (right perturbation:
+  // T = T1 T2 -> xi = Ad(T2^-1) xi1 + xi2; inverse T^-1 -> Sigma' = Ad(T) Sigma Ad(T)^T).
+  std::optional<std::pair<Eigen::Isometry3d, Matrix6d>> Chain(size_t ia, size_t ib) const {
+    const size_t lo = std::min(ia, ib), hi = std::max(ia, ib);
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    Matrix6d C = Matrix6d::Zero();
+    for (size_t i = lo; i < hi; ++i) {
+      auto it = sequential.find(i);
+      if (it == sequential.end()) return std::nullopt;
+      const Matrix6d Ad = se3::Adjoint(it->second.T.inverse());
+      C = Ad * C * Ad.transpose() + it->second.covariance;
+      T = T * it->second.T;
+    }
+    if (ia > ib) {
+      const Matrix6d Ad = se3::Adjoint(T);
+      C = Ad * C * Ad.transpose();
+      T = T.inverse();
+    }
+    return std::make_pair(T, C);
+  }
+
+  StatusOr<LoopCheck> Check(SubmapId a, SubmapId b, const Eigen::Isometry3d& T_a_b,
+                            const Matrix6d& covariance) const {
+    SLAM_MMS_ASSIGN_OR_RETURN(auto nodes_ab, Pair(a, b, "CheckLoop"));
+    SLAM_MMS_RETURN_IF_ERROR(ValidatePose(T_a_b, "SubmapGraph loop T_a_b"));
+    SLAM_MMS_RETURN_IF_ERROR(ValidateCovariance<6>(covariance, "SubmapGraph loop"));
+    LoopCheck check;
+    auto chain = Chain(nodes_ab.first->index, nodes_ab.second->index);
+    if (!chain) return check;
+    check.chain_available = true;
+    check.T_a_b_chain = chain->first;
+    check.chain_covariance = chain->second;
+    const Matrix6d combined = covariance + chain->second;
+    const Vector6d e = backend_internal::PoseError(chain->first, T_a_b);
+    check.mahalanobis_sq = e.dot(combined.ldlt().solve(e));
+    return check;
   }
 
   // The node index from which a bounded solve frees the graph.
@@ -180,23 +236,38 @@ Status SubmapGraph::SetScans(SubmapId id, const std::vector<SubmapScanPose>& sca
 
 Status SubmapGraph::AddRegistrationFactor(SubmapId a, SubmapId b, const Eigen::Isometry3d& T_a_b,
                                           const Matrix6d& covariance, const RobustLoss& loss) {
-  return impl_->AddBetween(a, b, T_a_b, covariance, loss, "AddRegistrationFactor");
+  SLAM_MMS_RETURN_IF_ERROR(
+      impl_->AddBetween(a, b, T_a_b, covariance, loss, "AddRegistrationFactor"));
+  impl_->RecordSequential(a, b, T_a_b, covariance, /*reckon=*/false);
+  return OkStatus();
 }
 
 Status SubmapGraph::AddReckonFactor(SubmapId a, SubmapId b, const Eigen::Isometry3d& T_a_b,
                                     const Matrix6d& covariance) {
-  return impl_->AddBetween(a, b, T_a_b, covariance, RobustLoss::None(), "AddReckonFactor");
+  SLAM_MMS_RETURN_IF_ERROR(
+      impl_->AddBetween(a, b, T_a_b, covariance, RobustLoss::None(), "AddReckonFactor"));
+  impl_->RecordSequential(a, b, T_a_b, covariance, /*reckon=*/true);
+  return OkStatus();
 }
 
-Status SubmapGraph::AddLoopFactor(SubmapId a, SubmapId b, const Eigen::Isometry3d& T_a_b,
-                                  const Matrix6d& covariance) {
+StatusOr<LoopCheck> SubmapGraph::CheckLoop(SubmapId a, SubmapId b, const Eigen::Isometry3d& T_a_b,
+                                           const Matrix6d& covariance) const {
+  return impl_->Check(a, b, T_a_b, covariance);
+}
+
+StatusOr<LoopCheck> SubmapGraph::AddLoopFactor(SubmapId a, SubmapId b,
+                                               const Eigen::Isometry3d& T_a_b,
+                                               const Matrix6d& covariance) {
   Impl& m = *impl_;
+  SLAM_MMS_ASSIGN_OR_RETURN(LoopCheck check, m.Check(a, b, T_a_b, covariance));
   SLAM_MMS_RETURN_IF_ERROR(
       m.AddBetween(a, b, T_a_b, covariance, m.options.loop_loss, "AddLoopFactor"));
   const size_t oldest = std::min(m.Find(a)->index, m.Find(b)->index);
   m.pending_loop_from = std::min(m.pending_loop_from.value_or(oldest), oldest);
   ++m.num_loops;
-  return OkStatus();
+  SLAM_MMS_LOG(kDebug) << "SubmapGraph: loop " << a << "<->" << b
+                       << " d2 = " << check.mahalanobis_sq;
+  return check;
 }
 
 Status SubmapGraph::AddGnssPrior(SubmapId id, const Eigen::Vector3d& p_world_antenna,

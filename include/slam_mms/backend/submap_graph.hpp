@@ -8,8 +8,14 @@
 // Factors (eq 25: argmin sum |r_GNSS|^2 + |r_Reckon|^2 + |r_Reg|^2 + |r_Loop|^2):
 //  - AddRegistrationFactor: map-to-map registration of submap b against a (F_Reg, §5.2.1).
 //  - AddReckonFactor: the serial scan-to-map chain T~ = T_Nref_Nlast * T_Nlast_(N+1)first (eq 21).
-//  - AddLoopFactor: loop closure, always with Options::loop_loss (robust: one bad loop cannot bend
-//    the map) (eqs 22-23).
+//  - AddLoopFactor: loop closure (eqs 22-23), always robustified by Options::loop_loss so one bad
+//    loop cannot bend the map. The default Cauchy scale of 5 sigma (about sqrt of the 6-DoF 99.9 %
+//    chi-square quantile) keeps a correct loop after a long drift (its whitened residual may be
+//    hundreds of sigmas at the start, but it agrees with the chain between its ends) while a loop
+//    that contradicts the chain costs less left unsatisfied than followed (see docs/backend.md).
+//    Each loop is also compared with the sequential chain between its ends (composed from the
+//    reckon/registration factors between consecutive submaps); the Mahalanobis distance comes back
+//    in LoopCheck (CheckLoop() gives it before adding, for the caller's verification).
 //  - AddGnssPrior: a GNSS antenna position on a scan of a submap (eq 24; the ins module's
 //    GnssPositionFactor with the lever arm folded into the submap frame). Plug and play: add it
 //    only for valid fixes; the graph works with none (then the first submap is held fixed as the
@@ -62,6 +68,15 @@ struct SubmapScanPose {
   Eigen::Isometry3d T_world_scan = Eigen::Isometry3d::Identity();
 };
 
+/// How a loop measurement compares with the sequential chain between its two submaps.
+struct LoopCheck {
+  bool chain_available =
+      false;  ///< Every consecutive pair between a and b has a sequential factor.
+  Eigen::Isometry3d T_a_b_chain = Eigen::Isometry3d::Identity();  ///< Chain prediction.
+  Matrix6d chain_covariance = Matrix6d::Zero();                   ///< Its covariance.
+  double mahalanobis_sq = 0.0;  ///< e^T (Sigma_loop + Sigma_chain)^-1 e, e = loop vs chain (6 DoF).
+};
+
 /// A loop-closure candidate (the caller registers and verifies it, e.g. with ICP).
 struct LoopCandidate {
   SubmapId submap = 0;
@@ -77,8 +92,8 @@ class SubmapGraph {
     double function_tolerance = 1e-8;  ///< Ceres relative cost change to stop, > 0.
     /// Newest nodes free in a bounded solve (kFinish frees all), > 0.
     int active_submaps = 50;
-    /// Robust loss of loop factors (scale in sigma of the whitened residual).
-    RobustLoss loop_loss = RobustLoss::Cauchy(1.0);
+    /// Robust loss of loop factors (scale in sigmas of the loop's whitened residual, see above).
+    RobustLoss loop_loss = RobustLoss::Cauchy(5.0);
     /// Robust loss of GNSS priors (multipath).
     RobustLoss gnss_loss = RobustLoss::Huber(3.0);
     /// Loop candidates: nearer than this to the query [m] (the paper's D_thr), > 0.
@@ -115,9 +130,12 @@ class SubmapGraph {
   /// F_Reckon (eq 21): T~_a_b from the serial scan-to-map chain.
   Status AddReckonFactor(SubmapId a, SubmapId b, const Eigen::Isometry3d& T_a_b,
                          const Matrix6d& covariance);
-  /// F_Loop (eqs 22-23), robustified by Options::loop_loss.
-  Status AddLoopFactor(SubmapId a, SubmapId b, const Eigen::Isometry3d& T_a_b,
-                       const Matrix6d& covariance);
+  /// F_Loop (eqs 22-23), robustified by Options::loop_loss (scale adapted, see above).
+  StatusOr<LoopCheck> AddLoopFactor(SubmapId a, SubmapId b, const Eigen::Isometry3d& T_a_b,
+                                    const Matrix6d& covariance);
+  /// The comparison AddLoopFactor would make, without adding anything.
+  StatusOr<LoopCheck> CheckLoop(SubmapId a, SubmapId b, const Eigen::Isometry3d& T_a_b,
+                                const Matrix6d& covariance) const;
   /// F_GNSS (eq 24): antenna position p~_world_antenna (3x3 covariance) measured when the body was
   /// at T_submap_body in submap `id`, antenna at t_body_antenna (lever arm) in the body frame.
   Status AddGnssPrior(SubmapId id, const Eigen::Vector3d& p_world_antenna,

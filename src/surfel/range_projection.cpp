@@ -78,9 +78,8 @@ RangeProjection::RangeProjection(const RangeProjectionOptions& options) : option
     const float cp = row_cos_[static_cast<size_t>(r)];
     const float sp = row_sin_[static_cast<size_t>(r)];
     for (int c = 0; c < cols; ++c) {
-      ray_directions_[static_cast<size_t>(r * cols + c)] =
-          Eigen::Vector3f(cp * col_cos_[static_cast<size_t>(c)], cp * col_sin_[static_cast<size_t>(c)],
-                          sp);
+      ray_directions_[static_cast<size_t>(r * cols + c)] = Eigen::Vector3f(
+          cp * col_cos_[static_cast<size_t>(c)], cp * col_sin_[static_cast<size_t>(c)], sp);
     }
   }
 }

@@ -8,6 +8,7 @@
 
 #include "slam_mms/render_egl/surfel_renderer_factory.hpp"
 #include "slam_mms/surfel/cpu_surfel_renderer.hpp"
+#include "slam_mms/surfel/surfel_map.hpp"
 #include "surfel/synthetic_surfels.hpp"
 
 namespace slam_mms {
@@ -128,6 +129,38 @@ TEST(EglSurfelRendererTest, ImpossibleImageSizeIsAStatusNotACrash) {
   ASSERT_FALSE(r.ok());
   EXPECT_EQ(r.status().code(), StatusCode::kUnavailable);
   EXPECT_FALSE(r.status().message().empty());
+}
+
+TEST(EglSurfelRendererTest, SurfelMapIntegratesTheSameWithEitherRenderer) {
+  const SurfelRendererOptions options;
+  REQUIRE_EGL(egl, options);
+  // "Scans": images of a synthetic street rendered at two poses.
+  CpuSurfelRenderer cpu;
+  const auto street = internal::MakeStreetSurfels(60000, 21);
+  std::vector<VertexNormalMap> scans(2);
+  std::vector<Eigen::Isometry3d> poses(2, Eigen::Isometry3d::Identity());
+  poses[1].translation() = Eigen::Vector3d(0.6, 0.05, 0.0);
+  for (int f = 0; f < 2; ++f) {
+    ASSERT_TRUE(cpu.Render(SurfelRenderInput::All(street), poses[f], &scans[f]).ok());
+  }
+  SurfelMap with_cpu, with_egl;
+  ASSERT_TRUE(with_egl.SetRenderer(egl.get()).ok());
+  for (int f = 0; f < 2; ++f) {
+    auto a = with_cpu.Integrate(scans[f], poses[f], Timestamp::FromNanoseconds(f));
+    auto b = with_egl.Integrate(scans[f], poses[f], Timestamp::FromNanoseconds(f));
+    ASSERT_TRUE(a.ok() && b.ok());
+    EXPECT_NEAR(a->num_explained, b->num_explained, 2 + a->num_explained / 1000);
+    EXPECT_NEAR(a->num_created, b->num_created, 2 + a->num_created / 1000);
+    EXPECT_NEAR(a->num_confirmed, b->num_confirmed, 2 + a->num_confirmed / 1000);
+  }
+  EXPECT_GT(with_cpu.size(), 10000u);
+  EXPECT_NEAR(static_cast<double>(with_cpu.size()), static_cast<double>(with_egl.size()),
+              2.0 + with_cpu.size() / 1000.0);
+  // A renderer with another image geometry is refused.
+  SurfelRendererOptions other;
+  other.projection.cols = 1024;
+  REQUIRE_EGL(egl_other, other);
+  EXPECT_EQ(with_egl.SetRenderer(egl_other.get()).code(), StatusCode::kInvalidArgument);
 }
 
 TEST(SurfelRendererFactoryTest, ChoosesCpuOnSoftwareGlAndHonoursExplicitChoice) {

@@ -1,0 +1,40 @@
+#pragma once
+// Command line of slam_mms_run (issue 8: the exact interface other tools call):
+//   slam_mms_run --kitti-raw DRIVE_DIR --out DIR [--mode full|gnss_ins|lidar_only|all]
+//                [--frames A:B] [--gnss-outage START_S:DURATION_S ...] [--config FILE]
+//   slam_mms_run --out DIR      (no data: simulates the embedded default drive into DIR/sim first)
+// plus --sim-duration S and --sim-seed N for the simulated drive, and --help.
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "slam_mms/core/status.hpp"
+#include "slam_mms/pipeline/localization_result.hpp"
+
+namespace slam_mms::app {
+
+struct RunArgs {
+  std::filesystem::path kitti_raw;  ///< Empty: simulate the default drive.
+  std::filesystem::path out_dir;
+  std::vector<MappingMode> modes;  ///< In run order (all = full, gnss_ins, lidar_only).
+  int64_t first_frame = 0;         ///< --frames A:B, inclusive file numbers.
+  int64_t last_frame = -1;         ///< -1 = the drive's last frame.
+  /// --gnss-outage windows [start_s, duration_s] relative to the first scan's start.
+  std::vector<std::pair<double, double>> gnss_outages;
+  std::filesystem::path config;  ///< Empty: none.
+  double sim_duration_s = 60.0;  ///< Seconds of the default drive to simulate (0 = all).
+  uint64_t sim_seed = 1;
+  bool help = false;
+  bool list_config_keys = false;  ///< --config-keys: print the config keys (markdown table).
+};
+
+/// Parses argv; errors name the flag and what was expected (exit code 2 in main).
+StatusOr<RunArgs> ParseRunArgs(int argc, const char* const* argv);
+
+/// The --help text.
+std::string RunUsage();
+
+}  // namespace slam_mms::app

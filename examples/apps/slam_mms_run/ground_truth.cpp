@@ -1,0 +1,165 @@
+#include "slam_mms_run/ground_truth.hpp"
+
+#include <GeographicLib/LocalCartesian.hpp>
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <vector>
+
+#include "slam_mms/io/oxts_record.hpp"
+#include "slam_mms/io/trajectory_io.hpp"
+
+namespace slam_mms::app {
+namespace {
+
+constexpr double kDegToRad = M_PI / 180.0;
+
+// The number after "key": inside `text` from `from` on (a tiny reader for scenario.json).
+StatusOr<double> JsonNumberAfter(const std::string& text, size_t from, const std::string& key,
+                                 const std::string& file) {
+  const std::string quoted = "\"" + key + "\"";
+  const size_t k = text.find(quoted, from);
+  if (k == std::string::npos) return DataLossError(file + ": no field '" + key + "'");
+  const size_t colon = text.find(':', k + quoted.size());
+  if (colon == std::string::npos) return DataLossError(file + ": field '" + key + "' has no value");
+  const char* begin = text.c_str() + colon + 1;
+  char* end = nullptr;
+  const double v = std::strtod(begin, &end);
+  if (end == begin || !std::isfinite(v)) {
+    return DataLossError(file + ": field '" + key + "' is not a finite number");
+  }
+  return v;
+}
+
+}  // namespace
+
+Eigen::Matrix3d R_ecef_enu(double latitude_deg, double longitude_deg) {
+  const double slat = std::sin(latitude_deg * kDegToRad), clat = std::cos(latitude_deg * kDegToRad);
+  const double slon = std::sin(longitude_deg * kDegToRad),
+               clon = std::cos(longitude_deg * kDegToRad);
+  Eigen::Matrix3d R;  // columns: east, north, up in ECEF
+  R.col(0) << -slon, clon, 0.0;
+  R.col(1) << -slat * clon, -slat * slon, clat;
+  R.col(2) << clat * clon, clat * slon, slat;
+  return R;
+}
+
+StatusOr<GeodeticPoint> ReadScenarioOrigin(const std::filesystem::path& scenario_json) {
+  std::ifstream in(scenario_json);
+  if (!in) return NotFoundError(scenario_json.string() + ": cannot open");
+  std::ostringstream s;
+  s << in.rdbuf();
+  const std::string text = s.str();
+  const std::string file = scenario_json.string();
+  const size_t at = text.find("\"origin_wgs84\"");
+  if (at == std::string::npos) return DataLossError(file + ": no field 'origin_wgs84'");
+  GeodeticPoint origin;
+  SLAM_MMS_ASSIGN_OR_RETURN(origin.latitude_deg, JsonNumberAfter(text, at, "latitude_deg", file));
+  SLAM_MMS_ASSIGN_OR_RETURN(origin.longitude_deg, JsonNumberAfter(text, at, "longitude_deg", file));
+  SLAM_MMS_ASSIGN_OR_RETURN(origin.height_m, JsonNumberAfter(text, at, "height_m", file));
+  if (std::abs(origin.latitude_deg) > 90.0 || std::abs(origin.longitude_deg) > 180.0) {
+    return DataLossError(file + ": origin_wgs84 outside the WGS-84 range");
+  }
+  return origin;
+}
+
+bool HasSimulatorGroundTruth(const std::filesystem::path& drive_dir) {
+  const std::filesystem::path gt = drive_dir / "ground_truth";
+  std::error_code ec;
+  return std::filesystem::exists(gt / "scenario.json", ec) &&
+         std::filesystem::exists(gt / "poses_100hz.tum", ec);
+}
+
+namespace {
+
+StatusOr<GroundTruth> LoadSimulator(const std::filesystem::path& drive_dir,
+                                    const GeodeticPoint& run_origin) {
+  const std::filesystem::path dir = drive_dir / "ground_truth";
+  SLAM_MMS_ASSIGN_OR_RETURN(const GeodeticPoint sim_origin,
+                            ReadScenarioOrigin(dir / "scenario.json"));
+  SLAM_MMS_ASSIGN_OR_RETURN(Trajectory poses, ReadTrajectoryTum(dir / "poses_100hz.tum"));
+  // The 100 Hz poses plus the exact poses at every scan start, so the interpolation at scan starts
+  // (where the estimates are) is exact.
+  std::vector<StampedPose> all = poses.poses();
+  std::error_code ec;
+  if (std::filesystem::exists(dir / "scan_start.tum", ec)) {
+    SLAM_MMS_ASSIGN_OR_RETURN(Trajectory starts, ReadTrajectoryTum(dir / "scan_start.tum"));
+    all.insert(all.end(), starts.poses().begin(), starts.poses().end());
+  }
+  std::stable_sort(all.begin(), all.end(),
+                   [](const StampedPose& a, const StampedPose& b) { return a.stamp < b.stamp; });
+
+  const GeographicLib::LocalCartesian sim_lc(sim_origin.latitude_deg, sim_origin.longitude_deg,
+                                             sim_origin.height_m);
+  const GeographicLib::LocalCartesian run_lc(run_origin.latitude_deg, run_origin.longitude_deg,
+                                             run_origin.height_m);
+  // R_run_sim = R_run_ecef * R_ecef_sim: both world frames are Cartesian ENU frames.
+  const Eigen::Matrix3d R_run_sim =
+      R_ecef_enu(run_origin.latitude_deg, run_origin.longitude_deg).transpose() *
+      R_ecef_enu(sim_origin.latitude_deg, sim_origin.longitude_deg);
+
+  GroundTruth gt;
+  gt.kind = "simulator";
+  gt.source = dir;
+  if (std::filesystem::exists(dir / "scene_points.ply", ec))
+    gt.scene_map = dir / "scene_points.ply";
+  for (size_t i = 0; i < all.size(); ++i) {
+    if (i > 0 && all[i].stamp == all[i - 1].stamp) continue;  // scan start on a 100 Hz record
+    const Eigen::Vector3d& p_sim = all[i].T_world_body.translation();
+    double lat = 0, lon = 0, h = 0;
+    sim_lc.Reverse(p_sim.x(), p_sim.y(), p_sim.z(), lat, lon, h);
+    Eigen::Vector3d p_run;
+    run_lc.Forward(lat, lon, h, p_run.x(), p_run.y(), p_run.z());
+    Eigen::Isometry3d T_run_body = Eigen::Isometry3d::Identity();
+    T_run_body.linear() = R_run_sim * all[i].T_world_body.linear();
+    T_run_body.translation() = p_run;
+    SLAM_MMS_RETURN_IF_ERROR(gt.T_world_body.Add(all[i].stamp, T_run_body));
+  }
+  if (gt.T_world_body.size() < 2) {
+    return DataLossError((dir / "poses_100hz.tum").string() + ": fewer than 2 poses");
+  }
+  return gt;
+}
+
+StatusOr<GroundTruth> LoadOxts(const KittiRawReader& reader, const GeodeticPoint& run_origin) {
+  // The denser stream when the drive has 100 Hz records.
+  const std::vector<StampedOxts>& records =
+      reader.HasImu100Hz() ? reader.ImuOxtsRecords() : reader.OxtsRecords();
+  if (records.size() < 2) {
+    return NotFoundError(
+        reader.drive_dir().string() +
+        ": no ground truth (no ground_truth/ folder and fewer than 2 OXTS records)");
+  }
+  const GeographicLib::LocalCartesian run_lc(run_origin.latitude_deg, run_origin.longitude_deg,
+                                             run_origin.height_m);
+  const Eigen::Matrix3d R_run_ecef =
+      R_ecef_enu(run_origin.latitude_deg, run_origin.longitude_deg).transpose();
+  GroundTruth gt;
+  gt.kind = "oxts";
+  gt.source = reader.drive_dir() / (reader.HasImu100Hz() ? "oxts_100hz" : "oxts");
+  for (const StampedOxts& r : records) {
+    Eigen::Vector3d p_run;
+    run_lc.Forward(r.record.lat_deg, r.record.lon_deg, r.record.alt_m, p_run.x(), p_run.y(),
+                   p_run.z());
+    // OXTS attitude is relative to the local level (ENU) frame at the record's position.
+    const Eigen::Matrix3d R_run_local = R_run_ecef * R_ecef_enu(r.record.lat_deg, r.record.lon_deg);
+    Eigen::Isometry3d T_run_body = Eigen::Isometry3d::Identity();
+    T_run_body.linear() = R_run_local * OxtsAttitude(r.record);
+    T_run_body.translation() = p_run;
+    SLAM_MMS_RETURN_IF_ERROR(gt.T_world_body.Add(r.stamp, T_run_body));
+  }
+  return gt;
+}
+
+}  // namespace
+
+StatusOr<GroundTruth> LoadGroundTruth(const std::filesystem::path& drive_dir,
+                                      const KittiRawReader& reader,
+                                      const GeodeticPoint& run_origin) {
+  if (HasSimulatorGroundTruth(drive_dir)) return LoadSimulator(drive_dir, run_origin);
+  return LoadOxts(reader, run_origin);
+}
+
+}  // namespace slam_mms::app

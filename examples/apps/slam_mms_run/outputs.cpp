@@ -1,0 +1,210 @@
+#include "slam_mms_run/outputs.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+#include "slam_mms/core/logging.hpp"
+#include "slam_mms/eval/map_entropy.hpp"
+#include "slam_mms/eval/plots.hpp"
+#include "slam_mms/eval/relative_error.hpp"
+#include "slam_mms/io/map_io.hpp"
+#include "slam_mms/io/trajectory_io.hpp"
+
+namespace slam_mms::app {
+namespace {
+
+void KeepFirst(Status* first, const Status& s) {
+  if (!s.ok()) {
+    SLAM_MMS_LOG(kError) << s.ToString();
+    if (first->ok()) *first = s;
+  }
+}
+
+std::string Cell(const std::optional<double>& v, const char* format) {
+  if (!v || !std::isfinite(*v)) return "-";
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), format, *v);
+  return buf;
+}
+
+}  // namespace
+
+Status WriteMethodFiles(const ModeRun& run, const std::filesystem::path& out_dir) {
+  Status first;
+  if (!run.trajectory.empty()) {
+    KeepFirst(&first, WriteTrajectoryTum(run.trajectory, out_dir / (run.name + ".tum")));
+    KeepFirst(&first, WriteTrajectoryKitti(run.trajectory, out_dir / (run.name + ".kitti")));
+    KeepFirst(&first, WriteTrajectoryCsv(run.trajectory, out_dir / (run.name + "_cov.csv")));
+  } else {
+    SLAM_MMS_LOG(kWarning) << run.name << ": no pose estimated, no trajectory written";
+  }
+  const bool map_wanted = run.mode == MappingMode::kFull || run.mode == MappingMode::kGnssIns;
+  if (map_wanted && !run.map.empty()) {
+    MapCloud map;
+    map.cloud = run.map;
+    const std::string base = "map_" + run.name;
+    KeepFirst(&first, WritePly(map, out_dir / (base + ".ply")));
+    KeepFirst(&first, WritePcd(map, out_dir / (base + ".pcd")));
+    if (run.origin) {
+      GeoOrigin origin{run.origin->latitude_deg, run.origin->longitude_deg, run.origin->height_m};
+      KeepFirst(&first, WriteLas(map, origin, out_dir / (base + ".las")));
+    } else {
+      SLAM_MMS_LOG(kWarning) << run.name << ": world origin unknown, " << base
+                             << ".las not written";
+    }
+  } else if (map_wanted) {
+    SLAM_MMS_LOG(kWarning) << run.name << ": empty map, map files not written";
+  }
+  return first;
+}
+
+MethodEvaluation EvaluateMethod(const ModeRun& run, const GroundTruth* gt,
+                                const std::vector<eval::OutageWindow>& outages, Timestamp reference,
+                                int num_threads) {
+  MethodEvaluation ev;
+  ev.name = run.name;
+  std::optional<eval::RelativeErrorResult> relative;
+  std::optional<eval::OutageErrorResult> outage;
+  std::optional<eval::MapEntropyResult> entropy;
+  if (gt != nullptr && !run.trajectory.empty()) {
+    StatusOr<eval::AteResult> ate = eval::ComputeAte(run.trajectory, gt->T_world_body);
+    if (ate.ok()) {
+      ev.ate = *ate;
+      StatusOr<eval::OutageErrorResult> o =
+          eval::ComputeOutageErrors(ate->errors, outages, reference);
+      if (o.ok()) {
+        outage = *o;
+        ev.outage_poses = o->num_poses;
+      } else {
+        SLAM_MMS_LOG(kWarning) << run.name << ": outage errors: " << o.status().ToString();
+      }
+    } else {
+      SLAM_MMS_LOG(kWarning) << run.name << ": ATE: " << ate.status().ToString();
+    }
+    if (run.trajectory.size() >= 2) {
+      // The devkit's 100..800 m where the drive is long enough, else 10..80 m (named so).
+      StatusOr<eval::MatchedPoses> matched =
+          eval::MatchByTimestamp(run.trajectory, gt->T_world_body);
+      double path_m = 0.0;
+      if (matched.ok()) {
+        for (size_t i = 1; i < matched->size(); ++i) {
+          path_m +=
+              (matched->T_world_gt[i].translation() - matched->T_world_gt[i - 1].translation())
+                  .norm();
+        }
+      }
+      const eval::RelativeErrorOptions rel_options = path_m >= 400.0
+                                                         ? eval::RelativeErrorOptions::Kitti()
+                                                         : eval::RelativeErrorOptions::ShortDrive();
+      ev.relative_label = rel_options.LengthsLabel();
+      StatusOr<eval::RelativeErrorResult> r =
+          eval::ComputeRelativeError(run.trajectory, gt->T_world_body, rel_options);
+      if (r.ok()) {
+        relative = *r;
+        ev.relative_segments = r->num_segments;
+      } else {
+        SLAM_MMS_LOG(kWarning) << run.name << ": relative error: " << r.status().ToString();
+      }
+    }
+  }
+  if (!run.map.empty()) {
+    eval::MapEntropyOptions mo;
+    mo.num_threads = num_threads;
+    StatusOr<eval::MapEntropyResult> e = eval::ComputeMapEntropy(run.map, mo);
+    if (e.ok()) {
+      entropy = *e;
+      ev.mme_points = e->num_valid_points;
+    } else {
+      SLAM_MMS_LOG(kWarning) << run.name << ": map entropy: " << e.status().ToString();
+    }
+  }
+  ev.report = eval::MakeMethodReport(ev.ate ? &*ev.ate : nullptr, relative ? &*relative : nullptr,
+                                     outage ? &*outage : nullptr, entropy ? &*entropy : nullptr);
+  ev.report.scans_per_s = run.scans_per_s;
+  ev.report.peak_rss_mb = run.peak_rss_mb;
+  return ev;
+}
+
+void WritePlots(const std::vector<ModeRun>& runs, const std::vector<MethodEvaluation>& evals,
+                const GroundTruth* gt, const std::vector<eval::OutageWindow>& outages,
+                Timestamp reference, const std::filesystem::path& out_dir) {
+  auto warn = [](const char* what, const Status& s) {
+    if (!s.ok()) {
+      SLAM_MMS_LOG(kWarning) << what << ": " << s.ToString();
+    }
+  };
+  std::vector<eval::NamedTrajectory> methods;
+  for (const ModeRun& r : runs) {
+    if (!r.trajectory.empty()) methods.push_back({r.name, r.trajectory});
+  }
+  if (gt != nullptr && !methods.empty()) {
+    // The ground truth over the span of the estimates only (the simulator's covers the lead-in).
+    Trajectory gt_span;
+    Timestamp t_min = methods.front().trajectory.start(), t_max = methods.front().trajectory.end();
+    for (const auto& m : methods) {
+      t_min = std::min(t_min, m.trajectory.start());
+      t_max = std::max(t_max, m.trajectory.end());
+    }
+    for (const StampedPose& p : gt->T_world_body.poses()) {
+      if (p.stamp >= t_min && p.stamp <= t_max) (void)gt_span.Add(p);
+    }
+    if (gt_span.size() < 2) gt_span = gt->T_world_body;
+    eval::PlotOptions po;
+    po.title = "Trajectories from above (ground truth: " + gt->kind + ")";
+    warn("trajectories.png",
+         eval::PlotTrajectoriesTopView({"ground truth (" + gt->kind + ")", gt_span}, methods,
+                                       outages, reference, out_dir / "trajectories.png", po));
+    std::vector<eval::ErrorSeries> series;
+    for (const MethodEvaluation& e : evals) {
+      if (e.ate) series.push_back(eval::MakeErrorSeries(e.name, e.ate->errors, reference));
+    }
+    if (!series.empty()) {
+      eval::PlotOptions pe;
+      pe.title = "Position error vs " + gt->kind + " ground truth (GNSS outages shaded)";
+      warn("position_error.png",
+           eval::PlotPositionErrors(series, outages, out_dir / "position_error.png", pe));
+    }
+  }
+  for (const ModeRun& r : runs) {
+    if (r.mode == MappingMode::kLidarOnly || r.map.empty()) continue;
+    std::vector<Eigen::Vector3d> overlay;
+    for (const StampedPose& p : r.trajectory.poses())
+      overlay.push_back(p.T_world_body.translation());
+    eval::PlotOptions pm;
+    pm.title = "Map of " + r.name + " from above, coloured by height";
+    const std::string file = "map_" + r.name + "_height.png";
+    warn(file.c_str(), eval::PlotMapHeight(r.map, overlay, out_dir / file, pm));
+  }
+}
+
+std::string SummaryTable(const std::vector<MethodEvaluation>& evals,
+                         const std::optional<double>& gt_map_mme, const std::string& gt_kind) {
+  std::ostringstream s;
+  char line[512];
+  std::snprintf(line, sizeof(line), "%-11s %9s %9s %9s %12s %14s %8s %8s %9s\n", "method", "ATE[m]",
+                "rotRMSE", "t_rel[%]", "r_rel[d/100]", "maxErrOut[m]", "MME", "scans/s", "RSS[MB]");
+  s << line;
+  for (const MethodEvaluation& e : evals) {
+    const eval::MethodReport& m = e.report;
+    std::snprintf(line, sizeof(line), "%-11s %9s %9s %9s %12s %14s %8s %8s %9s\n", e.name.c_str(),
+                  Cell(m.ate_rmse_m, "%.3f").c_str(), Cell(m.rot_rmse_deg, "%.3f").c_str(),
+                  Cell(m.t_rel_pct, "%.3f").c_str(), Cell(m.r_rel_deg_per_100m, "%.4f").c_str(),
+                  Cell(m.max_pos_err_in_outage_m, "%.3f").c_str(), Cell(m.mme, "%.4f").c_str(),
+                  Cell(m.scans_per_s, "%.2f").c_str(), Cell(m.peak_rss_mb, "%.0f").c_str());
+    s << line;
+  }
+  s << "ground-truth map MME: " << Cell(gt_map_mme, "%.4f") << "\n";
+  s << "ATE and rotation RMSE without alignment, against the " << gt_kind
+    << " ground truth interpolated at each scan's start; rotRMSE in deg.\n";
+  for (const MethodEvaluation& e : evals) {
+    if (!e.relative_label.empty()) {
+      s << e.name << ": t_rel/r_rel over segments " << e.relative_label << " ("
+        << e.relative_segments << " segments); " << e.outage_poses
+        << " poses inside GNSS outages; MME over " << e.mme_points << " points\n";
+    }
+  }
+  return s.str();
+}
+
+}  // namespace slam_mms::app

@@ -1,0 +1,50 @@
+#pragma once
+// Outputs of slam_mms_run: per-method trajectory and map files, the metrics of each method against
+// the ground truth (eval), report.json (issue 8's exact schema), PNG plots and the summary table.
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "slam_mms/core/status.hpp"
+#include "slam_mms/eval/outage_error.hpp"
+#include "slam_mms/eval/report.hpp"
+#include "slam_mms/eval/trajectory_error.hpp"
+#include "slam_mms_run/ground_truth.hpp"
+#include "slam_mms_run/run_mode.hpp"
+
+namespace slam_mms::app {
+
+/// <name>.tum, <name>.kitti, <name>_cov.csv; for full and gnss_ins also map_<name>.ply/.pcd/.las
+/// (the LAS geo-referenced with the run's origin). Returns the first failure (all are attempted).
+Status WriteMethodFiles(const ModeRun& run, const std::filesystem::path& out_dir);
+
+/// One method's metrics plus what the plots and the table need.
+struct MethodEvaluation {
+  std::string name;
+  eval::MethodReport report;
+  std::optional<eval::AteResult> ate;  ///< Absent without ground truth.
+  std::string relative_label;          ///< "kitti_100-800m" or "short_10-80m".
+  size_t relative_segments = 0;
+  size_t outage_poses = 0;
+  size_t mme_points = 0;
+};
+
+/// ATE, rotation RMSE, KITTI relative error (devkit lengths when the ground-truth path is at least
+/// 400 m, else the short 10-80 m lengths, named so), outage errors (windows relative to
+/// `reference`), map entropy; scans/s and peak RSS from the run. `gt` may be null.
+MethodEvaluation EvaluateMethod(const ModeRun& run, const GroundTruth* gt,
+                                const std::vector<eval::OutageWindow>& outages, Timestamp reference,
+                                int num_threads);
+
+/// trajectories.png, position_error.png, map_<name>_height.png (full, gnss_ins). Logs failures.
+void WritePlots(const std::vector<ModeRun>& runs, const std::vector<MethodEvaluation>& evals,
+                const GroundTruth* gt, const std::vector<eval::OutageWindow>& outages,
+                Timestamp reference, const std::filesystem::path& out_dir);
+
+/// The methods side by side (ATE, rot RMSE, t_rel, max error in outages, MME, scans/s, RSS).
+std::string SummaryTable(const std::vector<MethodEvaluation>& evals,
+                         const std::optional<double>& gt_map_mme, const std::string& gt_kind);
+
+}  // namespace slam_mms::app

@@ -62,7 +62,7 @@ class GnssSimulator {
     double multipath_sigma_m = 3.0;
     double urban_canyon_scale = 1.0;  ///< Multiplies the sky blockage; 0 disables degradation.
     /// Blockage thresholds: above each the best state drops to float / SPS / none.
-    double blockage_float = 0.45, blockage_sps = 0.65, blockage_none = 0.85;
+    double blockage_float = 0.35, blockage_sps = 0.5, blockage_none = 0.75;
     double ins_velocity_drift_sigma_mps = 0.02;  ///< During "none".
     double ins_accel_drift_sigma_mps2 = 0.001;
     std::vector<GnssOutage> outages;

@@ -147,4 +147,51 @@ StatusOr<RelativeErrorResult> ComputeRelativeError(const Trajectory& estimate,
   return ComputeRelativeError(matched.T_world_gt, matched.T_world_est, options);
 }
 
+StatusOr<RelativeErrorResult> CombineRelativeErrors(
+    const std::vector<RelativeErrorResult>& results) {
+  if (results.empty()) return InvalidArgumentError("CombineRelativeErrors: no results");
+  RelativeErrorResult out;
+  out.lengths_label = results.front().lengths_label;
+  out.per_length = results.front().per_length;
+  for (SegmentLengthError& pl : out.per_length) {
+    pl.num_segments = 0;
+    pl.t_rel_pct = 0.0;
+    pl.r_rel_deg_per_100m = 0.0;
+  }
+  double sum_t = 0.0, sum_r = 0.0;
+  for (size_t i = 0; i < results.size(); ++i) {
+    const RelativeErrorResult& r = results[i];
+    if (r.lengths_label != out.lengths_label || r.per_length.size() != out.per_length.size()) {
+      return InvalidArgumentError("CombineRelativeErrors: result " + std::to_string(i) + " uses " +
+                                  r.lengths_label + ", result 0 uses " + out.lengths_label);
+    }
+    out.ground_truth_path_length_m += r.ground_truth_path_length_m;
+    if (r.num_segments == 0) continue;
+    const double n = static_cast<double>(r.num_segments);
+    sum_t += n * r.t_rel_pct;
+    sum_r += n * r.r_rel_deg_per_100m;
+    out.num_segments += r.num_segments;
+    for (size_t k = 0; k < r.per_length.size(); ++k) {
+      const SegmentLengthError& src = r.per_length[k];
+      SegmentLengthError& dst = out.per_length[k];
+      dst.t_rel_pct += static_cast<double>(src.num_segments) * src.t_rel_pct;
+      dst.r_rel_deg_per_100m += static_cast<double>(src.num_segments) * src.r_rel_deg_per_100m;
+      dst.num_segments += src.num_segments;
+    }
+  }
+  for (SegmentLengthError& pl : out.per_length) {
+    if (pl.num_segments == 0) continue;
+    pl.t_rel_pct /= static_cast<double>(pl.num_segments);
+    pl.r_rel_deg_per_100m /= static_cast<double>(pl.num_segments);
+  }
+  if (out.num_segments == 0) {
+    out.t_rel_pct = std::numeric_limits<double>::quiet_NaN();
+    out.r_rel_deg_per_100m = std::numeric_limits<double>::quiet_NaN();
+  } else {
+    out.t_rel_pct = sum_t / static_cast<double>(out.num_segments);
+    out.r_rel_deg_per_100m = sum_r / static_cast<double>(out.num_segments);
+  }
+  return out;
+}
+
 }  // namespace slam_mms::eval

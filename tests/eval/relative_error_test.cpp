@@ -155,6 +155,37 @@ TEST(RelativeErrorTest, TimestampedOverloadMatchesFrameOverload) {
   EXPECT_GT(a->t_rel_pct, 0.5);
 }
 
+TEST(RelativeErrorTest, CombiningSequencesIsThePlainMeanOverAllPairs) {
+  // Sequence A: 2 % scale drift, 1001 frames; sequence B: 5 %, 301 frames (only 100/200 m fit).
+  std::vector<Eigen::Isometry3d> gt_a = StraightLine(1001), est_a = gt_a;
+  for (Eigen::Isometry3d& T : est_a) T.translation() *= 1.02;
+  std::vector<Eigen::Isometry3d> gt_b = StraightLine(301), est_b = gt_b;
+  for (Eigen::Isometry3d& T : est_b) T.translation() *= 1.05;
+  const StatusOr<RelativeErrorResult> a = ComputeRelativeError(gt_a, est_a);
+  const StatusOr<RelativeErrorResult> b = ComputeRelativeError(gt_b, est_b);
+  ASSERT_TRUE(a.ok() && b.ok());
+  // Concatenating B after A in one call would create segments across the seam; combine instead.
+  const StatusOr<RelativeErrorResult> c = CombineRelativeErrors({*a, *b});
+  ASSERT_TRUE(c.ok());
+  EXPECT_EQ(c->num_segments, a->num_segments + b->num_segments);
+  double sum = 0.0;
+  size_t n = 0;
+  for (const auto* r : {&*a, &*b}) {
+    const double s = r == &*a ? 0.02 : 0.05;
+    for (const SegmentLengthError& pl : r->per_length) {
+      sum += pl.num_segments * 100.0 * s * (pl.length_m + 1.0) / pl.length_m;
+      n += pl.num_segments;
+    }
+  }
+  EXPECT_NEAR(c->t_rel_pct, sum / n, 1e-9);
+  EXPECT_EQ(c->per_length[0].num_segments,
+            a->per_length[0].num_segments + b->per_length[0].num_segments);
+  RelativeErrorResult other = *b;
+  other.lengths_label = "short_10-80m";
+  EXPECT_FALSE(CombineRelativeErrors({*a, other}).ok());
+  EXPECT_FALSE(CombineRelativeErrors({}).ok());
+}
+
 TEST(RelativeErrorTest, OptionsAndInputValidation) {
   RelativeErrorOptions o;
   o.segment_lengths_m = {50.0, 25.0};

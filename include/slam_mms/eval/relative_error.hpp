@@ -72,4 +72,10 @@ StatusOr<RelativeErrorResult> ComputeRelativeError(
     const RelativeErrorOptions& options = RelativeErrorOptions(),
     const MatchOptions& match_options = MatchOptions());
 
+/// The devkit's number over several sequences: the plain mean over all (start, length) pairs of
+/// all of them (each result weighted by its num_segments). Fails on an empty list or results with
+/// different lengths labels.
+StatusOr<RelativeErrorResult> CombineRelativeErrors(
+    const std::vector<RelativeErrorResult>& results);
+
 }  // namespace slam_mms::eval

@@ -375,11 +375,12 @@ StatusOr<SurfelIntegrationStats> SurfelMap::Integrate(const VertexNormalMap& sca
                 const float w = static_cast<float>(std::min(s.num_updates + 1, o.max_weight));
                 const Eigen::Vector3f v_world = R_ws * vm + t_ws;
                 const Eigen::Vector3f n_world = R_ws * nm;
+                const Eigen::Vector3f old_position = s.position;
                 s.position = (w * s.position + v_world) / (w + 1.0f);
                 const Eigen::Vector3f nn = w * s.normal + n_world;
                 const float len = nn.norm();
                 if (len > 1e-6f) s.normal = nn / len;
-                moved.push_back(id);
+                if (!m.index.SameCell(old_position, s.position)) moved.push_back(id);
               }
               s.updated_frame = frame;
               s.updated_ns = stamp.nanoseconds();

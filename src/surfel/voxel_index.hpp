@@ -25,6 +25,10 @@ class VoxelIndex {
   /// radius; the caller filters by exact distance).
   void CandidatesInSphere(const Eigen::Vector3f& center, float radius,
                           std::vector<uint32_t>* ids) const;
+  /// True when both positions fall in the same cell (thread-safe; lets callers skip Update).
+  bool SameCell(const Eigen::Vector3f& a, const Eigen::Vector3f& b) const {
+    return KeyOf(a) == KeyOf(b);
+  }
   size_t num_cells() const { return cells_.size(); }
   size_t MemoryBytes() const;
   float cell_size() const { return cell_size_; }

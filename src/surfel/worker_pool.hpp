@@ -4,9 +4,9 @@
 // Thread safety: Run must be called from one thread at a time.
 
 #include <condition_variable>
-#include <type_traits>
 #include <mutex>
 #include <thread>
+#include <type_traits>
 #include <vector>
 
 namespace slam_mms::internal {
@@ -24,9 +24,8 @@ class WorkerPool {
   /// Takes any callable by reference (no std::function, so no per-call allocation).
   template <typename Fn>
   void Run(Fn&& fn) {
-    RunImpl(
-        [](void* ctx, int i) { (*static_cast<std::remove_reference_t<Fn>*>(ctx))(i); },
-        const_cast<void*>(static_cast<const void*>(&fn)));
+    RunImpl([](void* ctx, int i) { (*static_cast<std::remove_reference_t<Fn>*>(ctx))(i); },
+            const_cast<void*>(static_cast<const void*>(&fn)));
   }
 
  private:

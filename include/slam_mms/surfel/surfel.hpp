@@ -3,8 +3,9 @@
 //
 // Positions and normals are in the frame of the SurfelMap that holds them ("world"); a submap's
 // surfels can be moved rigidly with SurfelMap::TransformSubmap after a pose-graph correction.
-// The first 32 bytes (position, radius, normal, confidence) are what the renderers read; the struct
-// is 64 bytes with this fixed layout (EglSurfelRenderer uploads it with a 64-byte stride).
+// The renderers read position, radius and normal only (EglSurfelRenderer packs them with the id
+// into a 32-byte vertex per surfel); the struct is 64 bytes, also the record size of SurfelMap
+// files.
 //
 // Thread safety: value type.
 
@@ -27,6 +28,6 @@ struct Surfel {
   int32_t num_updates = 0;    ///< Number of confirming measurements after creation.
 };
 
-static_assert(sizeof(Surfel) == 64, "Surfel is uploaded to the GPU as a 64-byte record");
+static_assert(sizeof(Surfel) == 64, "Surfel is a 64-byte record");
 
 }  // namespace slam_mms

@@ -83,6 +83,17 @@ StatusOr<std::vector<std::optional<Timestamp>>> ReadTimestampFile(const std::fil
   return stamps;
 }
 
+std::filesystem::path DirPathWithName(const std::filesystem::path& dir) {
+  if (dir.empty()) return dir;
+  const std::string name = dir.filename().string();
+  if (!name.empty() && name != "." && name != "..") return dir;
+  std::error_code ec;
+  std::filesystem::path p = std::filesystem::absolute(dir, ec).lexically_normal();
+  if (ec) return dir;
+  if (!p.has_filename() && p.has_parent_path() && p != p.root_path()) p = p.parent_path();
+  return p;
+}
+
 std::vector<std::string> SplitWhitespace(const std::string& line) {
   std::vector<std::string> tokens;
   std::istringstream is(line);

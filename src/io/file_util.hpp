@@ -27,6 +27,10 @@ bool IsBlank(const std::string& line);
 StatusOr<std::vector<std::optional<Timestamp>>> ReadTimestampFile(const std::filesystem::path& file,
                                                                   bool allow_blank_lines);
 
+/// `dir` unchanged when it ends in a name; "a/drive/", "a/drive/." or "." made absolute and
+/// normalised without a trailing separator, so that parent_path() is the enclosing folder.
+std::filesystem::path DirPathWithName(const std::filesystem::path& dir);
+
 /// Splits on whitespace.
 std::vector<std::string> SplitWhitespace(const std::string& line);
 

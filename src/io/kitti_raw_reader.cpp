@@ -175,7 +175,10 @@ StatusOr<KittiRawReader> KittiRawReader::Open(const fs::path& drive_dir) {
   return Open(drive_dir, Options());
 }
 
-StatusOr<KittiRawReader> KittiRawReader::Open(const fs::path& drive_dir, const Options& options) {
+StatusOr<KittiRawReader> KittiRawReader::Open(const fs::path& drive_dir_in,
+                                              const Options& options) {
+  // "a/drive/" -> "a/drive", so that parent_path() is the date folder.
+  const fs::path drive_dir = io_internal::DirPathWithName(drive_dir_in);
   SLAM_MMS_RETURN_IF_ERROR(options.Validate());
   std::error_code ec;
   if (!fs::is_directory(drive_dir, ec)) {

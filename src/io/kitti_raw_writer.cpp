@@ -5,6 +5,7 @@
 #include <cstring>
 #include <fstream>
 
+#include "io/file_util.hpp"
 #include "slam_mms/core/logging.hpp"
 
 namespace slam_mms {
@@ -102,7 +103,10 @@ StatusOr<KittiRawWriter> KittiRawWriter::Create(const fs::path& drive_dir) {
   return Create(drive_dir, Options());
 }
 
-StatusOr<KittiRawWriter> KittiRawWriter::Create(const fs::path& drive_dir, const Options& options) {
+StatusOr<KittiRawWriter> KittiRawWriter::Create(const fs::path& drive_dir_in,
+                                                const Options& options) {
+  // "a/drive/" -> "a/drive", so that parent_path() is the date folder.
+  const fs::path drive_dir = io_internal::DirPathWithName(drive_dir_in);
   SLAM_MMS_RETURN_IF_ERROR(options.Validate());
   if (drive_dir.empty()) return InvalidArgumentError("KittiRawWriter: empty drive folder path");
   std::error_code ec;

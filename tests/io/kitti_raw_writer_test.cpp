@@ -63,8 +63,9 @@ TEST(KittiRawWriterTest, RoundTripThroughReader) {
   std::vector<Timestamp> imu_stamps;
   const Eigen::Isometry3d T_lidar_body = RandomRigid(rng);
   {
-    auto writer = KittiRawWriter::Create(drive);
+    auto writer = KittiRawWriter::Create(drive.string() + "/");
     ASSERT_TRUE(writer.ok()) << writer.status().ToString();
+    EXPECT_EQ(writer->drive_dir(), drive);
     ASSERT_TRUE(writer->WriteCalibration(T_lidar_body).ok());
     // 100 Hz IMU from 2 s before to 2 s after the scans (the reader keeps +- 1 s).
     for (int k = -200; k < 10 * kScans + 200; ++k) {
@@ -89,8 +90,10 @@ TEST(KittiRawWriterTest, RoundTripThroughReader) {
   EXPECT_TRUE(fs::exists(drive / "oxts_100hz/dataformat.txt"));
   EXPECT_EQ(fs::file_size(drive / "velodyne_points/data/0000000002.bin"), 16u * 1020u);
 
-  auto reader = KittiRawReader::Open(drive);
+  // A trailing separator still finds the calibration in the parent folder.
+  auto reader = KittiRawReader::Open(drive.string() + "/");
   ASSERT_TRUE(reader.ok()) << reader.status().ToString();
+  EXPECT_EQ(reader->calibration_file(), drive.parent_path() / "calib_imu_to_velo.txt");
   EXPECT_EQ(reader->layout(), KittiRawLayout::kSync);
   ASSERT_EQ(reader->NumScans(), static_cast<size_t>(kScans));
   EXPECT_TRUE(reader->T_lidar_body().isApprox(T_lidar_body, 1e-8));

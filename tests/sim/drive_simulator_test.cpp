@@ -7,7 +7,9 @@
 #include <fstream>
 #include <sstream>
 
+#include "sim/random.hpp"  // the simulator's seed derivation (MixSeed(seed, 50) for the LiDAR)
 #include "slam_mms/core/lie.hpp"
+#include "slam_mms/io/kitti_raw_reader.hpp"
 #include "slam_mms/io/kitti_timestamp.hpp"
 #include "slam_mms/io/oxts_record.hpp"
 #include "slam_mms/io/trajectory_io.hpp"
@@ -32,6 +34,17 @@ std::vector<std::string> Lines(const fs::path& p) {
   return out;
 }
 
+// Removes a scratch folder at the end of a test (the drives are tens of MB).
+struct ScopedDir {
+  fs::path path;
+  explicit ScopedDir(const std::string& tag) : path(testing::MakeTempDir(tag)) {}
+  ~ScopedDir() {
+    std::error_code ec;
+    fs::remove_all(path, ec);
+  }
+  operator const fs::path&() const { return path; }  // NOLINT(google-explicit-constructor)
+};
+
 DriveSimulator::Options ShortDrive(uint64_t seed) {
   DriveSimulator::Options o;
   o.seed = seed;
@@ -49,11 +62,11 @@ DriveSimulator::Summary RunTo(const DriveSimulator::Options& o, const fs::path& 
 }
 
 TEST(DriveSimulatorTest, WritesKittiRawLayoutWithGroundTruth) {
-  const fs::path dir = testing::MakeTempDir("sim_layout");
+  const ScopedDir dir("sim_layout");
   const auto s = RunTo(ShortDrive(1), dir);
   EXPECT_EQ(s.num_scans, 8);
-  EXPECT_EQ(s.drive_dir, dir / "2026_01_15" / "2026_01_15_drive_0001_sync");
-  EXPECT_TRUE(fs::exists(dir / "2026_01_15" / "calib_imu_to_velo.txt"));
+  EXPECT_EQ(s.drive_dir, dir.path / "2026_01_15" / "2026_01_15_drive_0001_sync");
+  EXPECT_TRUE(fs::exists(dir.path / "2026_01_15" / "calib_imu_to_velo.txt"));
   const fs::path d = s.drive_dir;
   EXPECT_TRUE(fs::exists(d / "velodyne_points" / "data" / "0000000007.bin"));
   EXPECT_FALSE(fs::exists(d / "velodyne_points" / "data" / "0000000008.bin"));
@@ -72,9 +85,38 @@ TEST(DriveSimulatorTest, WritesKittiRawLayoutWithGroundTruth) {
   EXPECT_NE(json.find("\"origin_wgs84\""), std::string::npos);
 }
 
+TEST(DriveSimulatorTest, KittiRawReaderReadsTheDriveBackWithConsistentTimes) {
+  const ScopedDir dir("sim_reader");
+  auto o = ShortDrive(8);
+  o.duration_s = 0.5;
+  auto sim = DriveSimulator::Create(o);
+  ASSERT_TRUE(sim.ok());
+  auto s = sim->Run(dir);
+  ASSERT_TRUE(s.ok()) << s.status().ToString();
+  auto reader = KittiRawReader::Open(s->drive_dir);
+  ASSERT_TRUE(reader.ok()) << reader.status().ToString();
+  ASSERT_EQ(reader->NumScans(), 5u);
+  EXPECT_TRUE(reader->HasImu100Hz());
+  EXPECT_EQ(reader->OxtsRecords().size(), 5u);
+  EXPECT_TRUE(reader->T_lidar_body().isApprox(o.T_lidar_body, 1e-6));
+  // The reader's per-point times (from azimuth) match the simulator's firing times.
+  const Hdl64Lidar lidar(o.lidar);
+  const auto sim_scan = lidar.Simulate(sim->world(), sim->trajectory(), o.T_lidar_body.inverse(),
+                                       sim->first_scan_s() + 0.2, 2, MixSeed(o.seed, 50), 2);
+  auto scan = reader->ReadScan(2);
+  ASSERT_TRUE(scan.ok());
+  EXPECT_EQ(scan->stamp_start, sim_scan.scan.stamp_start);
+  EXPECT_EQ(scan->cloud.size(), sim_scan.scan.cloud.size());
+  double max_dt = 0.0;
+  for (size_t i = 0; i < std::min(scan->cloud.size(), sim_scan.scan.cloud.size()); ++i)
+    max_dt =
+        std::max(max_dt, static_cast<double>(std::abs(scan->cloud.time_offsets_s()[i] -
+                                                      sim_scan.scan.cloud.time_offsets_s()[i])));
+  EXPECT_LT(max_dt, 2.0 * lidar.PeriodSeconds() / o.lidar.firings_per_revolution);
+}
+
 TEST(DriveSimulatorTest, SameSeedGivesIdenticalFilesAndAnotherSeedDoesNot) {
-  const fs::path a = testing::MakeTempDir("sim_seed_a"), b = testing::MakeTempDir("sim_seed_b"),
-                 c = testing::MakeTempDir("sim_seed_c");
+  const ScopedDir a("sim_seed_a"), b("sim_seed_b"), c("sim_seed_c");
   auto o = ShortDrive(42);
   o.duration_s = 0.3;
   const auto sa = RunTo(o, a);
@@ -98,7 +140,7 @@ TEST(DriveSimulatorTest, SameSeedGivesIdenticalFilesAndAnotherSeedDoesNot) {
 }
 
 TEST(DriveSimulatorTest, OxtsRecordsAreConsistentWithTheGroundTruth) {
-  const fs::path dir = testing::MakeTempDir("sim_oxts");
+  const ScopedDir dir("sim_oxts");
   auto o = ShortDrive(5);
   o.gnss.urban_canyon_scale = 0.0;  // RTK fixed throughout
   auto sim = DriveSimulator::Create(o);
@@ -141,7 +183,7 @@ TEST(DriveSimulatorTest, OxtsRecordsAreConsistentWithTheGroundTruth) {
 }
 
 TEST(DriveSimulatorTest, GnssOutageWindowIsRespectedInTheOxtsRecords) {
-  const fs::path dir = testing::MakeTempDir("sim_outage");
+  const ScopedDir dir("sim_outage");
   auto o = ShortDrive(6);
   o.duration_s = 1.0;
   o.gnss.urban_canyon_scale = 0.0;
@@ -184,7 +226,7 @@ TEST(DriveSimulatorTest, ReadsRealKittiOxtsMotion) {
   EXPECT_EQ(sim->options().drive_id, 13);
   // The first real record defines the origin: the trajectory starts near (0, 0, 0).
   EXPECT_LT(sim->trajectory().Pose(sim->trajectory().start_s()).translation().norm(), 0.2);
-  const fs::path dir = testing::MakeTempDir("sim_oxts_real");
+  const ScopedDir dir("sim_oxts_real");
   auto s = sim->Run(dir);
   ASSERT_TRUE(s.ok()) << s.status().ToString();
   EXPECT_EQ(s->drive_name, "2011_09_26_drive_0013_sync");

@@ -57,6 +57,11 @@ void SceneCloudAccumulator::Add(const std::vector<Eigen::Vector3f>& p,
     const uint64_t key = (static_cast<uint64_t>(x & 0x1FFFFF) << 42) |
                          (static_cast<uint64_t>(y & 0x1FFFFF) << 21) |
                          static_cast<uint64_t>(z & 0x1FFFFF);
+    // Consecutive returns of a ring often share a voxel: skipping repeats of the previous key keeps
+    // the result (the first point of each voxel) and saves most hash lookups.
+    if (i > 0 && key == last_key_) continue;
+    last_key_ = key;
+    if (index_.empty()) index_.reserve(1 << 20);
     auto [it, inserted] = index_.emplace(key, static_cast<uint32_t>(map_.cloud.size()));
     if (inserted) map_.cloud.Add(p[i], i < inten.size() ? inten[i] : 0.f);
   }

@@ -34,6 +34,7 @@ class SceneCloudAccumulator {
  private:
   double inv_voxel_;
   std::unordered_map<uint64_t, uint32_t> index_;
+  uint64_t last_key_ = ~0ULL;
   MapCloud map_;
 };
 

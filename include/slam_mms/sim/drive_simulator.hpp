@@ -67,7 +67,7 @@ class DriveSimulator {
     Eigen::Isometry3d T_lidar_body = KittiTLidarBody();
     double gravity_mps2 = 9.81;
     ReferenceTrajectory::FitOptions fit;
-    CityWorld::Options world;
+    CityWorld::Options world;  ///< world.seed is ignored: derived from `seed`.
     Hdl64Lidar::Options lidar;
     ImuSimulator::Options imu;
     GnssSimulator::Options gnss;

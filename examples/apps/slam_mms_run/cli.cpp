@@ -76,7 +76,7 @@ Options:
                           start; repeat the flag or list several windows after it.
   --config FILE           "key = value" lines overriding MappingSystem options (keys in
                           docs/user_guide.md, "Options"); unknown keys and bad values are errors.
-  --sim-duration S        seconds of the default drive to simulate (default 60; 0 = all ~3 min).
+  --sim-duration S        seconds of the default drive to simulate (default 30; 0 = all ~3 min).
   --sim-seed N            simulator seed (default 1).
   --config-keys           print every --config key with its type and default, then exit.
   --help                  this text.

@@ -25,7 +25,7 @@ struct RunArgs {
   /// --gnss-outage windows [start_s, duration_s] relative to the first scan's start.
   std::vector<std::pair<double, double>> gnss_outages;
   std::filesystem::path config;  ///< Empty: none.
-  double sim_duration_s = 60.0;  ///< Seconds of the default drive to simulate (0 = all).
+  double sim_duration_s = 30.0;  ///< Seconds of the default drive to simulate (0 = all).
   uint64_t sim_seed = 1;
   bool help = false;
   bool list_config_keys = false;  ///< --config-keys: print the config keys (markdown table).

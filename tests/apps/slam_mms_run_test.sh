@@ -1,0 +1,181 @@
+#!/usr/bin/env bash
+# End-to-end tests of examples/apps/slam_mms_run (registered in tests/CMakeLists.txt).
+#   slam_mms_run_test.sh CASE SLAM_MMS_RUN_BINARY SOURCE_DIR
+# Cases: kitti_frames, truncated_bin, bad_oxts, bad_config, bad_cli, sim_all.
+# Exit 0 = pass, 77 = skipped (real KITTI data absent), anything else = fail (with a message).
+set -uo pipefail
+case_name=$1
+bin=$2
+src=$3
+shared=${SLAM_MMS_SHARED_DATA:-$src/../shared/data}
+drive=$shared/kitti_raw/2011_09_26/2011_09_26_drive_0013_sync
+tmp=$(mktemp -d "${TMPDIR:-/tmp}/slam_mms_run_test.XXXXXX")
+trap 'rm -rf "$tmp"' EXIT
+
+fail() { echo "FAIL: $*"; exit 1; }
+require_kitti() {
+  if [[ ! -d $drive ]]; then
+    echo "SKIP: real KITTI data not found at $drive (set SLAM_MMS_SHARED_DATA to the shared/data folder)"
+    exit 77
+  fi
+}
+# run OUT_LOG ARGS...: runs the app, keeps stdout+stderr in OUT_LOG, returns its exit status.
+run() {
+  local log=$1; shift
+  timeout 300 "$bin" "$@" >"$log" 2>&1
+}
+# The report's keys must be exactly the issue-8 schema's.
+check_report() {
+  local report=$1; shift
+  [[ -s $report ]] || fail "no $report"
+  if command -v jq >/dev/null; then
+    jq -e '(keys == ["gnss_outages","ground_truth_map","input","methods"]) and
+           (.input | keys == ["drive","duration_s","ground_truth","scans"]) and
+           (.ground_truth_map | keys == ["mme"])' "$report" >/dev/null ||
+      fail "report.json top-level/input keys differ from the schema: $(cat "$report")"
+    for m in "$@"; do
+      jq -e --arg m "$m" '.methods[$m] | keys == ["ate_rmse_m","ate_rmse_xyz_m","max_pos_err_in_outage_m",
+        "max_rot_err_in_outage_deg","mme","peak_rss_mb","r_rel_deg_per_100m","rot_rmse_deg",
+        "rot_rmse_rpy_deg","scans_per_s","t_rel_pct"]' "$report" >/dev/null ||
+        fail "report.json methods.$m keys differ from the schema: $(cat "$report")"
+    done
+  else
+    for k in '"input"' '"drive"' '"scans"' '"duration_s"' '"ground_truth"' '"gnss_outages"' \
+             '"methods"' '"ate_rmse_m"' '"ate_rmse_xyz_m"' '"rot_rmse_deg"' '"rot_rmse_rpy_deg"' \
+             '"t_rel_pct"' '"r_rel_deg_per_100m"' '"max_pos_err_in_outage_m"' \
+             '"max_rot_err_in_outage_deg"' '"mme"' '"scans_per_s"' '"peak_rss_mb"' \
+             '"ground_truth_map"'; do
+      grep -q "$k" "$report" || fail "report.json lacks $k"
+    done
+    for m in "$@"; do grep -q "\"$m\"" "$report" || fail "report.json lacks method $m"; done
+  fi
+}
+# json_number FILE FILTER: a number from the report (jq, else python3), or "" when unavailable.
+json_number() {
+  if command -v jq >/dev/null; then jq -r "$2" "$1"; else echo ""; fi
+}
+check_files() {
+  local dir=$1; shift
+  for f in "$@"; do [[ -s $dir/$f ]] || fail "missing or empty output $dir/$f"; done
+}
+# A copy of the real drive: symlinks to the data, real copies where a test edits a file.
+copy_drive() {
+  local dst=$1
+  mkdir -p "$dst/2011_09_26"
+  cp "$shared/kitti_raw/2011_09_26/calib_imu_to_velo.txt" "$dst/2011_09_26/"
+  cp -rs "$drive" "$dst/2011_09_26/"
+  echo "$dst/2011_09_26/2011_09_26_drive_0013_sync"
+}
+
+case $case_name in
+  kitti_frames)
+    require_kitti
+    run "$tmp/log" --kitti-raw "$drive" --out "$tmp/out" --mode gnss_ins --frames 0:19 ||
+      fail "exit status $? on the real frames: $(tail -20 "$tmp/log")"
+    check_report "$tmp/out/report.json" gnss_ins
+    check_files "$tmp/out" gnss_ins.tum gnss_ins.kitti gnss_ins_cov.csv map_gnss_ins.ply \
+      map_gnss_ins.pcd map_gnss_ins.las trajectories.png position_error.png \
+      map_gnss_ins_height.png summary.txt
+    # 20 frames; the POS may not cover scan 0's start (it begins at the first OXTS record).
+    n=$(grep -vc '^#' "$tmp/out/gnss_ins.tum")
+    [[ $n -ge 19 && $n -le 20 ]] || fail "gnss_ins.tum has $n poses, expected 19-20"
+    [[ $(wc -l <"$tmp/out/gnss_ins.kitti") == "$n" ]] || fail "gnss_ins.kitti pose count != tum"
+    if command -v jq >/dev/null; then
+      [[ $(jq -r .input.ground_truth "$tmp/out/report.json") == oxts ]] || fail "ground_truth != oxts"
+      [[ $(jq -r .input.scans "$tmp/out/report.json") == "$n" ]] || fail "input.scans != $n"
+      # The POS follows the OXTS solution it is fed (same GNSS, same IMU): well under a metre.
+      jq -e '.methods.gnss_ins.ate_rmse_m < 0.5 and .methods.gnss_ins.rot_rmse_deg < 1.0 and
+             (.methods.gnss_ins.mme | type) == "number" and .methods.gnss_ins.scans_per_s > 0 and
+             .methods.gnss_ins.peak_rss_mb > 0' "$tmp/out/report.json" >/dev/null ||
+        fail "gnss_ins metrics out of bounds: $(cat "$tmp/out/report.json")"
+    fi
+    grep -q "gnss_ins" "$tmp/log" || fail "no summary table in the output"
+    ;;
+  truncated_bin)
+    require_kitti
+    d=$(copy_drive "$tmp/data")
+    bad=$d/velodyne_points/data/0000000005.bin
+    rm "$bad"
+    head -c 1000 "$drive/velodyne_points/data/0000000005.bin" >"$bad"  # 1000 % 16 != 0
+    run "$tmp/log" --kitti-raw "$d" --out "$tmp/out" --mode gnss_ins --frames 0:19 ||
+      fail "a truncated scan must be skipped, not fatal (exit $?): $(tail -20 "$tmp/log")"
+    grep -qi "warning.*0000000005.bin" "$tmp/log" ||
+      fail "no warning naming the truncated file: $(cat "$tmp/log")"
+    check_report "$tmp/out/report.json" gnss_ins
+    n=$(grep -vc '^#' "$tmp/out/gnss_ins.tum")
+    [[ $n -ge 18 && $n -le 19 ]] || fail "expected 18-19 poses (frame 5 skipped), got $n"
+    # No pose at frame 5's start time.
+    t5=$(sed -n 6p "$drive/velodyne_points/timestamps_start.txt" | awk '{print $2}' | cut -c7-)
+    grep -q "^[0-9]*${t5} " "$tmp/out/gnss_ins.tum" && fail "a pose at the skipped frame's time"
+    ;;
+  bad_oxts)
+    require_kitti
+    d=$(copy_drive "$tmp/data")
+    f=$d/oxts/data/0000000007.txt
+    line=$(cat "$f")
+    rm "$f"
+    echo "${line% *}" >"$f"  # 29 fields
+    run "$tmp/log" --kitti-raw "$d" --out "$tmp/out" --mode gnss_ins --frames 0:19
+    status=$?
+    [[ $status == 1 ]] || fail "expected exit status 1 for a malformed OXTS line, got $status"
+    grep -q "error:.*0000000007.txt" "$tmp/log" || fail "error does not name the file: $(cat "$tmp/log")"
+    grep -q "0000000007.txt:1:.*field 30" "$tmp/log" ||
+      fail "error does not name the line and field: $(cat "$tmp/log")"
+    ;;
+  bad_config)
+    printf 'localizer.submap_duration_s = 5\n# a comment\nlocalizer.bogus_key = 3\n' >"$tmp/a.cfg"
+    run "$tmp/log" --kitti-raw "$tmp/none" --out "$tmp/out" --config "$tmp/a.cfg"
+    status=$?
+    [[ $status == 2 ]] || fail "unknown key: expected exit status 2, got $status"
+    grep -q "a.cfg:3: unknown key 'localizer.bogus_key'" "$tmp/log" ||
+      fail "unknown key: message lacks file:line and key: $(cat "$tmp/log")"
+    printf 'level2.use_loops = maybe\n' >"$tmp/b.cfg"
+    run "$tmp/log" --kitti-raw "$tmp/none" --out "$tmp/out" --config "$tmp/b.cfg"
+    [[ $? == 2 ]] || fail "bad bool: expected exit status 2"
+    grep -q "b.cfg:1: key 'level2.use_loops': bad value 'maybe'" "$tmp/log" ||
+      fail "bad bool: message lacks file:line, key and value: $(cat "$tmp/log")"
+    printf 'num_threads = 0\n' >"$tmp/c.cfg"
+    run "$tmp/log" --kitti-raw "$tmp/none" --out "$tmp/out" --config "$tmp/c.cfg"
+    [[ $? == 2 ]] || fail "invalid option: expected exit status 2"
+    grep -q "c.cfg: .*num_threads" "$tmp/log" ||
+      fail "invalid option: message lacks the option name: $(cat "$tmp/log")"
+    printf 'localizer.submap_duration_s = 4.5\nlevel2.use_loops = off\n' >"$tmp/ok.cfg"
+    run "$tmp/log" --kitti-raw "$tmp/none" --out "$tmp/out" --config "$tmp/ok.cfg"
+    [[ $? == 1 ]] || fail "a good config then a missing drive: expected exit status 1"
+    grep -q "ok.cfg" "$tmp/log" && fail "a good config was rejected: $(cat "$tmp/log")"
+    ;;
+  bad_cli)
+    run "$tmp/log" --out "$tmp/out" --frames 5
+    [[ $? == 2 ]] || fail "--frames 5: expected exit status 2"
+    grep -q -- "--frames 5: expected A:B" "$tmp/log" || fail "--frames message: $(cat "$tmp/log")"
+    run "$tmp/log" --out "$tmp/out" --gnss-outage 10:-3
+    [[ $? == 2 ]] || fail "--gnss-outage 10:-3: expected exit status 2"
+    run "$tmp/log" --out "$tmp/out" --mode fast
+    [[ $? == 2 ]] || fail "--mode fast: expected exit status 2"
+    run "$tmp/log" --kitti-raw "$tmp/x"
+    [[ $? == 2 ]] || fail "missing --out: expected exit status 2"
+    run "$tmp/log" --bogus
+    [[ $? == 2 ]] || fail "--bogus: expected exit status 2"
+    run "$tmp/log" --help
+    [[ $? == 0 ]] || fail "--help: expected exit status 0"
+    grep -q -- "--kitti-raw DRIVE_DIR --out DIR" "$tmp/log" || fail "--help text"
+    ;;
+  sim_all)
+    run "$tmp/log" --out "$tmp/out" --mode all --sim-duration 3 --gnss-outage 1:1 ||
+      fail "exit status $? on a simulated drive: $(tail -30 "$tmp/log")"
+    check_report "$tmp/out/report.json" full gnss_ins lidar_only
+    check_files "$tmp/out" full.tum gnss_ins.tum lidar_only.tum full_cov.csv lidar_only.kitti \
+      map_full.ply map_full.pcd map_full.las map_gnss_ins.las trajectories.png \
+      position_error.png map_full_height.png
+    if command -v jq >/dev/null; then
+      [[ $(jq -r .input.ground_truth "$tmp/out/report.json") == simulator ]] ||
+        fail "ground_truth != simulator"
+      jq -e '(.gnss_outages == [[1,1]]) and ((.ground_truth_map.mme | type) == "number") and
+             ([.methods[] | .ate_rmse_m | type] == ["number","number","number"]) and
+             .methods.full.ate_rmse_m < 1.0 and .methods.gnss_ins.ate_rmse_m < 1.0' \
+        "$tmp/out/report.json" >/dev/null || fail "sim metrics: $(cat "$tmp/out/report.json")"
+    fi
+    ;;
+  *) fail "unknown case $case_name" ;;
+esac
+echo "PASS: $case_name"

@@ -7,7 +7,8 @@
 //                          skipped without ../shared/data.
 //   BM_PointIcp            KD-tree ICP of one scan (0.3 m voxels) against a map of three scans.
 //   BM_PointIcpSetTarget   KD-tree build + PCA normals for that map.
-// "threads" is Options::num_threads (2 = the default, the budget's 2 cores; 1 shows the work).
+// "threads" is Options::num_threads (2 = the default, the budget's 2 cores; 1 shows the work);
+// "stride" is Options::pixel_stride (1 = every valid scan pixel, the default).
 #include <benchmark/benchmark.h>
 
 #include <cstdlib>
@@ -82,6 +83,7 @@ void BM_ProjectiveIcp(benchmark::State& state) {
   const SyntheticProblem& s = Synthetic();
   ProjectiveIcp::Options o;
   o.num_threads = static_cast<int>(state.range(0));
+  o.pixel_stride = static_cast<int>(state.range(1));
   auto icp = ProjectiveIcp::Create(s.proj, o).value();
   RegistrationResult r;
   for (auto _ : state) {
@@ -94,9 +96,10 @@ void BM_ProjectiveIcp(benchmark::State& state) {
   state.counters["err_mm"] = 1e3 * (s.T_true.inverse() * r.T_target_source).translation().norm();
 }
 BENCHMARK(BM_ProjectiveIcp)
-    ->ArgName("threads")
-    ->Arg(2)
-    ->Arg(1)
+    ->ArgNames({"threads", "stride"})
+    ->Args({2, 1})
+    ->Args({1, 1})
+    ->Args({2, 2})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

@@ -55,6 +55,8 @@ struct DegeneracyAnalysis {
   bool degenerate = false;
 };
 
+/// Inliers, RMS, covariance and degeneracy are those of the last linearisation, i.e. at the
+/// estimate before the final update (which is below the tolerances when converged).
 struct RegistrationResult {
   Eigen::Isometry3d T_target_source = Eigen::Isometry3d::Identity();
   /// Covariance of the right perturbation of T_target_source, [rotation, translation]:

@@ -112,6 +112,8 @@ TEST(SlidingWindowGraphTest, MarginalizationMatchesFullBatch) {
     const Eigen::Isometry3d Tw = *window->Pose(id);
     const Eigen::Isometry3d Tb = *batch->Pose(id);
     EXPECT_LT((Tw.translation() - Tb.translation()).norm(), 2e-3) << "state " << id;
+    RecordProperty("pos_diff_marg_vs_batch_m_state_" + std::to_string(id),
+                   std::to_string((Tw.translation() - Tb.translation()).norm()));
     EXPECT_LT(RotationAngle(Tw.linear().transpose() * Tb.linear()), 2e-4) << "state " << id;
   }
   // ... and so does the marginal covariance of the latest pose.
@@ -120,6 +122,9 @@ TEST(SlidingWindowGraphTest, MarginalizationMatchesFullBatch) {
   ASSERT_TRUE(cov_w.ok()) << cov_w.status().ToString();
   ASSERT_TRUE(cov_b.ok()) << cov_b.status().ToString();
   EXPECT_LT((*cov_w - *cov_b).norm(), 0.02 * cov_b->norm());
+  RecordProperty("cov_rel_diff_marg_vs_batch",
+                 std::to_string((*cov_w - *cov_b).norm() / cov_b->norm()));
+  RecordProperty("trace_batch", std::to_string(cov_b->trace()));
   // The estimate is better than dead reckoning.
   const double dr_err = (meas.init[15].translation() - truth[15].translation()).norm();
   const double est_err = (window->Pose(15)->translation() - truth[15].translation()).norm();
@@ -145,6 +150,10 @@ TEST(SlidingWindowGraphTest, FixingOldStatesIsOverconfident) {
   ASSERT_TRUE(cov_f.ok()) << cov_f.status().ToString();
   // Fixed states carry no uncertainty: the latest pose looks far more certain than it is.
   EXPECT_LT(cov_f->trace(), 0.5 * cov_b->trace());
+  RecordProperty("trace_fix_over_batch", std::to_string(cov_f->trace() / cov_b->trace()));
+  RecordProperty(
+      "pos_diff_fix_vs_batch_m",
+      std::to_string((fixed->Pose(15)->translation() - batch->Pose(15)->translation()).norm()));
   // Old fixed states without a factor to a free state are dropped: the graph stays bounded.
   EXPECT_LE(fixed->StateIds().size(), 6u);
 }

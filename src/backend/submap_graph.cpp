@@ -10,6 +10,7 @@
 
 #include "backend/backend_math.hpp"
 #include "backend/ceres_solve.hpp"
+#include "slam_mms/backend/pose_prior_factor.hpp"
 #include "slam_mms/backend/relative_pose_factor.hpp"
 #include "slam_mms/core/logging.hpp"
 #include "slam_mms/ins/gnss_position_factor.hpp"
@@ -268,6 +269,18 @@ StatusOr<LoopCheck> SubmapGraph::AddLoopFactor(SubmapId a, SubmapId b,
   SLAM_MMS_LOG(kDebug) << "SubmapGraph: loop " << a << "<->" << b
                        << " d2 = " << check.mahalanobis_sq;
   return check;
+}
+
+Status SubmapGraph::AddPosePrior(SubmapId id, const Eigen::Isometry3d& T_world_submap,
+                                 const Matrix6d& covariance) {
+  Impl& m = *impl_;
+  Node* node = m.Find(id);
+  if (node == nullptr) return NotFoundError("SubmapGraph::AddPosePrior: unknown submap " + Id(id));
+  SLAM_MMS_RETURN_IF_ERROR(ValidatePose(T_world_submap, "SubmapGraph::AddPosePrior"));
+  SLAM_MMS_RETURN_IF_ERROR(ValidateCovariance<6>(covariance, "SubmapGraph::AddPosePrior"));
+  SLAM_MMS_ASSIGN_OR_RETURN(auto cost, PosePriorFactor::Create(T_world_submap, covariance));
+  m.problem->AddResidualBlock(cost.release(), nullptr, node->pose.data());
+  return OkStatus();
 }
 
 Status SubmapGraph::AddGnssPrior(SubmapId id, const Eigen::Vector3d& p_world_antenna,

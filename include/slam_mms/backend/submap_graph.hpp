@@ -138,6 +138,12 @@ class SubmapGraph {
                                 const Matrix6d& covariance) const;
   /// F_GNSS (eq 24): antenna position p~_world_antenna (3x3 covariance) measured when the body was
   /// at T_submap_body in submap `id`, antenna at t_body_antenna (lever arm) in the body frame.
+  /// A 6-DoF prior on a submap reference (residual as PosePriorFactor: rotation first, in the
+  /// submap's body axes). With large variances on yaw and translation it is an attitude prior: the
+  /// roll and pitch that level 1 observed from gravity, which GNSS positions alone cannot observe
+  /// on straight roads (a rotation about the direction of travel moves no position).
+  Status AddPosePrior(SubmapId id, const Eigen::Isometry3d& T_world_submap,
+                      const Matrix6d& covariance);
   Status AddGnssPrior(SubmapId id, const Eigen::Vector3d& p_world_antenna,
                       const Eigen::Matrix3d& covariance,
                       const Eigen::Isometry3d& T_submap_body = Eigen::Isometry3d::Identity(),

@@ -1,0 +1,147 @@
+#pragma once
+// Localizer: level 1 of the hierarchical factor graph (paper §5.1, Fig. 4 left, eqs 12-16).
+//
+// ProcessScan is a short script of named stages, in the paper's order:
+//   1. de-skew      every point to the scan's first-point time with the motion prior
+//                   (POS while GNSS is valid, IMU preintegration while it is lost, constant
+//                   velocity in LiDAR-only mode)                                           §5.1.2
+//   2. predict      the scan's pose from the previous optimized state and the motion prior
+//   3. render       the current (and previous) submap's surfels at the prediction  §5.1.2
+//   4. register     ProjectiveIcp scan-to-submap (F_Reg measurement, eq 15-16)
+//   5. add factors  F_Reg between the submap reference and the scan (consistency-checked against
+//   the
+//                   motion prediction, Graham et al. 2015); the motion factor between consecutive
+//                   scans: F_Odom (eq 12) from the POS while GNSS is valid, F_Prein (eq 14) from
+//                   IMU preintegration while it is lost (an explicit, logged switch), or a weak
+//                   constant-velocity factor (LiDAR only)
+//   6. optimize     SlidingWindowGraph (Levenberg-Marquardt, <= 100 iterations, marginalization)
+//   7. integrate    the scan's surfels into the map at the optimized pose
+// Every Options::submap_duration_s (WT, default 5 s as in the paper) a new submap starts; its
+// reference frame is the body pose of its first scan. The level-1 window works in the frame of the
+// current submap (states T_submap_scan), so level-2 corrections of T_world_submap never disturb it.
+//
+// The level-1 graph's state of scan i holds the pose T_submap_body and, where IMU is used, the
+// velocity and IMU biases (estimated with a prior, beyond the paper, which fixes them).
+//
+// Ownership: owns its surfel map, renderer, ICP and window. Move-only via unique_ptr.
+// Thread safety: not thread-safe.
+
+#include <Eigen/Geometry>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "slam_mms/backend/sliding_window_graph.hpp"
+#include "slam_mms/core/point_cloud.hpp"
+#include "slam_mms/core/sensor_data.hpp"
+#include "slam_mms/core/status.hpp"
+#include "slam_mms/ins/imu_preintegration.hpp"
+#include "slam_mms/pipeline/localization_result.hpp"
+#include "slam_mms/pipeline/scan_deskewer.hpp"
+#include "slam_mms/registration/projective_icp.hpp"
+#include "slam_mms/render_egl/surfel_renderer_factory.hpp"
+#include "slam_mms/surfel/surfel_map.hpp"
+
+namespace slam_mms {
+
+/// The motion information the host (MappingSystem) gives level 1 for one scan.
+struct ScanMotionInput {
+  /// kOdometry: POS poses at this scan's start and end (world), and the 1-sigma noise of the POS
+  /// relative motion per scan interval; kPreintegration: `imu` covers [previous scan start,
+  /// this scan end]; kConstantVelocity: nothing. The Localizer switches by this field.
+  MotionFactorType type = MotionFactorType::kConstantVelocity;
+  Eigen::Isometry3d T_world_body_pos_start = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d T_world_body_pos_end = Eigen::Isometry3d::Identity();
+  Eigen::Vector3d v_world_pos = Eigen::Vector3d::Zero();  ///< POS velocity at scan start.
+  Vector6d pos_bias = Vector6d::Zero();                   ///< POS bias estimate [ba, bg].
+  std::vector<ImuSample> imu;
+  Eigen::Vector3d g_world = Eigen::Vector3d(0.0, 0.0, -9.80665);
+};
+
+/// A finished or current submap as level 1 hands it to level 2.
+struct SubmapRecord {
+  int32_t id = 0;
+  Eigen::Isometry3d T_world_submap = Eigen::Isometry3d::Identity();  ///< Level-1 estimate.
+  Timestamp start;
+  Timestamp end;
+  std::vector<int64_t> scan_indices;
+  std::vector<Timestamp> scan_stamps;
+  std::vector<Eigen::Isometry3d> T_submap_scan;  ///< Body poses in the submap frame.
+  std::vector<Matrix6d> cov_submap_scan;
+  /// Relative pose of the previous submap's reference to this one's (the reckon chain, eq 21), and
+  /// its covariance; identity for the first.
+  Eigen::Isometry3d T_prev_this = Eigen::Isometry3d::Identity();
+  Matrix6d cov_prev_this = Matrix6d::Identity();
+  /// De-skewed points of the submap's scans in the submap frame, voxel-downsampled (map output).
+  PointCloud cloud;
+  /// A coarser cloud for map-to-map registration and loop closure.
+  PointCloud registration_cloud;
+  bool finished = false;
+};
+
+class Localizer {
+ public:
+  struct Options {
+    MappingMode mode = MappingMode::kFull;
+    double submap_duration_s = 5.0;  ///< WT [s], > 0.
+    SurfelMapOptions surfels;        ///< Includes the range-image geometry.
+    ProjectiveIcp::Options icp;
+    SlidingWindowGraph::Options window;
+    ScanDeskewer::Options deskew;
+    ImuPreintegration::Options imu;
+    SurfelRendererBackend renderer = SurfelRendererBackend::kAuto;
+    /// Surfels rendered for registration: those within this radius with confidence above
+    /// min_model_confidence, of the current and the previous submap [m].
+    double model_radius_m = 60.0;
+    float min_model_confidence = -1.0f;
+    /// F_Odom noise per scan interval (1 sigma): rotation [rad] and translation [m].
+    double odom_sigma_rot_rad = 0.002;
+    double odom_sigma_trans_m = 0.02;
+    /// LiDAR only: constant-velocity factor noise per scan interval.
+    double cv_sigma_rot_rad = 0.02;
+    double cv_sigma_trans_m = 0.3;
+    /// Registration covariance: max(icp covariance * scale, floor^2) per axis.
+    double reg_cov_scale = 100.0;
+    double reg_sigma_floor_rot_rad = 0.0005;
+    double reg_sigma_floor_trans_m = 0.01;
+    /// Registration rejected when the inlier ratio is below this.
+    double min_inlier_ratio = 0.2;
+    /// Map output: voxel of the per-submap point cloud [m], points up to this range [m].
+    double map_voxel_m = 0.1;
+    double map_max_range_m = 60.0;
+    double registration_voxel_m = 0.5;
+    int num_threads = 2;
+    [[nodiscard]] Status Validate() const;
+  };
+
+  static StatusOr<std::unique_ptr<Localizer>> Create(const Options& options,
+                                                     const Eigen::Isometry3d& T_body_lidar);
+  ~Localizer();
+  Localizer(const Localizer&) = delete;
+  Localizer& operator=(const Localizer&) = delete;
+
+  /// Sets the pose of the first scan (world) before the first ProcessScan; default identity.
+  void SetInitialPose(const Eigen::Isometry3d& T_world_body);
+
+  /// Runs the stages above on one raw scan. InvalidArgument for an empty scan or a bad motion input
+  /// (nothing is changed then).
+  StatusOr<LocalizationResult> ProcessScan(const Scan& scan, const ScanMotionInput& motion);
+
+  /// Submaps so far (the last one may be unfinished). Level 2 moves them with SetSubmapPose.
+  const std::vector<SubmapRecord>& submaps() const;
+  /// Moves submap `id` to T_world_submap (after a level-2 solve): its surfels follow.
+  Status SetSubmapPose(int32_t id, const Eigen::Isometry3d& T_world_submap);
+  /// Frees the point clouds of submaps that level 2 no longer needs (memory bound).
+  void ReleaseSubmapClouds(int32_t id, bool keep_registration_cloud);
+  /// Ends the current submap (Finish()).
+  void FinishCurrentSubmap();
+  const SurfelMap& surfel_map() const;
+  const Options& options() const;
+
+ private:
+  Localizer();
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace slam_mms

@@ -1,0 +1,119 @@
+#pragma once
+// MappingSystem: the thin SDK facade of slam_mms (paper Fig. 2). Feed it sensor data in time order
+// (or a whole drive offline), get per-scan results, call Finish(), then read the trajectory with
+// covariances, the geo-referenced map and the surfel map.
+//
+//   auto system = MappingSystem::Create(options);          // StatusOr<std::unique_ptr<...>>
+//   system->AddImu(imu); system->AddGnss(fix); system->AddScan(scan);   // any interleaving in time
+//   system->Finish();
+//   Trajectory trajectory = system->FinalTrajectory();      // T_world_body at each scan's start
+//   PointCloud map = system->FinalMap();
+//
+// Modes (Options::mode):
+//  - kFull: the SLAM-integrated system: level 1 (Localizer: de-skew, scan-to-submap surfel
+//    registration, F_Odom from the POS while GNSS is valid, F_Prein from IMU preintegration while
+//    it is lost) and level 2 (SubmapGraph: map-to-map registration, reckon, loop and GNSS factors).
+//  - kGnssIns: the traditional MMS: scans placed with the POS (InsFilter) poses, no map feedback.
+//  - kLidarOnly: the SuMa-like baseline: constant-velocity prediction, registration, loops; no GNSS
+//    or IMU after the initial pose (the first POS pose anchors it so it can be compared in world).
+//
+// Time order: scans are processed once the POS covers their end time (the IMU/GNSS stream has
+// passed stamp_end), so a streaming host may push a scan before the IMU samples it spans. Finish()
+// processes what is still queued. Data older than what was processed is rejected with
+// InvalidArgument naming the stream and both times (nothing already computed is lost).
+//
+// World frame: local ENU at the first valid GNSS fix (or Options::origin); Origin() returns it so
+// outputs can be geo-referenced. Determinism: the same input and options give the same output.
+//
+// Ownership: owns every component; move-only through std::unique_ptr.
+// Thread safety: not thread-safe; call from one thread. Internally up to Options::num_threads.
+
+#include <functional>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "slam_mms/core/point_cloud.hpp"
+#include "slam_mms/core/sensor_data.hpp"
+#include "slam_mms/core/status.hpp"
+#include "slam_mms/core/trajectory.hpp"
+#include "slam_mms/ins/gnss_prior.hpp"
+#include "slam_mms/ins/ins_filter.hpp"
+#include "slam_mms/pipeline/localization_result.hpp"
+#include "slam_mms/pipeline/localizer.hpp"
+#include "slam_mms/pipeline/submap_manager.hpp"
+#include "slam_mms/surfel/surfel.hpp"
+
+namespace slam_mms {
+
+class MappingSystem {
+ public:
+  struct Options {
+    MappingMode mode = MappingMode::kFull;
+    /// T_body_lidar (KITTI: the inverse of calib_imu_to_velo.txt).
+    Eigen::Isometry3d T_body_lidar = Eigen::Isometry3d::Identity();
+    /// World origin; empty = the first valid GNSS fix.
+    std::optional<GeodeticPoint> origin;
+    /// GNSS outage windows [start_s, start_s + duration_s) relative to the first scan's start.
+    std::vector<std::pair<double, double>> gnss_outages;
+    InsFilter::Options ins;         ///< The POS (with ins.gnss: GnssPrior options, lever arm).
+    Localizer::Options localizer;   ///< Level 1.
+    SubmapManager::Options level2;  ///< Level 2 and loop closure.
+    /// Final map: points farther than this from the sensor are not kept [m].
+    double map_max_range_m = 60.0;
+    /// Final map voxel size [m] (the paper evaluates entropy on a 0.1 m grid).
+    double map_voxel_m = 0.1;
+    int num_threads = 2;
+    [[nodiscard]] Status Validate() const;
+  };
+
+  /// Validates the options and builds every component.
+  static StatusOr<std::unique_ptr<MappingSystem>> Create(const Options& options);
+  ~MappingSystem();
+  MappingSystem(const MappingSystem&) = delete;
+  MappingSystem& operator=(const MappingSystem&) = delete;
+
+  // ---- input (time-ordered per stream) --------------------------------------------------------
+  [[nodiscard]] Status AddImu(const ImuSample& sample);
+  [[nodiscard]] Status AddGnss(const GnssFix& fix);
+  /// Initial attitude and velocity from a POS record (KITTI OXTS); optional, else the filter aligns
+  /// from the first records it gets (see InsFilter).
+  [[nodiscard]] Status InitializePos(const InsState& state);
+  /// An external POS solution instead of IMU + GNSS (AddImu/AddGnss then unused for the POS).
+  [[nodiscard]] Status AddInsPose(const InsState& state);
+  /// A raw scan (lidar frame, per-point time offsets, not de-skewed). A bad scan (empty, all
+  /// points non-finite) is skipped with a warning and counted; the return is then OK.
+  [[nodiscard]] Status AddScan(const Scan& scan);
+  /// Processes queued scans, runs the final level-2 refinement. Idempotent.
+  [[nodiscard]] Status Finish();
+
+  // ---- output ---------------------------------------------------------------------------------
+  /// Per-scan level-1 results so far, in processing order.
+  const std::vector<LocalizationResult>& results() const;
+  /// Called after every processed scan (e.g. progress); may be empty.
+  void SetResultCallback(std::function<void(const LocalizationResult&)> callback);
+  /// T_world_body at each processed scan's stamp_start with covariance: after Finish() the final
+  /// (level-2 refined) poses, before it the current estimates.
+  Trajectory FinalTrajectory() const;
+  /// The map: de-skewed scan points at the final poses within map_max_range_m, voxel-downsampled to
+  /// map_voxel_m, with intensity, in world.
+  PointCloud FinalMap() const;
+  /// The surfel map's live surfels (world frame; kFull and kLidarOnly).
+  std::vector<Surfel> SurfelMapSnapshot() const;
+  /// WGS-84 origin of world (FailedPrecondition before it is known).
+  StatusOr<GeodeticPoint> Origin() const;
+  /// GNSS availability history (from the POS's GnssPrior).
+  std::vector<GnssAvailabilityInterval> GnssAvailability() const;
+  /// Scans skipped as bad input.
+  int num_skipped_scans() const;
+  /// Level-2 statistics (loops found, solves).
+  SubmapManager::Stats level2_stats() const;
+  const Options& options() const;
+
+ private:
+  explicit MappingSystem(const Options& options);
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace slam_mms

@@ -1,0 +1,73 @@
+#pragma once
+// SubmapManager: level 2 of the hierarchical factor graph (paper §5.2, Fig. 4 right, eqs 20-25) on
+// top of the backend's SubmapGraph: for each submap that level 1 finishes it adds the reckon factor
+// (F_Reckon, eq 21), map-to-map registration with the previous submap (F_Reg, PointIcp, §5.2.1),
+// GNSS position priors (F_GNSS, eq 24, only where fixes were used) and searches loops (F_Loop, eqs
+// 22-23: candidates within loop_distance_m that are not recent, verified by registration: inlier
+// ratio, residual and agreement with the graph); solves after GNSS returns from a long outage, on a
+// loop and on Finish(), then moves every submap (and so every scan pose, T_world_scan =
+// T_world_submap * T_submap_scan).
+//
+// Ownership: owns the graph and its registration workspace. Thread safety: not thread-safe.
+
+#include <Eigen/Geometry>
+#include <memory>
+#include <vector>
+
+#include "slam_mms/core/status.hpp"
+#include "slam_mms/ins/gnss_prior.hpp"
+#include "slam_mms/pipeline/localizer.hpp"
+#include "slam_mms/registration/point_icp.hpp"
+
+namespace slam_mms {
+
+class SubmapManager {
+ public:
+  struct Options {
+    bool enabled = true;
+    bool use_map_to_map = true;
+    bool use_gnss = true;
+    bool use_loops = true;
+    double loop_distance_m = 25.0;  ///< D_thr [m].
+    int loop_min_submap_gap = 6;    ///< Candidates at least this many submaps back.
+    double loop_min_inlier_ratio = 0.5;
+    double loop_max_rms_m = 0.25;
+    double loop_gate_chi2 = 50.0;  ///< Agreement with the graph (loose: drift is expected).
+    double long_outage_s = 10.0;   ///< GNSS back after at least this long: solve.
+    double reckon_sigma_rot_rad = 0.002;
+    double reckon_sigma_trans_m = 0.05;
+    double gnss_sigma_scale = 1.0;  ///< Multiplies the GNSS measurement covariance.
+    /// With GNSS: a roll/pitch prior on each submap from level 1 (1 sigma) [rad]; 0 disables it.
+    double attitude_prior_sigma_rad = 0.0175;
+    int max_iterations = 100;
+    int num_threads = 2;
+    PointIcp::Options icp;
+    [[nodiscard]] Status Validate() const;
+  };
+  struct Stats {
+    int solves = 0;
+    int loops_tested = 0;
+    int loops_accepted = 0;
+    int map_to_map_accepted = 0;
+    int gnss_factors = 0;
+    double last_solve_ms = 0.0;
+  };
+  static StatusOr<std::unique_ptr<SubmapManager>> Create(const Options& options);
+  ~SubmapManager();
+  /// A GNSS measurement that the POS used (antenna position in world; lever arm in the factor).
+  void AddGnssMeasurement(const GnssMeasurement& measurement,
+                          const Eigen::Vector3d& t_body_antenna);
+  /// Level 1 finished `submap_id`: add its factors, test loops, solve when triggered; then the
+  /// Localizer's submaps are moved to the new estimates.
+  Status OnSubmapFinished(Localizer* localizer, int32_t submap_id, bool gnss_returned_after_outage);
+  /// The final solve.
+  Status Finish(Localizer* localizer);
+  const Stats& stats() const;
+
+ private:
+  SubmapManager();
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace slam_mms

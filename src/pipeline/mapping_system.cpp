@@ -1,0 +1,492 @@
+#include "slam_mms/pipeline/mapping_system.hpp"
+
+#include <algorithm>
+#include <deque>
+#include <string>
+
+#include "pipeline/voxel_accumulator.hpp"
+#include "slam_mms/core/lie.hpp"
+#include "slam_mms/core/logging.hpp"
+#include "slam_mms/eval/voxel_downsample.hpp"
+#include "slam_mms/pipeline/scan_deskewer.hpp"
+
+namespace slam_mms {
+
+Status MappingSystem::Options::Validate() const {
+  if (!T_body_lidar.matrix().allFinite()) {
+    return InvalidArgumentError("MappingSystem::Options::T_body_lidar is not finite");
+  }
+  const Eigen::Matrix3d R = T_body_lidar.linear();
+  if ((R.transpose() * R - Eigen::Matrix3d::Identity()).norm() > 1e-6) {
+    return InvalidArgumentError(
+        "MappingSystem::Options::T_body_lidar has a rotation that is not orthonormal");
+  }
+  for (size_t i = 0; i < gnss_outages.size(); ++i) {
+    const auto& [start, duration] = gnss_outages[i];
+    if (!std::isfinite(start) || !(duration > 0.0)) {
+      return InvalidArgumentError("MappingSystem::Options::gnss_outages[" + std::to_string(i) +
+                                  "] = (" + std::to_string(start) + ", " +
+                                  std::to_string(duration) +
+                                  "); start must be finite and duration > 0");
+    }
+  }
+  if (!(map_max_range_m > 0.0)) {
+    return InvalidArgumentError("MappingSystem::Options::map_max_range_m = " +
+                                std::to_string(map_max_range_m) + "; must be > 0");
+  }
+  if (!(map_voxel_m > 0.0)) {
+    return InvalidArgumentError(
+        "MappingSystem::Options::map_voxel_m = " + std::to_string(map_voxel_m) + "; must be > 0");
+  }
+  if (num_threads < 1) {
+    return InvalidArgumentError(
+        "MappingSystem::Options::num_threads = " + std::to_string(num_threads) + "; must be >= 1");
+  }
+  SLAM_MMS_RETURN_IF_ERROR(ins.Validate());
+  if (mode != MappingMode::kGnssIns) {
+    Localizer::Options loc = localizer;
+    loc.mode = mode;
+    SLAM_MMS_RETURN_IF_ERROR(loc.Validate());
+    SLAM_MMS_RETURN_IF_ERROR(level2.Validate());
+  }
+  return OkStatus();
+}
+
+struct MappingSystem::Impl {
+  Options opt;
+  InsFilter ins;
+  std::unique_ptr<Localizer> loc;
+  std::unique_ptr<SubmapManager> level2;
+  ScanDeskewer deskewer;
+
+  bool external_pos = false;
+  bool have_first_scan = false;
+  bool finished = false;
+  std::vector<ImuSample> pending_imu;  // before the first scan (outage reference unknown)
+  std::vector<GnssFix> pending_gnss;
+  std::deque<ImuSample> imu_history;  // for preintegration
+  std::deque<Scan> queue;
+  Timestamp last_imu;
+  Timestamp last_gnss;
+  Timestamp last_pos_input;
+  bool have_pos_input = false;
+  Timestamp last_scan_start;
+  bool have_scan = false;
+
+  std::vector<LocalizationResult> results;
+  std::function<void(const LocalizationResult&)> callback;
+  int skipped = 0;
+  bool in_outage = false;
+  Timestamp outage_start;
+  bool gnss_returned_pending = false;
+  size_t submaps_reported = 0;
+
+  // gnss_ins mode.
+  Trajectory pos_trajectory;
+  internal::VoxelAccumulator pos_map;
+  PointCloud deskewed;
+
+  Status FeedImu(const ImuSample& s) {
+    imu_history.push_back(s);
+    if (external_pos) return OkStatus();
+    Status st = ins.AddImu(s);
+    if (st.ok()) MarkPosInput(s.stamp);
+    return st;
+  }
+
+  Status FeedGnss(const GnssFix& fix) {
+    if (external_pos) return OkStatus();
+    auto decision = ins.AddGnss(fix);
+    if (!decision.ok()) return decision.status();
+    MarkPosInput(fix.stamp);
+    if (decision->usable() && level2) {
+      level2->AddGnssMeasurement(decision->measurement, opt.ins.gnss.t_body_antenna);
+    }
+    if (decision->decision == GnssDecision::kReject) {
+      SLAM_MMS_LOG(kDebug) << "GNSS fix at " << fix.stamp.ToKittiString()
+                           << " rejected: " << decision->reason;
+    }
+    return OkStatus();
+  }
+
+  void MarkPosInput(Timestamp t) {
+    if (!have_pos_input || last_pos_input < t) last_pos_input = t;
+    have_pos_input = true;
+  }
+
+  /// Replays the data buffered before the first scan, merged in time order.
+  Status FlushPending() {
+    size_t i = 0, j = 0;
+    while (i < pending_imu.size() || j < pending_gnss.size()) {
+      const bool take_imu =
+          j >= pending_gnss.size() ||
+          (i < pending_imu.size() && pending_imu[i].stamp <= pending_gnss[j].stamp);
+      if (take_imu) {
+        SLAM_MMS_RETURN_IF_ERROR(FeedImu(pending_imu[i++]));
+      } else {
+        SLAM_MMS_RETURN_IF_ERROR(FeedGnss(pending_gnss[j++]));
+      }
+    }
+    pending_imu.clear();
+    pending_gnss.clear();
+    return OkStatus();
+  }
+
+  bool Ready(const Scan& scan) const {
+    if (finished) return true;
+    if (opt.mode == MappingMode::kLidarOnly && !results.empty()) return true;
+    return have_pos_input && scan.stamp_end <= last_pos_input;
+  }
+
+  std::vector<ImuSample> ImuBetween(Timestamp from, Timestamp to) const {
+    std::vector<ImuSample> out;
+    for (const ImuSample& s : imu_history) {
+      if (s.stamp.SecondsSince(from) >= -0.2 && to.SecondsSince(s.stamp) >= -0.2) out.push_back(s);
+    }
+    return out;
+  }
+
+  Status ProcessQueued() {
+    while (!queue.empty() && Ready(queue.front())) {
+      Scan scan = std::move(queue.front());
+      queue.pop_front();
+      SLAM_MMS_RETURN_IF_ERROR(ProcessScan(scan));
+    }
+    // Keep ~5 s of IMU behind the oldest scan still to come.
+    const Timestamp keep_from = (queue.empty() ? last_scan_start : queue.front().stamp_start);
+    while (!imu_history.empty() && keep_from.SecondsSince(imu_history.front().stamp) > 5.0) {
+      imu_history.pop_front();
+    }
+    return OkStatus();
+  }
+
+  Status ProcessScan(const Scan& scan) {
+    const bool pos_ok = ins.initialized() || external_pos;
+    StatusOr<InsState> s0 =
+        pos_ok ? ins.StateAt(scan.stamp_start)
+               : StatusOr<InsState>(FailedPreconditionError("POS not initialized"));
+    StatusOr<InsState> s1 =
+        pos_ok ? ins.StateAt(scan.stamp_end)
+               : StatusOr<InsState>(FailedPreconditionError("POS not initialized"));
+    if (!s0.ok() && s1.ok() && scan.DurationSeconds() <= 0.25) {
+      // The POS starts inside this scan (KITTI: the first OXTS record is stamped mid-scan): take
+      // the scan-end state back to the scan start at constant velocity.
+      InsState back = *s1;
+      back.stamp = scan.stamp_start;
+      back.T_world_body.translation() -= s1->v_world_mps * scan.DurationSeconds();
+      s0 = back;
+    }
+    LocalizationResult res;
+    if (opt.mode == MappingMode::kGnssIns) {
+      if (!s0.ok() || !s1.ok()) {
+        ++skipped;
+        SLAM_MMS_LOG(kWarning) << "gnss_ins: scan '" << scan.source << "' skipped: no POS state ("
+                               << (!s0.ok() ? s0.status() : s1.status()).message() << ")";
+        return OkStatus();
+      }
+      const Eigen::Isometry3d T_bstart_bend = s0->T_world_body.inverse() * s1->T_world_body;
+      SLAM_MMS_RETURN_IF_ERROR(deskewer.Deskew(scan, T_bstart_bend, opt.T_body_lidar, &deskewed));
+      pos_map.Add(deskewed, s0->T_world_body * opt.T_body_lidar, opt.map_max_range_m);
+      StampedPose pose;
+      pose.stamp = scan.stamp_start;
+      pose.T_world_body = s0->T_world_body;
+      pose.cov_T_world_body = s0->cov_T_world_body;
+      SLAM_MMS_RETURN_IF_ERROR(pos_trajectory.Add(pose));
+      res.scan_index = scan.index;
+      res.stamp = scan.stamp_start;
+      res.T_world_body = s0->T_world_body;
+      res.cov_T_world_body = s0->cov_T_world_body;
+      res.motion_factor = MotionFactorType::kPos;
+    } else {
+      ScanMotionInput motion;
+      motion.g_world = ins.initialized() ? ins.gravity_world() : Eigen::Vector3d(0, 0, -9.80665);
+      const bool lidar_only = opt.mode == MappingMode::kLidarOnly;
+      if (lidar_only) {
+        motion.type = MotionFactorType::kConstantVelocity;
+        if (results.empty() && s0.ok()) {
+          loc->SetInitialPose(s0->T_world_body);  // the anchor, as SuMa is started at a known pose
+        }
+      } else {
+        const bool gnss_valid = external_pos || ins.gnss_prior().AvailabilityAt(scan.stamp_start) !=
+                                                    GnssAvailability::kOutage;
+        UpdateOutageState(gnss_valid, scan.stamp_start);
+        if (gnss_valid && s0.ok() && s1.ok()) {
+          motion.type = MotionFactorType::kOdometry;
+          motion.T_world_body_pos_start = s0->T_world_body;
+          motion.T_world_body_pos_end = s1->T_world_body;
+          motion.v_world_pos = s0->v_world_mps;
+          motion.pos_bias << s0->accel_bias_mps2, s0->gyro_bias_radps;
+        } else {
+          motion.type = MotionFactorType::kPreintegration;
+          if (s0.ok()) {
+            motion.v_world_pos = s0->v_world_mps;
+            motion.pos_bias << s0->accel_bias_mps2, s0->gyro_bias_radps;
+            if (results.empty()) loc->SetInitialPose(s0->T_world_body);
+          }
+          const Timestamp from = have_scan ? last_scan_start : scan.stamp_start;
+          motion.imu = ImuBetween(from, scan.stamp_end);
+          if (motion.imu.empty()) motion.type = MotionFactorType::kConstantVelocity;
+        }
+      }
+      auto r = loc->ProcessScan(scan, motion);
+      if (!r.ok()) {
+        if (r.status().code() == StatusCode::kInvalidArgument) {
+          ++skipped;
+          SLAM_MMS_LOG(kWarning) << "scan '" << scan.source
+                                 << "' skipped: " << r.status().message();
+          return OkStatus();
+        }
+        return r.status();
+      }
+      res = std::move(r).value();
+      SLAM_MMS_RETURN_IF_ERROR(ReportFinishedSubmaps(/*all=*/false));
+    }
+    last_scan_start = scan.stamp_start;
+    have_scan = true;
+    results.push_back(res);
+    if (callback) callback(results.back());
+    return OkStatus();
+  }
+
+  void UpdateOutageState(bool gnss_valid, Timestamp t) {
+    if (!gnss_valid && !in_outage) {
+      in_outage = true;
+      outage_start = t;
+      SLAM_MMS_LOG(kInfo) << "GNSS lost at " << t.ToKittiString()
+                          << ": level 1 switches from F_Odom to F_Prein (IMU preintegration)";
+    } else if (gnss_valid && in_outage) {
+      in_outage = false;
+      const double duration = t.SecondsSince(outage_start);
+      SLAM_MMS_LOG(kInfo) << "GNSS back after " << duration
+                          << " s: level 1 switches from F_Prein back to F_Odom";
+      if (level2 && duration >= opt.level2.long_outage_s) gnss_returned_pending = true;
+    }
+  }
+
+  /// Hands finished submaps to level 2 (all: also the current one, on Finish).
+  Status ReportFinishedSubmaps(bool all) {
+    if (!level2) return OkStatus();
+    const auto& submaps = loc->submaps();
+    while (submaps_reported < submaps.size() && (submaps[submaps_reported].finished || all)) {
+      if (!submaps[submaps_reported].finished) break;
+      const int32_t id = submaps[submaps_reported].id;
+      SLAM_MMS_RETURN_IF_ERROR(level2->OnSubmapFinished(loc.get(), id, gnss_returned_pending));
+      gnss_returned_pending = false;
+      ++submaps_reported;
+    }
+    return OkStatus();
+  }
+
+  Status AcceptTime(const char* stream, Timestamp t, Timestamp* last, bool have_last) {
+    if (have_last && t < *last) {
+      return InvalidArgumentError(std::string("MappingSystem: ") + stream + " at " +
+                                  t.ToKittiString() + " is older than the previous one at " +
+                                  last->ToKittiString() + " (data must come in time order)");
+    }
+    *last = t;
+    return OkStatus();
+  }
+  bool have_imu = false;
+  bool have_gnss = false;
+};
+
+MappingSystem::MappingSystem(const Options& options) : impl_(std::make_unique<Impl>()) {
+  impl_->opt = options;
+}
+MappingSystem::~MappingSystem() = default;
+
+StatusOr<std::unique_ptr<MappingSystem>> MappingSystem::Create(const Options& options) {
+  SLAM_MMS_RETURN_IF_ERROR(options.Validate());
+  std::unique_ptr<MappingSystem> sys(new MappingSystem(options));
+  Impl& m = *sys->impl_;
+  SLAM_MMS_ASSIGN_OR_RETURN(m.ins, InsFilter::Create(options.ins));
+  if (options.origin) {
+    SLAM_MMS_RETURN_IF_ERROR(m.ins.mutable_gnss_prior().SetOrigin(*options.origin));
+  }
+  ScanDeskewer::Options dopt;
+  dopt.num_threads = options.num_threads;
+  SLAM_MMS_ASSIGN_OR_RETURN(m.deskewer, ScanDeskewer::Create(dopt));
+  m.pos_map = internal::VoxelAccumulator(options.map_voxel_m);
+  if (options.mode != MappingMode::kGnssIns) {
+    Localizer::Options lopt = options.localizer;
+    lopt.mode = options.mode;
+    lopt.map_voxel_m = options.map_voxel_m;
+    lopt.map_max_range_m = options.map_max_range_m;
+    SLAM_MMS_ASSIGN_OR_RETURN(m.loc, Localizer::Create(lopt, options.T_body_lidar));
+    SubmapManager::Options l2 = options.level2;
+    if (options.mode == MappingMode::kLidarOnly) l2.use_gnss = false;
+    if (l2.enabled) {
+      SLAM_MMS_ASSIGN_OR_RETURN(m.level2, SubmapManager::Create(l2));
+    }
+  }
+  return sys;
+}
+
+Status MappingSystem::AddImu(const ImuSample& sample) {
+  Impl& m = *impl_;
+  if (m.finished) return FailedPreconditionError("MappingSystem::AddImu after Finish()");
+  if (!sample.accel_mps2.allFinite() || !sample.gyro_radps.allFinite()) {
+    return InvalidArgumentError("MappingSystem::AddImu: non-finite sample at " +
+                                sample.stamp.ToKittiString());
+  }
+  SLAM_MMS_RETURN_IF_ERROR(m.AcceptTime("IMU sample", sample.stamp, &m.last_imu, m.have_imu));
+  m.have_imu = true;
+  if (!m.have_first_scan) {
+    m.pending_imu.push_back(sample);
+    return OkStatus();
+  }
+  SLAM_MMS_RETURN_IF_ERROR(m.FeedImu(sample));
+  return m.ProcessQueued();
+}
+
+Status MappingSystem::AddGnss(const GnssFix& fix) {
+  Impl& m = *impl_;
+  if (m.finished) return FailedPreconditionError("MappingSystem::AddGnss after Finish()");
+  SLAM_MMS_RETURN_IF_ERROR(m.AcceptTime("GNSS fix", fix.stamp, &m.last_gnss, m.have_gnss));
+  m.have_gnss = true;
+  if (!m.have_first_scan) {
+    m.pending_gnss.push_back(fix);
+    return OkStatus();
+  }
+  SLAM_MMS_RETURN_IF_ERROR(m.FeedGnss(fix));
+  return m.ProcessQueued();
+}
+
+Status MappingSystem::InitializePos(const InsState& state) {
+  Impl& m = *impl_;
+  if (!state.T_world_body.matrix().allFinite() || !state.v_world_mps.allFinite()) {
+    return InvalidArgumentError("MappingSystem::InitializePos: non-finite state");
+  }
+  return m.ins.InitializeAttitude(Eigen::Quaterniond(state.T_world_body.linear()),
+                                  state.v_world_mps);
+}
+
+Status MappingSystem::AddInsPose(const InsState& state) {
+  Impl& m = *impl_;
+  m.external_pos = true;
+  SLAM_MMS_RETURN_IF_ERROR(m.ins.AddExternalPose(state));
+  m.MarkPosInput(state.stamp);
+  if (!m.have_first_scan) return OkStatus();
+  return m.ProcessQueued();
+}
+
+Status MappingSystem::AddScan(const Scan& scan) {
+  Impl& m = *impl_;
+  if (m.finished) return FailedPreconditionError("MappingSystem::AddScan after Finish()");
+  if (scan.cloud.empty()) {
+    ++m.skipped;
+    SLAM_MMS_LOG(kWarning) << "scan '" << scan.source << "' (index " << scan.index
+                           << ") skipped: no points";
+    return OkStatus();
+  }
+  if (!(scan.stamp_start <= scan.stamp_end)) {
+    ++m.skipped;
+    SLAM_MMS_LOG(kWarning) << "scan '" << scan.source << "' skipped: stamp_end before stamp_start";
+    return OkStatus();
+  }
+  const Timestamp newest = m.queue.empty() ? (m.have_scan ? m.last_scan_start : Timestamp())
+                                           : m.queue.back().stamp_start;
+  if ((m.have_scan || !m.queue.empty()) && !(newest < scan.stamp_start)) {
+    ++m.skipped;
+    SLAM_MMS_LOG(kWarning) << "scan '" << scan.source << "' skipped: it starts at "
+                           << scan.stamp_start.ToKittiString()
+                           << ", not after the previous scan at " << newest.ToKittiString();
+    return OkStatus();
+  }
+  if (!m.have_first_scan) {
+    m.have_first_scan = true;
+    m.ins.mutable_gnss_prior().SetReferenceTime(scan.stamp_start);
+    for (const auto& [start, duration] : m.opt.gnss_outages) {
+      SLAM_MMS_RETURN_IF_ERROR(m.ins.mutable_gnss_prior().AddOutageWindow(start, duration));
+    }
+    SLAM_MMS_RETURN_IF_ERROR(m.FlushPending());
+  }
+  m.queue.push_back(scan);
+  return m.ProcessQueued();
+}
+
+Status MappingSystem::Finish() {
+  Impl& m = *impl_;
+  if (m.finished) return OkStatus();
+  if (!m.have_first_scan) SLAM_MMS_RETURN_IF_ERROR(m.FlushPending());
+  m.finished = true;
+  SLAM_MMS_RETURN_IF_ERROR(m.ProcessQueued());
+  if (m.loc) {
+    m.loc->FinishCurrentSubmap();
+    SLAM_MMS_RETURN_IF_ERROR(m.ReportFinishedSubmaps(/*all=*/true));
+    if (m.level2) SLAM_MMS_RETURN_IF_ERROR(m.level2->Finish(m.loc.get()));
+  }
+  return OkStatus();
+}
+
+const std::vector<LocalizationResult>& MappingSystem::results() const { return impl_->results; }
+
+void MappingSystem::SetResultCallback(std::function<void(const LocalizationResult&)> callback) {
+  impl_->callback = std::move(callback);
+}
+
+Trajectory MappingSystem::FinalTrajectory() const {
+  const Impl& m = *impl_;
+  if (!m.loc) return m.pos_trajectory;
+  std::vector<StampedPose> poses;
+  for (const SubmapRecord& rec : m.loc->submaps()) {
+    for (size_t j = 0; j < rec.T_submap_scan.size(); ++j) {
+      StampedPose p;
+      p.stamp = rec.scan_stamps[j];
+      p.T_world_body = rec.T_world_submap * rec.T_submap_scan[j];
+      // Rotate the submap-relative covariance (right perturbation: unchanged by left composition).
+      p.cov_T_world_body = rec.cov_submap_scan[j];
+      poses.push_back(p);
+    }
+  }
+  std::sort(poses.begin(), poses.end(),
+            [](const StampedPose& a, const StampedPose& b) { return a.stamp < b.stamp; });
+  Trajectory traj;
+  for (const StampedPose& p : poses) {
+    if (!traj.Add(p).ok()) continue;  // duplicates cannot happen; guard anyway
+  }
+  return traj;
+}
+
+PointCloud MappingSystem::FinalMap() const {
+  const Impl& m = *impl_;
+  if (!m.loc) return m.pos_map.Cloud();
+  PointCloud merged;
+  for (const SubmapRecord& rec : m.loc->submaps()) {
+    const Eigen::Matrix3f R = rec.T_world_submap.linear().cast<float>();
+    const Eigen::Vector3f t = rec.T_world_submap.translation().cast<float>();
+    for (size_t i = 0; i < rec.cloud.size(); ++i) {
+      merged.Add(R * rec.cloud.points()[i] + t, rec.cloud.intensities()[i]);
+    }
+  }
+  auto down = eval::VoxelDownsample(merged, m.opt.map_voxel_m);
+  return down.ok() ? std::move(down).value() : merged;
+}
+
+std::vector<Surfel> MappingSystem::SurfelMapSnapshot() const {
+  if (!impl_->loc) return {};
+  return impl_->loc->surfel_map().LiveSurfels();
+}
+
+StatusOr<GeodeticPoint> MappingSystem::Origin() const {
+  const GnssPrior& prior = impl_->ins.gnss_prior();
+  if (!prior.has_origin()) {
+    return FailedPreconditionError(
+        "MappingSystem::Origin: no valid GNSS fix yet and no origin set");
+  }
+  return prior.origin();
+}
+
+std::vector<GnssAvailabilityInterval> MappingSystem::GnssAvailability() const {
+  return impl_->ins.gnss_prior().AvailabilityIntervals();
+}
+
+int MappingSystem::num_skipped_scans() const { return impl_->skipped; }
+
+SubmapManager::Stats MappingSystem::level2_stats() const {
+  return impl_->level2 ? impl_->level2->stats() : SubmapManager::Stats{};
+}
+
+const MappingSystem::Options& MappingSystem::options() const { return impl_->opt; }
+
+}  // namespace slam_mms

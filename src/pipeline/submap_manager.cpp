@@ -1,0 +1,269 @@
+#include "slam_mms/pipeline/submap_manager.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <deque>
+#include <string>
+
+#include "slam_mms/backend/submap_graph.hpp"
+#include "slam_mms/core/lie.hpp"
+#include "slam_mms/core/logging.hpp"
+
+namespace slam_mms {
+namespace {
+
+Matrix6d Diagonal(double sigma_rot, double sigma_trans) {
+  Vector6d d;
+  d << Eigen::Vector3d::Constant(sigma_rot * sigma_rot),
+      Eigen::Vector3d::Constant(sigma_trans * sigma_trans);
+  return d.asDiagonal();
+}
+
+const SubmapRecord* FindSubmap(const Localizer& loc, int32_t id) {
+  for (const SubmapRecord& rec : loc.submaps()) {
+    if (rec.id == id) return &rec;
+  }
+  return nullptr;
+}
+
+/// T_submap_body at `t` by interpolating the submap's scan poses (clamped extrapolation).
+Eigen::Isometry3d BodyPoseAt(const SubmapRecord& rec, Timestamp t) {
+  const auto& stamps = rec.scan_stamps;
+  if (stamps.size() == 1 || t <= stamps.front()) return rec.T_submap_scan.front();
+  if (t >= stamps.back()) return rec.T_submap_scan.back();
+  const auto it = std::upper_bound(stamps.begin(), stamps.end(), t);
+  const size_t j = static_cast<size_t>(it - stamps.begin());
+  const double alpha = t.SecondsSince(stamps[j - 1]) / stamps[j].SecondsSince(stamps[j - 1]);
+  return InterpolatePose(rec.T_submap_scan[j - 1], rec.T_submap_scan[j], alpha);
+}
+
+}  // namespace
+
+Status SubmapManager::Options::Validate() const {
+  auto bad = [](const std::string& f, double v, const std::string& rule) {
+    return InvalidArgumentError("SubmapManager::Options::" + f + " = " + std::to_string(v) + "; " +
+                                rule);
+  };
+  if (!(loop_distance_m > 0.0)) return bad("loop_distance_m", loop_distance_m, "must be > 0");
+  if (loop_min_submap_gap < 1)
+    return bad("loop_min_submap_gap", loop_min_submap_gap, "must be >= 1");
+  if (!(loop_min_inlier_ratio >= 0.0 && loop_min_inlier_ratio <= 1.0)) {
+    return bad("loop_min_inlier_ratio", loop_min_inlier_ratio, "must be in [0, 1]");
+  }
+  if (!(loop_max_rms_m > 0.0)) return bad("loop_max_rms_m", loop_max_rms_m, "must be > 0");
+  if (!(loop_gate_chi2 > 0.0)) return bad("loop_gate_chi2", loop_gate_chi2, "must be > 0");
+  if (!(long_outage_s >= 0.0)) return bad("long_outage_s", long_outage_s, "must be >= 0");
+  if (!(reckon_sigma_rot_rad > 0.0)) {
+    return bad("reckon_sigma_rot_rad", reckon_sigma_rot_rad, "must be > 0");
+  }
+  if (!(reckon_sigma_trans_m > 0.0)) {
+    return bad("reckon_sigma_trans_m", reckon_sigma_trans_m, "must be > 0");
+  }
+  if (!(gnss_sigma_scale > 0.0)) return bad("gnss_sigma_scale", gnss_sigma_scale, "must be > 0");
+  if (!(attitude_prior_sigma_rad >= 0.0)) {
+    return bad("attitude_prior_sigma_rad", attitude_prior_sigma_rad, "must be >= 0");
+  }
+  if (max_iterations < 1) return bad("max_iterations", max_iterations, "must be >= 1");
+  if (num_threads < 1) return bad("num_threads", num_threads, "must be >= 1");
+  return icp.Validate();
+}
+
+struct SubmapManager::Impl {
+  Options opt;
+  std::unique_ptr<SubmapGraph> graph;
+  std::unique_ptr<PointIcp> icp;
+  Stats stats;
+  struct PendingGnss {
+    GnssMeasurement m;
+    Eigen::Vector3d t_body_antenna;
+  };
+  std::deque<PendingGnss> pending_gnss;
+  int32_t last_id = -1;
+
+  /// Registers source (frame b) against target (frame a) from T_a_b_init; empty when it fails.
+  std::optional<RegistrationResult> Register(const PointCloud& target, const PointCloud& source,
+                                             const Eigen::Isometry3d& T_a_b_init) {
+    if (target.size() < 100 || source.size() < 100) return std::nullopt;
+    if (!icp->SetTarget(target.View()).ok()) return std::nullopt;
+    auto r = icp->Align(source.View(), T_a_b_init);
+    if (!r.ok() || !r->IsUsable()) return std::nullopt;
+    return std::move(r).value();
+  }
+
+  Matrix6d RegistrationCovariance(const RegistrationResult& r) const {
+    Matrix6d cov = 100.0 * r.covariance;
+    cov.diagonal() += Diagonal(0.001, 0.02).diagonal();
+    return 0.5 * (cov + cov.transpose());
+  }
+
+  Status AttachGnss(const Localizer& loc, const SubmapRecord& rec, Timestamp next_start) {
+    while (!pending_gnss.empty() && pending_gnss.front().m.stamp < next_start) {
+      const PendingGnss g = pending_gnss.front();
+      pending_gnss.pop_front();
+      if (g.m.stamp.SecondsSince(rec.start) < -0.15) continue;  // before the first submap
+      const Eigen::Matrix3d cov =
+          opt.gnss_sigma_scale * opt.gnss_sigma_scale * g.m.cov_world_antenna;
+      SLAM_MMS_RETURN_IF_ERROR(graph->AddGnssPrior(rec.id, g.m.p_world_antenna, cov,
+                                                   BodyPoseAt(rec, g.m.stamp), g.t_body_antenna));
+      ++stats.gnss_factors;
+    }
+    return OkStatus();
+  }
+
+  /// After a solve: move the localizer's submaps (and the unfinished current one, rigidly with the
+  /// last finished one) to the graph's estimates.
+  Status ApplySolution(Localizer* loc) {
+    const auto& submaps = loc->submaps();
+    std::vector<std::pair<int32_t, Eigen::Isometry3d>> updates;
+    const SubmapRecord* last_in_graph = FindSubmap(*loc, last_id);
+    for (const SubmapRecord& rec : submaps) {
+      if (graph->HasSubmap(rec.id)) {
+        SLAM_MMS_ASSIGN_OR_RETURN(Eigen::Isometry3d T, graph->SubmapPose(rec.id));
+        updates.emplace_back(rec.id, T);
+      } else if (last_in_graph != nullptr) {
+        SLAM_MMS_ASSIGN_OR_RETURN(Eigen::Isometry3d T_last_new, graph->SubmapPose(last_id));
+        const Eigen::Isometry3d T_last_rec =
+            last_in_graph->T_world_submap.inverse() * rec.T_world_submap;
+        updates.emplace_back(rec.id, T_last_new * T_last_rec);
+      }
+    }
+    for (const auto& [id, T] : updates) SLAM_MMS_RETURN_IF_ERROR(loc->SetSubmapPose(id, T));
+    return OkStatus();
+  }
+
+  Status Solve(Localizer* loc, SolveTrigger trigger) {
+    const auto t0 = std::chrono::steady_clock::now();
+    SLAM_MMS_ASSIGN_OR_RETURN(SolveSummary summary, graph->Solve(trigger));
+    stats.last_solve_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    ++stats.solves;
+    SLAM_MMS_LOG(kInfo) << "level 2: solve (" << SolveTriggerName(trigger) << ") over "
+                        << graph->num_submaps()
+                        << " submaps: " << SolveTerminationName(summary.termination) << ", "
+                        << summary.iterations << " iterations, " << stats.last_solve_ms << " ms";
+    if (!summary.usable()) return OkStatus();
+    return ApplySolution(loc);
+  }
+};
+
+SubmapManager::SubmapManager() : impl_(std::make_unique<Impl>()) {}
+SubmapManager::~SubmapManager() = default;
+
+StatusOr<std::unique_ptr<SubmapManager>> SubmapManager::Create(const Options& options) {
+  SLAM_MMS_RETURN_IF_ERROR(options.Validate());
+  std::unique_ptr<SubmapManager> mgr(new SubmapManager());
+  Impl& m = *mgr->impl_;
+  m.opt = options;
+  SubmapGraph::Options gopt;
+  gopt.max_iterations = options.max_iterations;
+  gopt.num_threads = options.num_threads;
+  gopt.loop_candidate_distance_m = options.loop_distance_m;
+  gopt.loop_min_submap_gap = options.loop_min_submap_gap;
+  SLAM_MMS_ASSIGN_OR_RETURN(SubmapGraph graph, SubmapGraph::Create(gopt));
+  m.graph = std::make_unique<SubmapGraph>(std::move(graph));
+  PointIcp::Options iopt = options.icp;
+  iopt.num_threads = options.num_threads;
+  SLAM_MMS_ASSIGN_OR_RETURN(PointIcp icp, PointIcp::Create(iopt));
+  m.icp = std::make_unique<PointIcp>(std::move(icp));
+  return mgr;
+}
+
+void SubmapManager::AddGnssMeasurement(const GnssMeasurement& measurement,
+                                       const Eigen::Vector3d& t_body_antenna) {
+  if (!impl_->opt.use_gnss) return;
+  impl_->pending_gnss.push_back({measurement, t_body_antenna});
+}
+
+Status SubmapManager::OnSubmapFinished(Localizer* localizer, int32_t submap_id,
+                                       bool gnss_returned_after_outage) {
+  Impl& m = *impl_;
+  const SubmapRecord* rec = FindSubmap(*localizer, submap_id);
+  if (rec == nullptr) {
+    return NotFoundError("SubmapManager: level 1 has no submap " + std::to_string(submap_id));
+  }
+  // Nodes: the submap and its scan poses (level 1 is done with them).
+  SLAM_MMS_RETURN_IF_ERROR(m.graph->AddSubmap(submap_id, rec->T_world_submap));
+  for (size_t j = 0; j < rec->scan_indices.size(); ++j) {
+    SLAM_MMS_RETURN_IF_ERROR(m.graph->AddScan(submap_id, rec->scan_indices[j], rec->scan_stamps[j],
+                                              rec->T_submap_scan[j]));
+  }
+  if (m.opt.use_gnss && m.opt.attitude_prior_sigma_rad > 0.0) {
+    // Roll and pitch from level 1 (observed from gravity by the IMU/POS): GNSS positions cannot
+    // observe a rotation about the direction of travel.
+    Vector6d d;
+    const double s_rp = m.opt.attitude_prior_sigma_rad;
+    d << s_rp * s_rp, s_rp * s_rp, 1.0, 1e4, 1e4, 1e4;
+    SLAM_MMS_RETURN_IF_ERROR(
+        m.graph->AddPosePrior(submap_id, rec->T_world_submap, Matrix6d(d.asDiagonal())));
+  }
+  const SubmapRecord* prev = m.last_id >= 0 ? FindSubmap(*localizer, m.last_id) : nullptr;
+  if (prev != nullptr) {
+    // F_Reckon (eq 21): the serial chain from level 1.
+    SLAM_MMS_RETURN_IF_ERROR(
+        m.graph->AddReckonFactor(m.last_id, submap_id, rec->T_prev_this,
+                                 Diagonal(m.opt.reckon_sigma_rot_rad, m.opt.reckon_sigma_trans_m)));
+    // F_Reg (§5.2.1): map-to-map registration with the previous submap (point-based ICP).
+    if (m.opt.use_map_to_map) {
+      auto reg = m.Register(prev->registration_cloud, rec->registration_cloud, rec->T_prev_this);
+      if (reg && reg->inlier_ratio >= 0.3) {
+        const Vector6d correction = se3::Log(rec->T_prev_this.inverse() * reg->T_target_source);
+        if (correction.head<3>().norm() < 0.05 && correction.tail<3>().norm() < 1.0) {
+          SLAM_MMS_RETURN_IF_ERROR(m.graph->AddRegistrationFactor(
+              m.last_id, submap_id, reg->T_target_source, m.RegistrationCovariance(*reg)));
+          ++m.stats.map_to_map_accepted;
+        }
+      }
+    }
+  }
+  // F_GNSS (eq 24): the fixes the POS used while this submap was mapped.
+  const auto& all = localizer->submaps();
+  Timestamp next_start = rec->end.PlusSeconds(0.2);
+  for (size_t i = 0; i + 1 < all.size(); ++i) {
+    if (all[i].id == submap_id) next_start = all[i + 1].start;
+  }
+  if (m.opt.use_gnss) SLAM_MMS_RETURN_IF_ERROR(m.AttachGnss(*localizer, *rec, next_start));
+  m.last_id = submap_id;
+
+  // F_Loop (eqs 22-23): candidates within D_thr, not recent; verified by registration.
+  bool loop = false;
+  if (m.opt.use_loops) {
+    const Eigen::Vector3d center = rec->T_world_submap * rec->T_submap_scan.back().translation();
+    for (const LoopCandidate& c : m.graph->LoopCandidates(center, submap_id)) {
+      const SubmapRecord* cand = FindSubmap(*localizer, static_cast<int32_t>(c.submap));
+      if (cand == nullptr) continue;
+      ++m.stats.loops_tested;
+      const Eigen::Isometry3d T_init = cand->T_world_submap.inverse() * rec->T_world_submap;
+      auto reg = m.Register(cand->registration_cloud, rec->registration_cloud, T_init);
+      if (!reg) continue;
+      const Vector6d correction = se3::Log(T_init.inverse() * reg->T_target_source);
+      const bool verified = reg->inlier_ratio >= m.opt.loop_min_inlier_ratio &&
+                            reg->rms_residual_m <= m.opt.loop_max_rms_m &&
+                            correction.squaredNorm() < m.opt.loop_gate_chi2;
+      SLAM_MMS_LOG(kDebug) << "level 2: loop " << cand->id << " <-> " << submap_id << ": inliers "
+                           << reg->inlier_ratio << ", rms " << reg->rms_residual_m
+                           << ", correction " << correction.tail<3>().norm() << " m -> "
+                           << (verified ? "accepted" : "rejected");
+      if (!verified) continue;
+      SLAM_MMS_RETURN_IF_ERROR(m.graph
+                                   ->AddLoopFactor(cand->id, submap_id, reg->T_target_source,
+                                                   m.RegistrationCovariance(*reg))
+                                   .status());
+      ++m.stats.loops_accepted;
+      loop = true;
+      break;  // the most compatible (nearest verified) candidate
+    }
+  }
+  if (loop) return m.Solve(localizer, SolveTrigger::kLoopClosed);
+  if (gnss_returned_after_outage) return m.Solve(localizer, SolveTrigger::kGnssReturned);
+  return OkStatus();
+}
+
+Status SubmapManager::Finish(Localizer* localizer) {
+  Impl& m = *impl_;
+  if (m.graph->num_submaps() == 0) return OkStatus();
+  return m.Solve(localizer, SolveTrigger::kFinish);
+}
+
+const SubmapManager::Stats& SubmapManager::stats() const { return impl_->stats; }
+
+}  // namespace slam_mms

@@ -8,8 +8,8 @@ namespace slam_mms {
 
 Status Trajectory::Add(const StampedPose& pose) {
   if (!poses_.empty() && !(poses_.back().stamp < pose.stamp)) {
-    return InvalidArgumentError("trajectory pose " + std::to_string(poses_.size()) + " at t = " +
-                                std::to_string(pose.stamp.nanoseconds()) +
+    return InvalidArgumentError("trajectory pose " + std::to_string(poses_.size()) +
+                                " at t = " + std::to_string(pose.stamp.nanoseconds()) +
                                 " ns is not after the previous one at t = " +
                                 std::to_string(poses_.back().stamp.nanoseconds()) + " ns");
   }

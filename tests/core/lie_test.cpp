@@ -52,10 +52,12 @@ TEST_F(LieTest, So3RightJacobianMatchesNumericDifferentiation) {
       J_num.col(k) = so3::Log(Eigen::Matrix3d(so3::Exp(w).transpose() * so3::Exp(w + d))) / h;
     }
     EXPECT_LT((J_num - so3::RightJacobian(w)).norm(), 1e-5) << "scale " << scale;
-    EXPECT_LT((so3::RightJacobian(w) * so3::RightJacobianInverse(w) -
-               Eigen::Matrix3d::Identity()).norm(), 1e-9);
-    EXPECT_LT((so3::LeftJacobian(w) * so3::LeftJacobianInverse(w) -
-               Eigen::Matrix3d::Identity()).norm(), 1e-9);
+    EXPECT_LT(
+        (so3::RightJacobian(w) * so3::RightJacobianInverse(w) - Eigen::Matrix3d::Identity()).norm(),
+        1e-9);
+    EXPECT_LT(
+        (so3::LeftJacobian(w) * so3::LeftJacobianInverse(w) - Eigen::Matrix3d::Identity()).norm(),
+        1e-9);
   }
 }
 
@@ -80,8 +82,9 @@ TEST_F(LieTest, Se3RightJacobianMatchesNumericDifferentiation) {
       J_num.col(k) = se3::Log(se3::Exp(xi).inverse() * se3::Exp(xi + d)) / h;
     }
     EXPECT_LT((J_num - se3::RightJacobian(xi)).norm(), 1e-5) << "scale " << scale;
-    EXPECT_LT((se3::RightJacobian(xi) * se3::RightJacobianInverse(xi) -
-               Matrix6d::Identity()).norm(), 1e-9);
+    EXPECT_LT(
+        (se3::RightJacobian(xi) * se3::RightJacobianInverse(xi) - Matrix6d::Identity()).norm(),
+        1e-9);
   }
 }
 

@@ -33,9 +33,9 @@ std::filesystem::path MakeTempDir(const std::string& tag) {
   for (char& c : name) {
     if (c == '/') c = '_';
   }
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("slam_mms_test_" + name + "_" + std::to_string(rd()) + "_" +
-                    std::to_string(counter++));
+  const auto dir =
+      std::filesystem::temp_directory_path() /
+      ("slam_mms_test_" + name + "_" + std::to_string(rd()) + "_" + std::to_string(counter++));
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;

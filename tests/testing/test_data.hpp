@@ -14,17 +14,17 @@ std::filesystem::path KittiRawDriveDir();
 /// True when the real KITTI drive is present.
 bool HasKittiRaw();
 
-/// A fresh empty folder under the system temp dir, unique per test; removed by the caller if wanted.
+/// A fresh empty folder under the system temp dir, unique per test; removed by the caller if
+/// wanted.
 std::filesystem::path MakeTempDir(const std::string& tag);
 
 }  // namespace slam_mms::testing
 
 /// Skips the current test with a clear message where ../shared/data is absent.
-#define SLAM_MMS_REQUIRE_KITTI_RAW()                                                      \
-  do {                                                                                    \
-    if (!::slam_mms::testing::HasKittiRaw()) {                                            \
-      GTEST_SKIP() << "real KITTI data not found at "                                     \
-                   << ::slam_mms::testing::KittiRawDriveDir()                             \
-                   << " (set SLAM_MMS_SHARED_DATA to the shared/data folder to run this)"; \
-    }                                                                                     \
+#define SLAM_MMS_REQUIRE_KITTI_RAW()                                                             \
+  do {                                                                                           \
+    if (!::slam_mms::testing::HasKittiRaw()) {                                                   \
+      GTEST_SKIP() << "real KITTI data not found at " << ::slam_mms::testing::KittiRawDriveDir() \
+                   << " (set SLAM_MMS_SHARED_DATA to the shared/data folder to run this)";       \
+    }                                                                                            \
   } while (0)

@@ -1,6 +1,6 @@
 #pragma once
-// Logging through a sink the caller installs. The library never prints: without a sink, messages are
-// dropped. Apps install a sink that writes to stderr.
+// Logging through a sink the caller installs. The library never prints: without a sink, messages
+// are dropped. Apps install a sink that writes to stderr.
 //
 // Thread safety: SetLogSink/Log may be called from any thread; the sink itself is called under a
 // mutex, so it need not be thread-safe.
@@ -47,7 +47,7 @@ class LogMessage {
 }  // namespace slam_mms
 
 /// `SLAM_MMS_LOG(kWarning) << "skipping " << file;`
-#define SLAM_MMS_LOG(level)                                                       \
-  if (::slam_mms::LogLevel::level < ::slam_mms::MinLogLevel()) {                  \
-  } else                                                                          \
+#define SLAM_MMS_LOG(level)                                      \
+  if (::slam_mms::LogLevel::level < ::slam_mms::MinLogLevel()) { \
+  } else                                                         \
     ::slam_mms::internal::LogMessage(::slam_mms::LogLevel::level).stream()

@@ -1,11 +1,11 @@
 #pragma once
 // PointCloud: the library's own point container (structure of arrays: positions, intensities,
-// per-point time offsets), and PointCloudView: a borrowed, strided view so a host's own point type can
-// be passed in without a copy.
+// per-point time offsets), and PointCloudView: a borrowed, strided view so a host's own point type
+// can be passed in without a copy.
 //
-// Ownership: PointCloud owns its arrays. PointCloudView borrows the caller's memory, which must outlive
-// every call it is passed to (the library never keeps a view beyond the call).
-// Thread safety: value type; concurrent const access is safe.
+// Ownership: PointCloud owns its arrays. PointCloudView borrows the caller's memory, which must
+// outlive every call it is passed to (the library never keeps a view beyond the call). Thread
+// safety: value type; concurrent const access is safe.
 
 #include <Eigen/Core>
 #include <cstddef>
@@ -17,7 +17,8 @@ namespace slam_mms {
 /// A borrowed, strided view of a host's points. Strides are in bytes between consecutive points.
 /// `intensity` and `dt_from_scan_start_s` are optional (nullptr: absent).
 struct PointCloudView {
-  const float* xyz = nullptr;  ///< Points x, y, z (float32, consecutive floats) in the sensor frame.
+  const float* xyz =
+      nullptr;  ///< Points x, y, z (float32, consecutive floats) in the sensor frame.
   size_t size = 0;
   size_t stride_bytes = 3 * sizeof(float);
   const float* intensity = nullptr;
@@ -26,8 +27,8 @@ struct PointCloudView {
   size_t time_stride_bytes = sizeof(float);
 
   Eigen::Vector3f Point(size_t i) const {
-    const auto* p = reinterpret_cast<const float*>(reinterpret_cast<const uint8_t*>(xyz) +
-                                                   i * stride_bytes);
+    const auto* p =
+        reinterpret_cast<const float*>(reinterpret_cast<const uint8_t*>(xyz) + i * stride_bytes);
     return {p[0], p[1], p[2]};
   }
   float Intensity(size_t i) const {

@@ -19,12 +19,12 @@ using Vector6d = Eigen::Matrix<double, 6, 1>;
 
 /// One LiDAR revolution, points in the `lidar` frame, not motion-compensated.
 struct Scan {
-  int64_t index = -1;          ///< Frame index in its drive (file number), -1 if unknown.
-  Timestamp stamp_start;       ///< Time of the first firing (the scan's reference time).
-  Timestamp stamp_end;         ///< Time of the last firing.
-  Timestamp stamp_trigger;     ///< KITTI `timestamps.txt` (camera trigger, about mid-scan).
-  PointCloud cloud;            ///< Points with per-point time offsets from stamp_start.
-  std::string source;          ///< File it came from, for messages ("" if none).
+  int64_t index = -1;       ///< Frame index in its drive (file number), -1 if unknown.
+  Timestamp stamp_start;    ///< Time of the first firing (the scan's reference time).
+  Timestamp stamp_end;      ///< Time of the last firing.
+  Timestamp stamp_trigger;  ///< KITTI `timestamps.txt` (camera trigger, about mid-scan).
+  PointCloud cloud;         ///< Points with per-point time offsets from stamp_start.
+  std::string source;       ///< File it came from, for messages ("" if none).
 
   double DurationSeconds() const { return stamp_end.SecondsSince(stamp_start); }
 };
@@ -32,7 +32,8 @@ struct Scan {
 /// One IMU measurement in the `body` frame.
 struct ImuSample {
   Timestamp stamp;
-  Eigen::Vector3d accel_mps2 = Eigen::Vector3d::Zero();  ///< Specific force (gravity included) [m/s^2].
+  Eigen::Vector3d accel_mps2 =
+      Eigen::Vector3d::Zero();  ///< Specific force (gravity included) [m/s^2].
   Eigen::Vector3d gyro_radps = Eigen::Vector3d::Zero();  ///< Angular rate [rad/s].
 };
 
@@ -46,9 +47,9 @@ struct GnssFix {
   Timestamp stamp;
   double latitude_deg = 0.0;
   double longitude_deg = 0.0;
-  double height_m = 0.0;             ///< Height as the receiver reports it (KITTI OXTS "alt").
-  double sigma_horizontal_m = 1.0;   ///< Reported 1-sigma horizontal accuracy [m].
-  double sigma_vertical_m = 1.5;     ///< Reported 1-sigma vertical accuracy [m].
+  double height_m = 0.0;            ///< Height as the receiver reports it (KITTI OXTS "alt").
+  double sigma_horizontal_m = 1.0;  ///< Reported 1-sigma horizontal accuracy [m].
+  double sigma_vertical_m = 1.5;    ///< Reported 1-sigma vertical accuracy [m].
   GnssFixType type = GnssFixType::kSingle;
   int num_satellites = 0;
 };

@@ -1,7 +1,7 @@
 #pragma once
-// Status and StatusOr<T>: how every fallible slam_mms call reports failure. No exception crosses the
-// public API; bad input or bad options return a Status whose message names the file, line, field or
-// option and the rule it breaks.
+// Status and StatusOr<T>: how every fallible slam_mms call reports failure. No exception crosses
+// the public API; bad input or bad options return a Status whose message names the file, line,
+// field or option and the rule it breaks.
 //
 // Thread safety: value types; distinct objects may be used from distinct threads.
 
@@ -14,13 +14,13 @@ namespace slam_mms {
 
 enum class StatusCode {
   kOk = 0,
-  kInvalidArgument,   ///< A bad option or argument value.
-  kNotFound,          ///< A file, folder or record that should exist does not.
-  kDataLoss,          ///< A file is truncated or corrupt.
-  kOutOfRange,        ///< A time or index outside what the data covers.
-  kFailedPrecondition,///< Called in the wrong state (e.g. before initialisation).
-  kUnavailable,       ///< A resource (EGL display, GPU) could not be opened.
-  kInternal,          ///< A solver or library failure that is not the caller's fault.
+  kInvalidArgument,     ///< A bad option or argument value.
+  kNotFound,            ///< A file, folder or record that should exist does not.
+  kDataLoss,            ///< A file is truncated or corrupt.
+  kOutOfRange,          ///< A time or index outside what the data covers.
+  kFailedPrecondition,  ///< Called in the wrong state (e.g. before initialisation).
+  kUnavailable,         ///< A resource (EGL display, GPU) could not be opened.
+  kInternal,            ///< A solver or library failure that is not the caller's fault.
   kUnimplemented,
 };
 
@@ -73,7 +73,7 @@ class [[nodiscard]] StatusOr {
   StatusOr(Status status) : status_(std::move(status)) {  // NOLINT(google-explicit-constructor)
     if (status_.ok()) status_ = InternalError("StatusOr constructed from an OK Status");
   }
-  StatusOr(const T& value) : value_(value) {}       // NOLINT(google-explicit-constructor)
+  StatusOr(const T& value) : value_(value) {}        // NOLINT(google-explicit-constructor)
   StatusOr(T&& value) : value_(std::move(value)) {}  // NOLINT(google-explicit-constructor)
 
   bool ok() const { return status_.ok(); }
@@ -104,17 +104,17 @@ class [[nodiscard]] StatusOr {
 }  // namespace slam_mms
 
 /// Returns early from the enclosing function when `expr` (a Status) is not ok.
-#define SLAM_MMS_RETURN_IF_ERROR(expr)              \
-  do {                                              \
-    ::slam_mms::Status slam_mms_status_ = (expr);   \
+#define SLAM_MMS_RETURN_IF_ERROR(expr)                   \
+  do {                                                   \
+    ::slam_mms::Status slam_mms_status_ = (expr);        \
     if (!slam_mms_status_.ok()) return slam_mms_status_; \
   } while (0)
 
 #define SLAM_MMS_CONCAT_INNER_(a, b) a##b
 #define SLAM_MMS_CONCAT_(a, b) SLAM_MMS_CONCAT_INNER_(a, b)
 /// `SLAM_MMS_ASSIGN_OR_RETURN(auto x, Foo());` unwraps a StatusOr or returns its Status.
-#define SLAM_MMS_ASSIGN_OR_RETURN(lhs, expr)                                   \
-  auto SLAM_MMS_CONCAT_(slam_mms_or_, __LINE__) = (expr);                      \
-  if (!SLAM_MMS_CONCAT_(slam_mms_or_, __LINE__).ok())                          \
-    return SLAM_MMS_CONCAT_(slam_mms_or_, __LINE__).status();                  \
+#define SLAM_MMS_ASSIGN_OR_RETURN(lhs, expr)                  \
+  auto SLAM_MMS_CONCAT_(slam_mms_or_, __LINE__) = (expr);     \
+  if (!SLAM_MMS_CONCAT_(slam_mms_or_, __LINE__).ok())         \
+    return SLAM_MMS_CONCAT_(slam_mms_or_, __LINE__).status(); \
   lhs = std::move(SLAM_MMS_CONCAT_(slam_mms_or_, __LINE__)).value()

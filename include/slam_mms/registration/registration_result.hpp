@@ -46,8 +46,8 @@ struct DegeneracyAnalysis {
   /// Per tangent axis [omega_x, omega_y, omega_z, v_x, v_y, v_z] of the source/sensor frame: the
   /// information left on that axis once the other five are free, 1 / (H'^-1)_kk, divided by the
   /// largest eigenvalue (in [0, 1]; 0 = not observable at all). For this measure relative
-  /// eigenvalues are floored at degeneracy_threshold^2, so an exactly unobservable direction that is
-  /// numerically mixed into another axis does not mark that axis as well.
+  /// eigenvalues are floored at degeneracy_threshold^2, so an exactly unobservable direction that
+  /// is numerically mixed into another axis does not mark that axis as well.
   Vector6d axis_information = Vector6d::Zero();
   /// axis_information[k] < Options::degeneracy_threshold.
   std::array<bool, 6> degenerate_axis{};

@@ -3,6 +3,7 @@
 #include "slam_mms/pipeline/mapping_system.hpp"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <map>
@@ -71,8 +72,9 @@ StatusOr<RunOutput> RunDrive(const std::filesystem::path& drive, MappingSystem::
 class SimulatedDriveTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
+    // One folder per process: ctest runs each test in its own process, two at a time.
     dir_ = new std::filesystem::path(std::filesystem::temp_directory_path() /
-                                     "slam_mms_pipeline_sim_drive");
+                                     ("slam_mms_pipeline_sim_drive_" + std::to_string(::getpid())));
     sim::DriveSimulator::Options opt;
     opt.seed = 3;
     opt.duration_s = kDurationS;
@@ -90,7 +92,8 @@ class SimulatedDriveTest : public ::testing::Test {
     ground_truth_ = new Trajectory(std::move(gt).value());
   }
   static void TearDownTestSuite() {
-    std::filesystem::remove_all(*dir_);
+    std::error_code ec;
+    std::filesystem::remove_all(*dir_, ec);
     delete dir_;
     delete drive_;
     delete origin_;

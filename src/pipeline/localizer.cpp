@@ -7,6 +7,7 @@
 #include <cmath>
 #include <string>
 
+#include "pipeline/pose_covariance.hpp"
 #include "pipeline/voxel_accumulator.hpp"
 #include "slam_mms/core/lie.hpp"
 #include "slam_mms/core/logging.hpp"
@@ -18,13 +19,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double MsSince(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
-
-Matrix6d DiagonalCovariance(double sigma_rot, double sigma_trans) {
-  Vector6d d;
-  d << Eigen::Vector3d::Constant(sigma_rot * sigma_rot),
-      Eigen::Vector3d::Constant(sigma_trans * sigma_trans);
-  return d.asDiagonal();
 }
 
 /// Pose T scaled along its twist: Exp(s * Log(T)).
@@ -42,42 +36,6 @@ std::unique_ptr<ceres::CostFunction> MakeNormalPrior(const Eigen::VectorXd& mean
 }
 
 }  // namespace
-
-const char* MappingModeName(MappingMode mode) {
-  switch (mode) {
-    case MappingMode::kFull: return "full";
-    case MappingMode::kGnssIns: return "gnss_ins";
-    case MappingMode::kLidarOnly: return "lidar_only";
-  }
-  return "?";
-}
-
-bool ParseMappingMode(const std::string& name, MappingMode* mode) {
-  for (MappingMode m : {MappingMode::kFull, MappingMode::kGnssIns, MappingMode::kLidarOnly}) {
-    if (name == MappingModeName(m)) {
-      *mode = m;
-      return true;
-    }
-  }
-  return false;
-}
-
-const char* MotionFactorTypeName(MotionFactorType type) {
-  switch (type) {
-    case MotionFactorType::kNone: return "none";
-    case MotionFactorType::kOdometry: return "odometry";
-    case MotionFactorType::kPreintegration: return "preintegration";
-    case MotionFactorType::kConstantVelocity: return "constant_velocity";
-    case MotionFactorType::kPos: return "pos";
-  }
-  return "?";
-}
-
-const std::array<const char*, StageTimings::kNumStages>& StageTimings::Names() {
-  static const std::array<const char*, kNumStages> names = {
-      "deskew", "predict", "render", "register", "factors", "optimize", "integrate"};
-  return names;
-}
 
 Status Localizer::Options::Validate() const {
   auto bad = [](const std::string& field, double v, const std::string& rule) {
@@ -431,9 +389,9 @@ StatusOr<LocalizationResult> Localizer::ProcessScan(const Scan& scan,
       // Right perturbation of T_world_lidar -> of T_world_body: Ad(T_body_lidar).
       const Matrix6d Ad = se3::Adjoint(m.T_body_lidar);
       cov_reg = m.opt.reg_cov_scale * (Ad * r.covariance * Ad.transpose());
-      cov_reg.diagonal() +=
-          DiagonalCovariance(m.opt.reg_sigma_floor_rot_rad, m.opt.reg_sigma_floor_trans_m)
-              .diagonal();
+      cov_reg.diagonal() += internal::DiagonalPoseCovariance(m.opt.reg_sigma_floor_rot_rad,
+                                                             m.opt.reg_sigma_floor_trans_m)
+                                .diagonal();
       cov_reg = 0.5 * (cov_reg + cov_reg.transpose()).eval();
     }
   }
@@ -453,10 +411,12 @@ StatusOr<LocalizationResult> Localizer::ProcessScan(const Scan& scan,
       init.imu_bias = m.bias_prev;
     }
     SLAM_MMS_RETURN_IF_ERROR(m.window->AddState(cur_state, init));
-    Matrix6d cov_motion = DiagonalCovariance(m.opt.cv_sigma_rot_rad, m.opt.cv_sigma_trans_m);
+    Matrix6d cov_motion =
+        internal::DiagonalPoseCovariance(m.opt.cv_sigma_rot_rad, m.opt.cv_sigma_trans_m);
     if (factor_type == MotionFactorType::kOdometry) {
       // F_Odom (eq 12) between consecutive scans: the POS relative motion.
-      cov_motion = DiagonalCovariance(m.opt.odom_sigma_rot_rad, m.opt.odom_sigma_trans_m);
+      cov_motion =
+          internal::DiagonalPoseCovariance(m.opt.odom_sigma_rot_rad, m.opt.odom_sigma_trans_m);
       SLAM_MMS_RETURN_IF_ERROR(
           m.window
               ->AddRelativePoseFactor(m.prev_id, cur_state,
@@ -490,10 +450,10 @@ StatusOr<LocalizationResult> Localizer::ProcessScan(const Scan& scan,
                                                             {cur_state, StateBlock::kVelocity},
                                                             {cur_state, StateBlock::kBias}})
               .status());
-      cov_motion = DiagonalCovariance(0.002 + 0.001 * dt, 0.02 + 0.05 * dt);
+      cov_motion = internal::DiagonalPoseCovariance(0.002 + 0.001 * dt, 0.02 + 0.05 * dt);
     } else {
       // LiDAR only: a weak constant-velocity factor keeps degenerate directions bounded.
-      cov_motion = DiagonalCovariance(m.opt.cv_sigma_rot_rad, m.opt.cv_sigma_trans_m);
+      cov_motion = internal::DiagonalPoseCovariance(m.opt.cv_sigma_rot_rad, m.opt.cv_sigma_trans_m);
       SLAM_MMS_RETURN_IF_ERROR(
           m.window
               ->AddRelativePoseFactor(m.prev_id, cur_state,
@@ -505,7 +465,7 @@ StatusOr<LocalizationResult> Localizer::ProcessScan(const Scan& scan,
       // F_Reg (eq 16): reference -> scan, checked against the motion prediction.
       MotionPrediction prediction;
       prediction.T_a_b = T_submap_pred;
-      prediction.covariance = 4.0 * cov_motion + DiagonalCovariance(0.003, 0.05);
+      prediction.covariance = 4.0 * cov_motion + internal::DiagonalPoseCovariance(0.003, 0.05);
       auto outcome = m.window->AddRelativePoseFactor(m.ref_id, cur_state, *T_submap_reg, cov_reg,
                                                      FactorKind::kRegistration,
                                                      RobustLoss::Huber(3.0), prediction);

@@ -239,7 +239,7 @@ struct MappingSystem::Impl {
         return r.status();
       }
       res = std::move(r).value();
-      SLAM_MMS_RETURN_IF_ERROR(ReportFinishedSubmaps(/*all=*/false));
+      SLAM_MMS_RETURN_IF_ERROR(ReportFinishedSubmaps());
     }
     last_scan_start = scan.stamp_start;
     have_scan = true;
@@ -263,12 +263,11 @@ struct MappingSystem::Impl {
     }
   }
 
-  /// Hands finished submaps to level 2 (all: also the current one, on Finish).
-  Status ReportFinishedSubmaps(bool all) {
+  /// Hands the submaps level 1 has finished to level 2, in order.
+  Status ReportFinishedSubmaps() {
     if (!level2) return OkStatus();
     const auto& submaps = loc->submaps();
-    while (submaps_reported < submaps.size() && (submaps[submaps_reported].finished || all)) {
-      if (!submaps[submaps_reported].finished) break;
+    while (submaps_reported < submaps.size() && submaps[submaps_reported].finished) {
       const int32_t id = submaps[submaps_reported].id;
       SLAM_MMS_RETURN_IF_ERROR(level2->OnSubmapFinished(loc.get(), id, gnss_returned_pending));
       gnss_returned_pending = false;
@@ -413,7 +412,7 @@ Status MappingSystem::Finish() {
   SLAM_MMS_RETURN_IF_ERROR(m.ProcessQueued());
   if (m.loc) {
     m.loc->FinishCurrentSubmap();
-    SLAM_MMS_RETURN_IF_ERROR(m.ReportFinishedSubmaps(/*all=*/true));
+    SLAM_MMS_RETURN_IF_ERROR(m.ReportFinishedSubmaps());
     if (m.level2) SLAM_MMS_RETURN_IF_ERROR(m.level2->Finish(m.loc.get()));
   }
   return OkStatus();

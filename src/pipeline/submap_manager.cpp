@@ -5,19 +5,13 @@
 #include <deque>
 #include <string>
 
+#include "pipeline/pose_covariance.hpp"
 #include "slam_mms/backend/submap_graph.hpp"
 #include "slam_mms/core/lie.hpp"
 #include "slam_mms/core/logging.hpp"
 
 namespace slam_mms {
 namespace {
-
-Matrix6d Diagonal(double sigma_rot, double sigma_trans) {
-  Vector6d d;
-  d << Eigen::Vector3d::Constant(sigma_rot * sigma_rot),
-      Eigen::Vector3d::Constant(sigma_trans * sigma_trans);
-  return d.asDiagonal();
-}
 
 const SubmapRecord* FindSubmap(const Localizer& loc, int32_t id) {
   for (const SubmapRecord& rec : loc.submaps()) {
@@ -92,7 +86,7 @@ struct SubmapManager::Impl {
 
   Matrix6d RegistrationCovariance(const RegistrationResult& r) const {
     Matrix6d cov = 100.0 * r.covariance;
-    cov.diagonal() += Diagonal(0.001, 0.02).diagonal();
+    cov.diagonal() += internal::DiagonalPoseCovariance(0.001, 0.02).diagonal();
     return 0.5 * (cov + cov.transpose());
   }
 
@@ -193,15 +187,15 @@ Status SubmapManager::OnSubmapFinished(Localizer* localizer, int32_t submap_id,
     Vector6d d;
     const double s_rp = m.opt.attitude_prior_sigma_rad;
     d << s_rp * s_rp, s_rp * s_rp, 1.0, 1e4, 1e4, 1e4;
-    SLAM_MMS_RETURN_IF_ERROR(
-        m.graph->AddPosePrior(submap_id, rec->T_world_submap, Matrix6d(d.asDiagonal())));
+    SLAM_MMS_RETURN_IF_ERROR(m.graph->AddPosePrior(
+        submap_id, rec->T_world_submap, Matrix6d(d.asinternal::DiagonalPoseCovariance())));
   }
   const SubmapRecord* prev = m.last_id >= 0 ? FindSubmap(*localizer, m.last_id) : nullptr;
   if (prev != nullptr) {
     // F_Reckon (eq 21): the serial chain from level 1.
-    SLAM_MMS_RETURN_IF_ERROR(
-        m.graph->AddReckonFactor(m.last_id, submap_id, rec->T_prev_this,
-                                 Diagonal(m.opt.reckon_sigma_rot_rad, m.opt.reckon_sigma_trans_m)));
+    SLAM_MMS_RETURN_IF_ERROR(m.graph->AddReckonFactor(
+        m.last_id, submap_id, rec->T_prev_this,
+        internal::DiagonalPoseCovariance(m.opt.reckon_sigma_rot_rad, m.opt.reckon_sigma_trans_m)));
     // F_Reg (§5.2.1): map-to-map registration with the previous submap (point-based ICP).
     if (m.opt.use_map_to_map) {
       auto reg = m.Register(prev->registration_cloud, rec->registration_cloud, rec->T_prev_this);

@@ -6,18 +6,18 @@
 #include <string>
 #include <unordered_set>
 
+#include "core/worker_pool.hpp"
 #include "registration/gauss_newton.hpp"
 #include "registration/point_to_plane.hpp"
-#include "registration/worker_pool.hpp"
 
 namespace slam_mms {
 namespace {
 
+using internal::WorkerPool;
 using registration_internal::GaussNewtonSettings;
 using registration_internal::HuberWeight;
 using registration_internal::NormalEquations;
 using registration_internal::PointToPlaneResidual;
-using registration_internal::WorkerPool;
 
 struct CloudAdaptor {
   const std::vector<Eigen::Vector3f>* pts = nullptr;

@@ -4,17 +4,17 @@
 #include <string>
 #include <vector>
 
+#include "core/worker_pool.hpp"
 #include "registration/gauss_newton.hpp"
 #include "registration/point_to_plane.hpp"
-#include "registration/worker_pool.hpp"
 
 namespace slam_mms {
 namespace {
 
+using internal::WorkerPool;
 using registration_internal::GaussNewtonSettings;
 using registration_internal::NormalEquations;
 using registration_internal::PointToPlaneResidual;
-using registration_internal::WorkerPool;
 
 constexpr float kPiF = 3.14159265358979f;
 

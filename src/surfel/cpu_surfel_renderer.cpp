@@ -5,8 +5,8 @@
 #include <limits>
 #include <utility>
 
+#include "core/worker_pool.hpp"
 #include "surfel/fast_math.hpp"
-#include "surfel/worker_pool.hpp"
 
 namespace slam_mms {
 namespace {

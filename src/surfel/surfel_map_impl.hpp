@@ -3,10 +3,10 @@
 #include <memory>
 #include <vector>
 
+#include "core/worker_pool.hpp"
 #include "slam_mms/surfel/cpu_surfel_renderer.hpp"
 #include "slam_mms/surfel/surfel_map.hpp"
 #include "surfel/voxel_index.hpp"
-#include "surfel/worker_pool.hpp"
 
 namespace slam_mms {
 

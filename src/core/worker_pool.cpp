@@ -1,4 +1,4 @@
-#include "surfel/worker_pool.hpp"
+#include "core/worker_pool.hpp"
 
 #include <algorithm>
 
@@ -36,10 +36,11 @@ void WorkerPool::RunImpl(Trampoline fn, void* ctx) {
   std::unique_lock<std::mutex> lock(mutex_);
   done_cv_.wait(lock, [this] { return pending_ == 0; });
   task_ = nullptr;
+  task_ctx_ = nullptr;
 }
 
 void WorkerPool::WorkerLoop(int index) {
-  long long seen = 0;
+  uint64_t seen = 0;
   for (;;) {
     Trampoline task = nullptr;
     void* ctx = nullptr;

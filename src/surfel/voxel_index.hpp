@@ -15,6 +15,8 @@ class VoxelIndex {
   explicit VoxelIndex(float cell_size_m = 10.0f) : cell_size_(cell_size_m) {}
 
   void Clear();
+  /// Reserves room for ids 0 .. num_ids-1 (avoids regrowth while bulk-inserting).
+  void Reserve(size_t num_ids) { where_.reserve(num_ids); }
   /// Adds `id` at `position` (id must not be present).
   void Insert(uint32_t id, const Eigen::Vector3f& position);
   /// Removes `id` (must be present).

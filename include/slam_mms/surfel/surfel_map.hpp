@@ -31,8 +31,9 @@
 //      = 0.
 //
 // Storage: a slot vector; a surfel's id is its slot and stays valid until the surfel is removed
-// (slots of removed surfels are reused by later creations). Positions are in the map ("world")
-// frame; TransformSubmap moves one submap's surfels rigidly after a pose-graph correction.
+// (slots of removed surfels are reused by later creations) or Compact() renumbers the map.
+// Positions are in the map ("world") frame; TransformSubmap moves one submap's surfels rigidly
+// after a pose-graph correction.
 //
 // Ownership: the map owns its surfels and its default CPU renderer; SetRenderer borrows.
 // Thread safety: not thread-safe; const methods may run concurrently with each other. Move-only.
@@ -42,6 +43,7 @@
 #include <limits>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "slam_mms/core/status.hpp"
@@ -147,6 +149,27 @@ class SurfelMap {
 
   /// Moves every surfel of `submap_id` by T_new_old (positions and normals); returns how many.
   size_t TransformSubmap(int32_t submap_id, const Eigen::Isometry3d& T_new_old);
+
+  // ---- bounding memory on long drives -----------------------------------------------------------
+  // A drive's map grows with its length; the pipeline keeps only the submaps it still registers
+  // against. Removing surfels frees their slots (reused by later creations, so the slot vector
+  // stops growing); Compact() gives the memory back to the allocator. Each call is O(slots).
+
+  /// Removes every live surfel of `submap_id` from the map and its spatial index. When `removed` is
+  /// not null the removed surfels are appended to it (e.g. to spill the submap to disk). The other
+  /// surfels keep their ids. Returns how many were removed (0 for an unknown submap).
+  size_t RemoveSubmap(int32_t submap_id, std::vector<Surfel>* removed = nullptr);
+  /// Removes the surfels of every submap not listed in `keep` (any order, duplicates allowed), as
+  /// RemoveSubmap. Returns how many were removed.
+  size_t RemoveSubmapsExcept(const std::vector<int32_t>& keep,
+                             std::vector<Surfel>* removed = nullptr);
+  /// Live surfel count per submap id, sorted by id (submaps without live surfels are not listed).
+  std::vector<std::pair<int32_t, size_t>> SubmapSizes() const;
+  /// Gives memory back: renumbers the live surfels 0 .. size()-1 (keeping their relative order),
+  /// rebuilds the spatial index and shrinks the slot, flag and index storage to fit. INVALIDATES
+  /// every surfel id held outside the map (ids from SelectActive, AddSurfels, rendered images).
+  /// Returns the bytes released (MemoryBytes() before minus after; 0 when nothing was freed).
+  size_t Compact();
   /// Adds surfels as they are (e.g. from another map); returns their ids. Invalid ones (non-finite,
   /// radius <= 0, normal not unit) are rejected with InvalidArgument before anything is added.
   StatusOr<std::vector<uint32_t>> AddSurfels(const std::vector<Surfel>& surfels);

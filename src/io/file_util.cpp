@@ -26,19 +26,23 @@ StatusOr<std::string> ReadFileBytes(const std::filesystem::path& file) {
   return bytes;
 }
 
-StatusOr<std::vector<std::string>> ReadLines(const std::filesystem::path& file) {
-  SLAM_MMS_ASSIGN_OR_RETURN(const std::string bytes, ReadFileBytes(file));
+std::vector<std::string> SplitLines(std::string_view bytes) {
   std::vector<std::string> lines;
   size_t start = 0;
   while (start < bytes.size()) {
     size_t end = bytes.find('\n', start);
-    if (end == std::string::npos) end = bytes.size();
-    std::string line = bytes.substr(start, end - start);
+    if (end == std::string_view::npos) end = bytes.size();
+    std::string line(bytes.substr(start, end - start));
     if (!line.empty() && line.back() == '\r') line.pop_back();
     lines.push_back(std::move(line));
     start = end + 1;
   }
   return lines;
+}
+
+StatusOr<std::vector<std::string>> ReadLines(const std::filesystem::path& file) {
+  SLAM_MMS_ASSIGN_OR_RETURN(const std::string bytes, ReadFileBytes(file));
+  return SplitLines(bytes);
 }
 
 bool IsBlank(const std::string& line) {
@@ -51,6 +55,11 @@ bool IsBlank(const std::string& line) {
 StatusOr<std::vector<std::optional<Timestamp>>> ReadTimestampFile(const std::filesystem::path& file,
                                                                   bool allow_blank_lines) {
   SLAM_MMS_ASSIGN_OR_RETURN(const std::vector<std::string> lines, ReadLines(file));
+  return ParseTimestampLines(lines, file.string(), allow_blank_lines);
+}
+
+StatusOr<std::vector<std::optional<Timestamp>>> ParseTimestampLines(
+    const std::vector<std::string>& lines, const std::string& file, bool allow_blank_lines) {
   std::vector<std::optional<Timestamp>> stamps;
   stamps.reserve(lines.size());
   int previous_line = 0;
@@ -59,22 +68,21 @@ StatusOr<std::vector<std::optional<Timestamp>>> ReadTimestampFile(const std::fil
     const int line_number = static_cast<int>(i) + 1;
     if (IsBlank(lines[i])) {
       if (!allow_blank_lines) {
-        return DataLossError(file.string() + ":" + std::to_string(line_number) +
-                             ": empty timestamp line");
+        return DataLossError(file + ":" + std::to_string(line_number) + ": empty timestamp line");
       }
       stamps.emplace_back(std::nullopt);
       continue;
     }
     auto stamp = ParseKittiTimestamp(lines[i]);
     if (!stamp.ok()) {
-      return DataLossError(file.string() + ":" + std::to_string(line_number) + ": " +
+      return DataLossError(file + ":" + std::to_string(line_number) + ": " +
                            stamp.status().message());
     }
     if (previous_line > 0 && *stamp <= previous) {
       return DataLossError(
-          file.string() + ":" + std::to_string(line_number) + ": timestamp " +
-          stamp->ToKittiString() + (*stamp == previous ? " duplicated" : " goes backwards") +
-          " (line " + std::to_string(previous_line) + " has " + previous.ToKittiString() + ")");
+          file + ":" + std::to_string(line_number) + ": timestamp " + stamp->ToKittiString() +
+          (*stamp == previous ? " duplicated" : " goes backwards") + " (line " +
+          std::to_string(previous_line) + " has " + previous.ToKittiString() + ")");
     }
     previous = *stamp;
     previous_line = line_number;

@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "slam_mms/core/status.hpp"
@@ -13,6 +14,9 @@ namespace slam_mms::io_internal {
 
 /// The lines of a text file ('\n' separated, a trailing '\r' removed, no final empty line).
 StatusOr<std::vector<std::string>> ReadLines(const std::filesystem::path& file);
+
+/// ReadLines on bytes already in memory (the parsers' entry for fuzzing and tests).
+std::vector<std::string> SplitLines(std::string_view bytes);
 
 /// Whole file contents as bytes.
 StatusOr<std::string> ReadFileBytes(const std::filesystem::path& file);
@@ -26,6 +30,10 @@ bool IsBlank(const std::string& line);
 /// "duplicated").
 StatusOr<std::vector<std::optional<Timestamp>>> ReadTimestampFile(const std::filesystem::path& file,
                                                                   bool allow_blank_lines);
+
+/// ReadTimestampFile on the lines of a file already in memory; `file` only names it in errors.
+StatusOr<std::vector<std::optional<Timestamp>>> ParseTimestampLines(
+    const std::vector<std::string>& lines, const std::string& file, bool allow_blank_lines);
 
 /// `dir` unchanged when it ends in a name; "a/drive/", "a/drive/." or "." made absolute and
 /// normalised without a trailing separator, so that parent_path() is the enclosing folder.

@@ -2,6 +2,7 @@
 
 #include <Eigen/SVD>
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -9,6 +10,7 @@
 #include <sstream>
 
 #include "io/file_util.hpp"
+#include "io/parsers.hpp"
 #include "slam_mms/core/logging.hpp"
 
 namespace slam_mms {
@@ -58,19 +60,28 @@ StatusOr<std::map<int64_t, fs::path>> ListNumberedFiles(const fs::path& dir) {
 
 StatusOr<OxtsRecord> ReadOxtsFile(const fs::path& file) {
   SLAM_MMS_ASSIGN_OR_RETURN(const std::vector<std::string> lines, ReadLines(file));
+  return io_internal::ParseOxtsFileLines(lines, file.string());
+}
+
+}  // namespace
+
+StatusOr<OxtsRecord> io_internal::ParseOxtsFileLines(const std::vector<std::string>& lines,
+                                                     const std::string& file) {
   int record_line = 0;
   for (size_t i = 0; i < lines.size(); ++i) {
     if (io_internal::IsBlank(lines[i])) continue;
     if (record_line != 0) {
-      return DataLossError(file.string() + ":" + std::to_string(i + 1) +
+      return DataLossError(file + ":" + std::to_string(i + 1) +
                            ": more than one OXTS record in the file (first on line " +
                            std::to_string(record_line) + ")");
     }
     record_line = static_cast<int>(i) + 1;
   }
-  if (record_line == 0) return DataLossError(file.string() + ":1: empty OXTS file");
-  return ParseOxtsLine(lines[record_line - 1], file.string(), record_line);
+  if (record_line == 0) return DataLossError(file + ":1: empty OXTS file");
+  return ParseOxtsLine(lines[record_line - 1], file, record_line);
 }
+
+namespace {
 
 // Reads an OXTS folder (`dir`/timestamps.txt + `dir`/data/NNNNNNNNNN.txt). Records whose file
 // number is in [first, last] (sync) or whose stamp is in [t_min, t_max] (other) are kept.
@@ -387,8 +398,91 @@ StatusOr<Scan> KittiRawReader::ReadScan(size_t i) const {
   scan.stamp_trigger = frame.trigger;
   scan.source = frame.file.string();
 
-  const Options& o = impl_->options;
-  const double duration_s = frame.end.SecondsSince(frame.start);
+  const size_t dropped = io_internal::KittiPointsToCloud(
+      xyzr, impl_->options, frame.end.SecondsSince(frame.start), &scan.cloud);
+  if (dropped > 0) {
+    impl_->dropped += dropped;
+    SLAM_MMS_LOG(kWarning) << frame.file.string() << ": dropped " << dropped << " of " << n
+                           << " points with NaN/Inf values";
+  }
+  if (scan.cloud.empty()) {
+    return DataLossError(frame.file.string() + ": scan has no finite point (" + std::to_string(n) +
+                         " points, all NaN/Inf)");
+  }
+  return scan;
+}
+
+// ---------------------------------------------------------------------------------------------
+namespace {
+
+Status ReadRawScan(const fs::path& file, std::vector<float>* xyzr) {
+  xyzr->clear();
+  if (file.extension() == ".bin") {
+    SLAM_MMS_ASSIGN_OR_RETURN(const std::string bytes, io_internal::ReadFileBytes(file));
+    return io_internal::ParseKittiBinScan(bytes, file.string(), xyzr);
+  }
+  if (file.extension() == ".txt") {
+    SLAM_MMS_ASSIGN_OR_RETURN(const auto lines, ReadLines(file));
+    return io_internal::ParseKittiTextScan(lines, file.string(), xyzr);
+  }
+  return InvalidArgumentError(file.string() + ": unknown scan file extension (.bin or .txt)");
+}
+
+}  // namespace
+
+Status io_internal::ParseKittiBinScan(std::string_view bytes, const std::string& file,
+                                      std::vector<float>* xyzr) {
+  static_assert(sizeof(float) == 4, "float32 required");
+  xyzr->clear();
+  if (bytes.size() % 16 != 0) {
+    return DataLossError(file + ": size " + std::to_string(bytes.size()) +
+                         " bytes is not a multiple of 16 (float32 x y z reflectance per point)");
+  }
+  xyzr->resize(bytes.size() / 4);
+  if (!bytes.empty()) std::memcpy(xyzr->data(), bytes.data(), bytes.size());
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_BIG_ENDIAN__
+  for (float& f : *xyzr) {
+    uint32_t u;
+    std::memcpy(&u, &f, 4);
+    u = __builtin_bswap32(u);
+    std::memcpy(&f, &u, 4);
+  }
+#endif
+  return OkStatus();
+}
+
+Status io_internal::ParseKittiTextScan(const std::vector<std::string>& lines,
+                                       const std::string& file, std::vector<float>* xyzr) {
+  xyzr->clear();
+  xyzr->reserve(4 * lines.size());
+  for (size_t l = 0; l < lines.size(); ++l) {
+    if (IsBlank(lines[l])) continue;
+    const char* p = lines[l].c_str();
+    for (int f = 0; f < 4; ++f) {
+      char* end = nullptr;
+      const float v = std::strtof(p, &end);
+      if (end == p) {
+        static constexpr const char* kNames[4] = {"x", "y", "z", "reflectance"};
+        return DataLossError(file + ":" + std::to_string(l + 1) + ": field " +
+                             std::to_string(f + 1) + " (" + kNames[f] +
+                             ") missing or not a number");
+      }
+      xyzr->push_back(v);
+      p = end;
+    }
+    while (*p != '\0' && std::isspace(static_cast<unsigned char>(*p))) ++p;
+    if (*p != '\0') {
+      return DataLossError(file + ":" + std::to_string(l + 1) +
+                           ": more than 4 numbers (x y z reflectance) on the line");
+    }
+  }
+  return OkStatus();
+}
+
+size_t io_internal::KittiPointsToCloud(const std::vector<float>& xyzr,
+                                       const KittiRawReader::Options& o, double duration_s,
+                                       PointCloud* cloud) {
+  const size_t n = xyzr.size() / 4;
   const double angle = o.vertical_correction_deg * M_PI / 180.0;
   const double cos_a = std::cos(angle);
   const double sin_a = std::sin(angle);
@@ -396,11 +490,10 @@ StatusOr<Scan> KittiRawReader::ReadScan(size_t i) const {
   const float time_sign = o.spin == SpinDirection::kClockwise ? -1.0f : 1.0f;
   const auto half_duration = static_cast<float>(0.5 * duration_s);
   constexpr auto kInvPi = static_cast<float>(1.0 / M_PI);
-  PointCloud& cloud = scan.cloud;
-  cloud.resize(n);
-  auto& out_pts = cloud.points();
-  auto& out_refl = cloud.intensities();
-  auto& out_time = cloud.time_offsets_s();
+  cloud->resize(n);
+  auto& out_pts = cloud->points();
+  auto& out_refl = cloud->intensities();
+  auto& out_time = cloud->time_offsets_s();
   size_t kept = 0;
   for (size_t k = 0; k < n; ++k) {
     const float* v = &xyzr[4 * k];
@@ -418,6 +511,7 @@ StatusOr<Scan> KittiRawReader::ReadScan(size_t i) const {
         q = Eigen::Vector3d(x * cos_a - sin_a * x * z / r, y * cos_a - sin_a * y * z / r,
                             z * cos_a + sin_a * r)
                 .cast<float>();
+        if (!q.allFinite()) continue;  // |p| near FLT_MAX: the rotated point overflows float
       }
     }
     out_pts[kept] = q;
@@ -431,81 +525,9 @@ StatusOr<Scan> KittiRawReader::ReadScan(size_t i) const {
     }
     ++kept;
   }
-  const size_t dropped = n - kept;
-  cloud.resize(kept);
-  if (dropped > 0) {
-    impl_->dropped += dropped;
-    SLAM_MMS_LOG(kWarning) << frame.file.string() << ": dropped " << dropped << " of " << n
-                           << " points with NaN/Inf values";
-  }
-  if (cloud.empty()) {
-    return DataLossError(frame.file.string() + ": scan has no finite point (" + std::to_string(n) +
-                         " points, all NaN/Inf)");
-  }
-  return scan;
+  cloud->resize(kept);
+  return n - kept;
 }
-
-// ---------------------------------------------------------------------------------------------
-namespace {
-
-Status ReadRawScan(const fs::path& file, std::vector<float>* xyzr) {
-  xyzr->clear();
-  if (file.extension() == ".bin") {
-    std::ifstream in(file, std::ios::binary);
-    if (!in) return NotFoundError("cannot open " + file.string());
-    in.seekg(0, std::ios::end);
-    const std::streamoff size = in.tellg();
-    if (size < 0) return DataLossError("cannot determine the size of " + file.string());
-    if (size % 16 != 0) {
-      return DataLossError(file.string() + ": size " + std::to_string(size) +
-                           " bytes is not a multiple of 16 (float32 x y z reflectance per point)");
-    }
-    xyzr->resize(static_cast<size_t>(size) / 4);
-    in.seekg(0, std::ios::beg);
-    if (size > 0 && !in.read(reinterpret_cast<char*>(xyzr->data()), size)) {
-      return DataLossError("cannot read " + std::to_string(size) + " bytes from " + file.string());
-    }
-    static_assert(sizeof(float) == 4, "float32 required");
-#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_BIG_ENDIAN__
-    for (float& f : *xyzr) {
-      uint32_t u;
-      std::memcpy(&u, &f, 4);
-      u = __builtin_bswap32(u);
-      std::memcpy(&f, &u, 4);
-    }
-#endif
-    return OkStatus();
-  }
-  if (file.extension() == ".txt") {
-    SLAM_MMS_ASSIGN_OR_RETURN(const auto lines, ReadLines(file));
-    xyzr->reserve(4 * lines.size());
-    for (size_t l = 0; l < lines.size(); ++l) {
-      if (io_internal::IsBlank(lines[l])) continue;
-      const char* p = lines[l].c_str();
-      for (int f = 0; f < 4; ++f) {
-        char* end = nullptr;
-        const float v = std::strtof(p, &end);
-        if (end == p) {
-          static constexpr const char* kNames[4] = {"x", "y", "z", "reflectance"};
-          return DataLossError(file.string() + ":" + std::to_string(l + 1) + ": field " +
-                               std::to_string(f + 1) + " (" + kNames[f] +
-                               ") missing or not a number");
-        }
-        xyzr->push_back(v);
-        p = end;
-      }
-      while (*p != '\0' && std::isspace(static_cast<unsigned char>(*p))) ++p;
-      if (*p != '\0') {
-        return DataLossError(file.string() + ":" + std::to_string(l + 1) +
-                             ": more than 4 numbers (x y z reflectance) on the line");
-      }
-    }
-    return OkStatus();
-  }
-  return InvalidArgumentError(file.string() + ": unknown scan file extension (.bin or .txt)");
-}
-
-}  // namespace
 
 StatusOr<PointCloud> ReadKittiScanFile(const fs::path& file) {
   std::vector<float> xyzr;
@@ -525,11 +547,16 @@ StatusOr<Eigen::Isometry3d> ReadKittiRigidCalibration(const fs::path& file) {
   if (!fs::exists(file, ec))
     return NotFoundError("calibration file " + file.string() + " not found");
   SLAM_MMS_ASSIGN_OR_RETURN(const auto lines, ReadLines(file));
+  return io_internal::ParseKittiRigidCalibrationLines(lines, file.string());
+}
+
+StatusOr<Eigen::Isometry3d> io_internal::ParseKittiRigidCalibrationLines(
+    const std::vector<std::string>& lines, const std::string& file) {
   std::optional<Eigen::Matrix3d> R;
   std::optional<Eigen::Vector3d> T;
   for (size_t l = 0; l < lines.size(); ++l) {
     const std::string& line = lines[l];
-    const std::string where = file.string() + ":" + std::to_string(l + 1);
+    const std::string where = file + ":" + std::to_string(l + 1);
     if (io_internal::IsBlank(line)) continue;
     const size_t colon = line.find(':');
     if (colon == std::string::npos) {
@@ -566,8 +593,8 @@ StatusOr<Eigen::Isometry3d> ReadKittiRigidCalibration(const fs::path& file) {
       T = Eigen::Vector3d(v[0], v[1], v[2]);
     }
   }
-  if (!R) return DataLossError(file.string() + ": key R (9 numbers) missing");
-  if (!T) return DataLossError(file.string() + ": key T (3 numbers) missing");
+  if (!R) return DataLossError(file + ": key R (9 numbers) missing");
+  if (!T) return DataLossError(file + ": key T (3 numbers) missing");
   // The file carries 7 digits: project R onto SO(3) (changes entries by ~1e-7).
   Eigen::JacobiSVD<Eigen::Matrix3d> svd(*R, Eigen::ComputeFullU | Eigen::ComputeFullV);
   Eigen::Isometry3d iso = Eigen::Isometry3d::Identity();

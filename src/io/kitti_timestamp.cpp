@@ -85,6 +85,10 @@ StatusOr<Timestamp> ParseKittiTimestamp(std::string_view text) {
     if (digits == 0) return fail("empty fraction");
     for (int i = digits; i < 9; ++i) frac_ns *= 10;
   }
+  // int64 nanoseconds since 1970 span 1677-09-21 .. 2262-04-11: whole years inside that.
+  if (year < 1678 || year > 2261) {
+    return fail("year " + std::to_string(year) + " out of 1678..2261 (int64 nanoseconds)");
+  }
   if (month < 1 || month > 12) return fail("month " + std::to_string(month) + " out of 1..12");
   if (day < 1 || day > DaysInMonth(year, month)) {
     return fail("day " + std::to_string(day) + " out of 1.." +

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "io/file_util.hpp"
+#include "io/parsers.hpp"
 
 namespace slam_mms {
 
@@ -28,8 +29,8 @@ Status WriteAll(const fs::path& file, const std::string& text) {
   return OkStatus();
 }
 
-std::string Where(const fs::path& file, size_t line_index) {
-  return file.string() + ":" + std::to_string(line_index + 1);
+std::string Where(const std::string& file, size_t line_index) {
+  return file + ":" + std::to_string(line_index + 1);
 }
 
 // Rotation from a quaternion read from a file; rejects non-unit quaternions beyond rounding.
@@ -87,6 +88,9 @@ std::vector<std::string> SplitCsv(const std::string& line) {
 
 }  // namespace
 
+// Largest whole number of seconds whose nanoseconds (with any fraction) fit in int64.
+constexpr int64_t kMaxWholeSeconds = 9223372035;
+
 // ------------------------------------------------------------------------------------------------
 StatusOr<Timestamp> ParseSecondsExact(const std::string& text) {
   const auto fail = [&](const char* why) {
@@ -114,6 +118,8 @@ StatusOr<Timestamp> ParseSecondsExact(const std::string& text) {
   }
   if (pos != text.size()) return fail("not a plain decimal number");
   if (whole_digits + frac_digits == 0) return fail("no digits");
+  // int64 nanoseconds: |t| < 9223372036.854775807 s.
+  if (whole > kMaxWholeSeconds) return fail("out of the int64 nanosecond range");
   for (int i = frac_digits; i < 9; ++i) frac *= 10;
   const int64_t ns = whole * 1000000000LL + frac;
   return Timestamp::FromNanoseconds(negative ? -ns : ns);
@@ -138,8 +144,12 @@ StatusOr<Timestamp> ParseTumTime(const std::string& token) {
   auto exact = ParseSecondsExact(token);
   if (exact.ok()) return exact;
   double s = 0.0;
-  if (ParseDouble(token, &s)) return Timestamp::FromSeconds(s);
-  return exact.status();
+  if (!ParseDouble(token, &s)) return exact.status();
+  if (std::abs(s) > static_cast<double>(kMaxWholeSeconds)) {
+    return InvalidArgumentError("time in seconds '" + token +
+                                "' out of the int64 nanosecond range");
+  }
+  return Timestamp::FromSeconds(s);
 }
 }  // namespace
 
@@ -157,6 +167,11 @@ Status WriteTrajectoryTum(const Trajectory& trajectory, const fs::path& file) {
 
 StatusOr<Trajectory> ReadTrajectoryTum(const fs::path& file) {
   SLAM_MMS_ASSIGN_OR_RETURN(const auto lines, ReadLines(file));
+  return io_internal::ParseTrajectoryTumLines(lines, file.string());
+}
+
+StatusOr<Trajectory> io_internal::ParseTrajectoryTumLines(const std::vector<std::string>& lines,
+                                                          const std::string& file) {
   static constexpr const char* kNames[8] = {"t", "tx", "ty", "tz", "qx", "qy", "qz", "qw"};
   Trajectory trajectory;
   for (size_t l = 0; l < lines.size(); ++l) {
@@ -203,6 +218,11 @@ Status WriteTrajectoryKitti(const Trajectory& trajectory, const fs::path& file) 
 
 StatusOr<std::vector<Eigen::Isometry3d>> ReadPosesKitti(const fs::path& file) {
   SLAM_MMS_ASSIGN_OR_RETURN(const auto lines, ReadLines(file));
+  return io_internal::ParsePosesKittiLines(lines, file.string());
+}
+
+StatusOr<std::vector<Eigen::Isometry3d>> io_internal::ParsePosesKittiLines(
+    const std::vector<std::string>& lines, const std::string& file) {
   static constexpr const char* kNames[12] = {"r00", "r01", "r02", "tx",  "r10", "r11",
                                              "r12", "ty",  "r20", "r21", "r22", "tz"};
   std::vector<Eigen::Isometry3d> poses;
@@ -277,6 +297,11 @@ Status WriteTrajectoryCsv(const Trajectory& trajectory, const fs::path& file) {
 
 StatusOr<Trajectory> ReadTrajectoryCsv(const fs::path& file) {
   SLAM_MMS_ASSIGN_OR_RETURN(const auto lines, ReadLines(file));
+  return io_internal::ParseTrajectoryCsvLines(lines, file.string());
+}
+
+StatusOr<Trajectory> io_internal::ParseTrajectoryCsvLines(const std::vector<std::string>& lines,
+                                                          const std::string& file) {
   Trajectory trajectory;
   bool header_seen = false;
   for (size_t l = 0; l < lines.size(); ++l) {
@@ -329,7 +354,7 @@ StatusOr<Trajectory> ReadTrajectoryCsv(const fs::path& file) {
     const Status added = trajectory.Add(pose);
     if (!added.ok()) return DataLossError(where + ": " + added.message());
   }
-  if (!header_seen) return DataLossError(file.string() + ": empty CSV file (no header line)");
+  if (!header_seen) return DataLossError(file + ": empty CSV file (no header line)");
   return trajectory;
 }
 

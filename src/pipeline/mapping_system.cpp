@@ -464,7 +464,7 @@ PointCloud MappingSystem::FinalMap() const {
 
 std::vector<Surfel> MappingSystem::SurfelMapSnapshot() const {
   if (!impl_->loc) return {};
-  return impl_->loc->surfel_map().LiveSurfels();
+  return impl_->loc->AllSurfels();
 }
 
 StatusOr<GeodeticPoint> MappingSystem::Origin() const {

@@ -187,8 +187,8 @@ Status SubmapManager::OnSubmapFinished(Localizer* localizer, int32_t submap_id,
     Vector6d d;
     const double s_rp = m.opt.attitude_prior_sigma_rad;
     d << s_rp * s_rp, s_rp * s_rp, 1.0, 1e4, 1e4, 1e4;
-    SLAM_MMS_RETURN_IF_ERROR(m.graph->AddPosePrior(
-        submap_id, rec->T_world_submap, Matrix6d(d.asDiagonal())));
+    SLAM_MMS_RETURN_IF_ERROR(
+        m.graph->AddPosePrior(submap_id, rec->T_world_submap, Matrix6d(d.asDiagonal())));
   }
   const SubmapRecord* prev = m.last_id >= 0 ? FindSubmap(*localizer, m.last_id) : nullptr;
   if (prev != nullptr) {

@@ -260,6 +260,12 @@ StatusOr<SurfelIntegrationStats> SurfelMap::Integrate(const VertexNormalMap& sca
   // 1-2. Active surfels and the model rendered at the pose.
   SelectActive(T_world_sensor.translation(), o.active_radius_m,
                -std::numeric_limits<float>::infinity(), &m.active);
+  if (o.integrate_current_submap_only) {
+    m.active.erase(
+        std::remove_if(m.active.begin(), m.active.end(),
+                       [&](uint32_t id) { return m.surfels[id].submap_id != m.submap_id; }),
+        m.active.end());
+  }
   stats.num_active = static_cast<int>(m.active.size());
   SLAM_MMS_RETURN_IF_ERROR(
       m.renderer->Render(SurfelRenderInput::Subset(m.surfels, m.active), T_world_sensor, &m.model));

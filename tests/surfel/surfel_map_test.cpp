@@ -137,6 +137,48 @@ TEST(SurfelMapTest, PlaneSceneConvergesAndGainsConfidence) {
   EXPECT_GT(conf_updated / n_updated, 1.0);  // >= 5 confirmations of up to +0.405 each
 }
 
+// With integrate_current_submap_only, a scan of an already mapped place is not fused into the
+// older submap's surfels: the new submap gets its own surfels and the old ones are untouched.
+TEST(SurfelMapTest, IntegrateCurrentSubmapOnlyLeavesOtherSubmapsAlone) {
+  const Scene scene;
+  for (const bool only_current : {false, true}) {
+    SurfelMapOptions options;
+    options.integrate_current_submap_only = only_current;
+    auto created = SurfelMap::Create(options);
+    ASSERT_TRUE(created.ok());
+    SurfelMap map = std::move(created).value();
+    const RangeProjection& proj = map.renderer().projection();
+    std::mt19937 rng(5);
+    VertexNormalMap scan;
+    const Eigen::Isometry3d T = PoseAt(0.0);
+    proj.ComputeVertexNormalMap(SimulateScan(scene, proj, T, 0.02, &rng), &scan);
+    ASSERT_TRUE(map.Integrate(scan, T, Timestamp::FromNanoseconds(1000000000LL)).ok());
+    const std::vector<Surfel> before = map.LiveSurfels();
+    map.SetSubmapId(1);
+    auto stats = map.Integrate(scan, T, Timestamp::FromNanoseconds(2000000000LL));
+    ASSERT_TRUE(stats.ok());
+    size_t in_submap0 = 0, in_submap1 = 0, updated0 = 0;
+    for (const Surfel& s : map.LiveSurfels()) {
+      if (s.submap_id == 0) {
+        ++in_submap0;
+        if (s.num_updates > 0) ++updated0;
+      } else {
+        ++in_submap1;
+      }
+    }
+    if (only_current) {
+      EXPECT_EQ(stats->num_active, 0);
+      EXPECT_EQ(in_submap0, before.size());
+      EXPECT_EQ(updated0, 0u);
+      EXPECT_GT(in_submap1, before.size() * 9 / 10);  // the place mapped again, in submap 1
+    } else {
+      EXPECT_GT(stats->num_active, 100000);
+      EXPECT_GT(updated0, before.size() / 2);  // SuMa's behaviour: the old surfels absorb it
+      EXPECT_LT(in_submap1, before.size() / 3);
+    }
+  }
+}
+
 TEST(SurfelMapTest, DynamicObjectSurfelsAreDropped) {
   Scene scene;
   SurfelMap map;

@@ -219,7 +219,11 @@ const std::vector<std::pair<std::string, KeyHandler>>& Handlers() {
     SLAM_MMS_KEY_D("localizer.map_voxel_m", o->localizer.map_voxel_m);
     SLAM_MMS_KEY_D("localizer.map_max_range_m", o->localizer.map_max_range_m);
     SLAM_MMS_KEY_D("localizer.registration_voxel_m", o->localizer.registration_voxel_m);
+    SLAM_MMS_KEY_B("localizer.per_submap_surfels", o->localizer.per_submap_surfels);
+    SLAM_MMS_KEY_B("localizer.archive_surfels", o->localizer.archive_surfels);
     SLAM_MMS_KEY_I("localizer.num_threads", o->localizer.num_threads);
+    SLAM_MMS_KEY_I("localizer.surfels.renderer.projection.cols",
+                   o->localizer.surfels.renderer.projection.cols);
     h.emplace_back("localizer.renderer",
                    Enum<SurfelRendererBackend>([](Options* o) { return &o->localizer.renderer; },
                                                {{"auto", SurfelRendererBackend::kAuto},

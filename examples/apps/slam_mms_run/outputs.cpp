@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <sstream>
 
 #include "slam_mms/core/logging.hpp"
@@ -30,6 +31,31 @@ std::string Cell(const std::optional<double>& v, const char* format) {
 
 }  // namespace
 
+/// Per-scan level-1 results: one row per scan (registration, degeneracy, motion factor, stage
+/// times).
+Status WriteScanResults(const std::vector<LocalizationResult>& results,
+                        const std::filesystem::path& path) {
+  std::ofstream f(path);
+  if (!f) return UnavailableError("cannot write " + path.string());
+  f << "scan_index,stamp,submap_id,motion_factor,registered,registration_used,downweighted,"
+       "termination,inlier_ratio,rms_residual_m,icp_iterations,degenerate,consistency_d2,"
+       "num_model_surfels,num_surfels";
+  for (const char* name : StageTimings::Names()) f << "," << name << "_ms";
+  f << ",total_ms\n";
+  f.precision(9);
+  for (const LocalizationResult& r : results) {
+    f << r.scan_index << "," << r.stamp.ToKittiString() << "," << r.submap_id << ","
+      << MotionFactorTypeName(r.motion_factor) << "," << r.registered << "," << r.registration_used
+      << "," << r.registration_downweighted << "," << IcpTerminationName(r.termination) << ","
+      << r.inlier_ratio << "," << r.rms_residual_m << "," << r.icp_iterations << "," << r.degenerate
+      << "," << r.consistency_mahalanobis_sq << "," << r.num_model_surfels << "," << r.num_surfels;
+    for (double v : r.timings.Values()) f << "," << v;
+    f << "," << r.timings.total_ms << "\n";
+  }
+  if (!f) return DataLossError("write failed: " + path.string());
+  return OkStatus();
+}
+
 Status WriteMethodFiles(const ModeRun& run, const std::filesystem::path& out_dir) {
   Status first;
   if (!run.trajectory.empty()) {
@@ -39,6 +65,8 @@ Status WriteMethodFiles(const ModeRun& run, const std::filesystem::path& out_dir
   } else {
     SLAM_MMS_LOG(kWarning) << run.name << ": no pose estimated, no trajectory written";
   }
+  if (!run.results.empty())
+    KeepFirst(&first, WriteScanResults(run.results, out_dir / (run.name + "_scans.csv")));
   const bool map_wanted = run.mode == MappingMode::kFull || run.mode == MappingMode::kGnssIns;
   if (map_wanted && !run.map.empty()) {
     MapCloud map;

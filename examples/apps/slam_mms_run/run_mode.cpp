@@ -132,6 +132,7 @@ ModeRun RunMode(MappingMode mode, const MappingSystem::Options& base_options,
 
   // What was computed, also after a fatal error (the current estimates).
   run.trajectory = system->FinalTrajectory();
+  run.results = system->results();
   run.map = system->FinalMap();
   if (StatusOr<GeodeticPoint> origin = system->Origin(); origin.ok()) run.origin = *origin;
   run.availability = system->GnssAvailability();

@@ -37,6 +37,7 @@ struct ModeRun {
   MappingMode mode = MappingMode::kFull;
   std::string name;  ///< MappingModeName(mode).
   Trajectory trajectory;
+  std::vector<LocalizationResult> results;  ///< Per scan, level 1 (before level 2).
   PointCloud map;
   std::optional<GeodeticPoint> origin;
   std::vector<GnssAvailabilityInterval> availability;

@@ -110,6 +110,14 @@ class Localizer {
     double map_voxel_m = 0.1;
     double map_max_range_m = 60.0;
     double registration_voxel_m = 0.5;
+    /// Each submap has its own surfels (the paper's local maps): a scan is fused only into the
+    /// current submap, and registration sees the current and the previous submap. Once a submap is
+    /// two behind, its surfels leave the live map (bounded work and memory on long drives; a
+    /// revisited place is not fused into old surfels but closed as a loop by level 2).
+    bool per_submap_surfels = true;
+    /// Keep the stable surfels (confidence > surfels.confidence_threshold) of the submaps that
+    /// left the live map, for AllSurfels(); false drops them (memory flat in drive length).
+    bool archive_surfels = true;
     int num_threads = 2;
     [[nodiscard]] Status Validate() const;
   };
@@ -135,7 +143,10 @@ class Localizer {
   void ReleaseSubmapClouds(int32_t id, bool keep_registration_cloud);
   /// Ends the current submap (Finish()).
   void FinishCurrentSubmap();
+  /// The live surfel map (the current and the previous submap when per_submap_surfels).
   const SurfelMap& surfel_map() const;
+  /// Every surfel: the live map's and the archived ones, at the submaps' current poses.
+  std::vector<Surfel> AllSurfels() const;
   const Options& options() const;
 
  private:

@@ -80,6 +80,10 @@ struct SurfelMapOptions {
   // Active map: what Integrate and RenderModel consider.
   double active_radius_m = 80.0;   ///< Surfels within this distance of the sensor [m].
   double index_cell_size_m = 8.0;  ///< Voxel-hash cell edge [m].
+  /// Integrate associates and fuses only with surfels of the current submap (SetSubmapId), so each
+  /// submap is a self-contained local map as in the paper (§5.1); surfels of other submaps are
+  /// neither confirmed nor removed by it. SelectActive / RenderModel still see every submap.
+  bool integrate_current_submap_only = false;
 
   [[nodiscard]] Status Validate() const;
 };

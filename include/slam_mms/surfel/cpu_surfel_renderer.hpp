@@ -2,11 +2,14 @@
 // CpuSurfelRenderer: the native SurfelRenderer. A z-buffer splat of oriented discs, exact per pixel
 // centre ray (see surfel_renderer.hpp for the image definition it shares with EglSurfelRenderer).
 //
-// How: the surfels are split into num_threads contiguous chunks; each thread culls and splats its
-// chunk into its own depth/winner buffer (bounding box of the disc's cone in pixel space, exact
-// ray-disc test per pixel); the buffers are merged (nearest wins, ties to the earlier surfel) and
-// the output pixels are written once. Worker threads are persistent and all buffers are reused, so
-// a steady-state Render does not allocate.
+// How: pass 1 splits the surfels into num_threads contiguous chunks of draw positions; each thread
+// culls its chunk (range, facing), bounds each disc in pixel space (its linearised projection, or
+// the cone around it for large discs) and appends a record per 128-column bin the box touches.
+// Pass 2: the threads take the bins in turn; a bin's records are rastered in draw order into its
+// slice of one depth/winner buffer (exact ray-disc test per pixel centre; nearest wins, ties to the
+// earlier surfel) and its output pixels are written while still in cache. Bins are disjoint, so the
+// image does not depend on the number of threads. Worker threads are persistent and all buffers
+// are reused, so a steady-state Render does not allocate.
 //
 // Thread safety: not thread-safe; one renderer per thread. Move-only.
 

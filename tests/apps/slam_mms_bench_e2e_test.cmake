@@ -1,0 +1,33 @@
+# Smoke test of slam_mms_bench_e2e (ctest label apps): runs it and checks its JSON report.
+#   cmake -DAPP=<exe> -DOUT=<json> "-DARGS=<arguments separated by |>" -P slam_mms_bench_e2e_test.cmake
+# Fails on a non-zero exit, a missing field, no processed scan, or implausible numbers; exit 77 of
+# the app (the --kitti-raw folder is absent) is passed on so ctest reports the test as skipped.
+string(REPLACE "|" ";" ARGS "${ARGS}")
+file(REMOVE "${OUT}")
+execute_process(COMMAND "${APP}" ${ARGS} --out "${OUT}" RESULT_VARIABLE rc)
+if(rc EQUAL 77)
+  message("slam_mms_bench_e2e: input absent, skipped")
+  # cmake -P cannot choose its exit status; ctest's SKIP_REGULAR_EXPRESSION matches this line.
+  return()
+endif()
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "slam_mms_bench_e2e exited with ${rc}")
+endif()
+file(READ "${OUT}" json)
+string(JSON total GET "${json}" scans_total)
+string(JSON done GET "${json}" scans_processed)
+string(JSON rate GET "${json}" scans_per_s)
+string(JSON rss GET "${json}" peak_rss_mb)
+string(JSON n_samples LENGTH "${json}" rss_samples)
+string(JSON integrate_median GET "${json}" stages_ms integrate median)
+string(JSON total_max GET "${json}" stages_ms "level-1 total" max)
+if(done LESS 5 OR NOT done EQUAL total)
+  message(FATAL_ERROR "processed ${done} of ${total} scans")
+endif()
+if(NOT rate GREATER 0 OR NOT rss GREATER 10 OR n_samples LESS 3)
+  message(FATAL_ERROR "implausible report: scans/s ${rate}, peak RSS ${rss} MiB, ${n_samples} RSS samples")
+endif()
+if(NOT total_max GREATER 0 OR integrate_median LESS 0)
+  message(FATAL_ERROR "implausible stage timings: total max ${total_max}, integrate median ${integrate_median}")
+endif()
+message("slam_mms_bench_e2e smoke: ${done} scans, ${rate} scans/s, peak RSS ${rss} MiB")

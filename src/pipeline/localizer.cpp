@@ -42,6 +42,12 @@ std::unique_ptr<ceres::CostFunction> MakeNormalPrior(const Eigen::VectorXd& mean
 
 }  // namespace
 
+SurfelMapOptions Localizer::DefaultSurfelOptions() {
+  SurfelMapOptions o;
+  o.renderer.projection.cols = 1024;
+  return o;
+}
+
 Status Localizer::Options::Validate() const {
   auto bad = [](const std::string& field, double v, const std::string& rule) {
     return InvalidArgumentError("Localizer::Options::" + field + " = " + std::to_string(v) + "; " +
@@ -49,6 +55,12 @@ Status Localizer::Options::Validate() const {
   };
   if (!(submap_duration_s > 0.0)) return bad("submap_duration_s", submap_duration_s, "must be > 0");
   if (!(model_radius_m > 0.0)) return bad("model_radius_m", model_radius_m, "must be > 0");
+  if (!std::isfinite(min_model_confidence)) {
+    return bad("min_model_confidence", min_model_confidence, "must be finite");
+  }
+  if (!(previous_submap_model_s >= 0.0)) {
+    return bad("previous_submap_model_s", previous_submap_model_s, "must be >= 0");
+  }
   if (!(odom_sigma_rot_rad > 0.0))
     return bad("odom_sigma_rot_rad", odom_sigma_rot_rad, "must be > 0");
   if (!(odom_sigma_trans_m > 0.0))
@@ -384,13 +396,20 @@ StatusOr<LocalizationResult> Localizer::ProcessScan(const Scan& scan,
   t0 = Clock::now();
   const Eigen::Isometry3d T_world_lidar_pred = T_world_submap * T_submap_pred * m.T_body_lidar;
   const int32_t cur_id = m.current().id;
-  m.map.SelectActive(T_world_lidar_pred.translation(), m.opt.model_radius_m,
-                     m.opt.min_model_confidence, &m.active_ids);
+  // SuMa's threshold schedule: all surfels at first, the stable ones after 10 scans.
+  constexpr double kInitialThreshold = -2.1972245773362196;  // ln(0.1 / 0.9)
+  const double ramp = std::min(1.0, static_cast<double>(m.num_processed) / 10.0);
+  const float model_threshold = static_cast<float>(
+      kInitialThreshold + ramp * (m.opt.min_model_confidence - kInitialThreshold));
+  const bool with_previous =
+      scan.stamp_start.SecondsSince(m.current().start) < m.opt.previous_submap_model_s;
+  m.map.SelectActive(T_world_lidar_pred.translation(), m.opt.model_radius_m, model_threshold,
+                     &m.active_ids);
   m.model_ids.clear();
   const auto& surfels = m.map.surfels();
   for (uint32_t id : m.active_ids) {
     const int32_t sid = surfels[id].submap_id;
-    if (sid == cur_id || sid == cur_id - 1) m.model_ids.push_back(id);
+    if (sid == cur_id || (with_previous && sid == cur_id - 1)) m.model_ids.push_back(id);
   }
   res.num_model_surfels = m.model_ids.size();
   bool have_model = m.model_ids.size() >= 100;

@@ -1,55 +1,125 @@
 #include "pipeline/voxel_accumulator.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <vector>
 
 namespace slam_mms::internal {
 namespace {
+
 // 21 bits per axis, offset so negative indices fit: +-1M voxels (+-100 km at 0.1 m).
+constexpr int64_t kOffset = 1 << 20;
+constexpr uint64_t kMask = (1u << 21) - 1;
+
 uint64_t Key(int64_t ix, int64_t iy, int64_t iz) {
-  constexpr int64_t kOffset = 1 << 20;
-  constexpr uint64_t kMask = (1u << 21) - 1;
   return ((static_cast<uint64_t>(ix + kOffset) & kMask) << 42) |
          ((static_cast<uint64_t>(iy + kOffset) & kMask) << 21) |
          (static_cast<uint64_t>(iz + kOffset) & kMask);
 }
+
+int64_t Axis(uint64_t key, int shift) {
+  return static_cast<int64_t>((key >> shift) & kMask) - kOffset;
+}
+
+size_t Slot(uint64_t key, size_t mask) {
+  return static_cast<size_t>((key * 0x9E3779B97F4A7C15ull) >> 20) & mask;
+}
+
 }  // namespace
+
+void VoxelAccumulator::Clear() {
+  table_ = std::vector<Entry>();
+  size_ = 0;
+}
+
+void VoxelAccumulator::Reserve(size_t voxels) {
+  if (2 * voxels <= table_.size()) return;
+  size_t capacity = table_.empty() ? size_t{1} << 16 : table_.size();
+  while (2 * voxels > capacity) capacity *= 2;
+  std::vector<Entry> old = std::move(table_);
+  table_.assign(capacity, Entry());
+  const size_t mask = capacity - 1;
+  for (const Entry& e : old) {
+    if (e.key == kEmpty) continue;
+    size_t slot = Slot(e.key, mask);
+    while (table_[slot].key != kEmpty) slot = (slot + 1) & mask;
+    table_[slot] = e;
+  }
+}
+
+VoxelAccumulator::Entry& VoxelAccumulator::Find(uint64_t key, size_t slot) {
+  const size_t mask = table_.size() - 1;
+  while (true) {
+    Entry& e = table_[slot];
+    if (e.key == key) return e;
+    if (e.key == kEmpty) {
+      e.key = key;
+      ++size_;
+      return e;
+    }
+    slot = (slot + 1) & mask;
+  }
+}
 
 void VoxelAccumulator::Add(const PointCloud& cloud, const Eigen::Isometry3d& T_frame_c,
                            double max_range_m) {
   const Eigen::Matrix3f R = T_frame_c.linear().cast<float>();
   const Eigen::Vector3d t = T_frame_c.translation();
   const float max_range_sq = static_cast<float>(max_range_m * max_range_m);
-  for (size_t i = 0; i < cloud.size(); ++i) {
-    const Eigen::Vector3f& p_c = cloud.points()[i];
-    if (!p_c.allFinite() || p_c.squaredNorm() > max_range_sq) continue;
-    const Eigen::Vector3d p = (R * p_c).cast<double>() + t;
-    const uint64_t key = Key(static_cast<int64_t>(std::floor(p.x() * inv_voxel_)),
-                             static_cast<int64_t>(std::floor(p.y() * inv_voxel_)),
-                             static_cast<int64_t>(std::floor(p.z() * inv_voxel_)));
-    Voxel& v = voxels_[key];
-    v.x += p.x();
-    v.y += p.y();
-    v.z += p.z();
-    v.intensity += cloud.intensities()[i];
-    ++v.count;
+  constexpr size_t kBatch = 32;
+  std::array<uint64_t, kBatch> keys;
+  std::array<Eigen::Vector3f, kBatch> offsets;
+  std::array<float, kBatch> intensities;
+  std::array<size_t, kBatch> slots;
+  const size_t n = cloud.size();
+  size_t i = 0;
+  while (i < n) {
+    // Keys and slots of the next batch, prefetching each slot; then the updates.
+    Reserve(size_ + kBatch);
+    const size_t mask = table_.size() - 1;
+    size_t b = 0;
+    for (; i < n && b < kBatch; ++i) {
+      const Eigen::Vector3f& p_c = cloud.points()[i];
+      if (!p_c.allFinite() || p_c.squaredNorm() > max_range_sq) continue;
+      const Eigen::Vector3d p = (R * p_c).cast<double>() + t;
+      const Eigen::Vector3d cell = (p * inv_voxel_).array().floor();
+      keys[b] = Key(static_cast<int64_t>(cell.x()), static_cast<int64_t>(cell.y()),
+                    static_cast<int64_t>(cell.z()));
+      offsets[b] = (p - cell * voxel_).cast<float>();
+      intensities[b] = cloud.intensities()[i];
+      slots[b] = Slot(keys[b], mask);
+      __builtin_prefetch(&table_[slots[b]], 1);
+      ++b;
+    }
+    for (size_t k = 0; k < b; ++k) {
+      Entry& e = Find(keys[k], slots[k]);
+      e.dx += offsets[k].x();
+      e.dy += offsets[k].y();
+      e.dz += offsets[k].z();
+      e.intensity += intensities[k];
+      ++e.count;
+    }
   }
 }
 
 PointCloud VoxelAccumulator::Cloud() const {
-  std::vector<std::pair<uint64_t, const Voxel*>> sorted;
-  sorted.reserve(voxels_.size());
-  for (const auto& kv : voxels_) sorted.emplace_back(kv.first, &kv.second);
+  std::vector<const Entry*> sorted;
+  sorted.reserve(size_);
+  for (const Entry& e : table_) {
+    if (e.key != kEmpty) sorted.push_back(&e);
+  }
   std::sort(sorted.begin(), sorted.end(),
-            [](const auto& a, const auto& b) { return a.first < b.first; });
+            [](const Entry* a, const Entry* b) { return a->key < b->key; });
   PointCloud out;
   out.reserve(sorted.size());
-  for (const auto& [key, v] : sorted) {
-    const double n = v->count;
-    out.Add(Eigen::Vector3f(static_cast<float>(v->x / n), static_cast<float>(v->y / n),
-                            static_cast<float>(v->z / n)),
-            v->intensity / static_cast<float>(n));
+  for (const Entry* e : sorted) {
+    const double n = e->count;
+    const Eigen::Vector3d corner(static_cast<double>(Axis(e->key, 42)) * voxel_,
+                                 static_cast<double>(Axis(e->key, 21)) * voxel_,
+                                 static_cast<double>(Axis(e->key, 0)) * voxel_);
+    const Eigen::Vector3d mean = corner + Eigen::Vector3d(e->dx, e->dy, e->dz) / n;
+    out.Add(mean.cast<float>(), e->intensity / static_cast<float>(n));
   }
   return out;
 }

@@ -208,6 +208,7 @@ const std::vector<std::pair<std::string, KeyHandler>>& Handlers() {
     SLAM_MMS_KEY_D("localizer.submap_duration_s", o->localizer.submap_duration_s);
     SLAM_MMS_KEY_D("localizer.model_radius_m", o->localizer.model_radius_m);
     SLAM_MMS_KEY_F("localizer.min_model_confidence", o->localizer.min_model_confidence);
+    SLAM_MMS_KEY_D("localizer.previous_submap_model_s", o->localizer.previous_submap_model_s);
     SLAM_MMS_KEY_D("localizer.odom_sigma_rot_rad", o->localizer.odom_sigma_rot_rad);
     SLAM_MMS_KEY_D("localizer.odom_sigma_trans_m", o->localizer.odom_sigma_trans_m);
     SLAM_MMS_KEY_D("localizer.cv_sigma_rot_rad", o->localizer.cv_sigma_rot_rad);

@@ -67,6 +67,14 @@ Status WriteMethodFiles(const ModeRun& run, const std::filesystem::path& out_dir
   }
   if (!run.results.empty())
     KeepFirst(&first, WriteScanResults(run.results, out_dir / (run.name + "_scans.csv")));
+  if (run.mode != MappingMode::kGnssIns && !run.results.empty()) {
+    // Level 1 alone (before any level-2 correction): the "before" of the paper's Table 2.
+    Trajectory level1;
+    for (const LocalizationResult& r : run.results) {
+      if (!level1.Add(r.stamp, r.T_world_body).ok()) break;
+    }
+    KeepFirst(&first, WriteTrajectoryTum(level1, out_dir / (run.name + "_level1.tum")));
+  }
   const bool map_wanted = run.mode == MappingMode::kFull || run.mode == MappingMode::kGnssIns;
   if (map_wanted && !run.map.empty()) {
     MapCloud map;

@@ -442,6 +442,10 @@ int main(int argc, char** argv) {
     }
     report.input = drive.string();
   }
+  if (args.last_frame >= 0) {
+    report.input +=
+        ", frames " + std::to_string(args.first_frame) + ":" + std::to_string(args.last_frame);
+  }
 
   slam_mms::KittiRawReader::Options ro;
   ro.first_frame = args.first_frame;

@@ -22,8 +22,11 @@ int64_t Axis(uint64_t key, int shift) {
   return static_cast<int64_t>((key >> shift) & kMask) - kOffset;
 }
 
+// Fibonacci hashing: the top bits of the product depend on every bit of the key (the low bits of a
+// product do not depend on the key's high bits, where x lives: slots from them collided by x).
 size_t Slot(uint64_t key, size_t mask) {
-  return static_cast<size_t>((key * 0x9E3779B97F4A7C15ull) >> 20) & mask;
+  const int bits = __builtin_popcountll(mask);
+  return static_cast<size_t>((key * 0x9E3779B97F4A7C15ull) >> (64 - bits));
 }
 
 }  // namespace

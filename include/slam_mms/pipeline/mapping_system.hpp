@@ -98,7 +98,8 @@ class MappingSystem {
   /// The map: de-skewed scan points at the final poses within map_max_range_m, voxel-downsampled to
   /// map_voxel_m, with intensity, in world.
   PointCloud FinalMap() const;
-  /// The surfel map's live surfels (world frame; kFull and kLidarOnly).
+  /// The surfels (world frame; kFull and kLidarOnly): those of the current and the previous
+  /// submap, plus the archived older ones when localizer.archive_surfels is set.
   std::vector<Surfel> SurfelMapSnapshot() const;
   /// WGS-84 origin of world (FailedPrecondition before it is known).
   StatusOr<GeodeticPoint> Origin() const;

@@ -24,6 +24,7 @@
 #include "slam_mms/eval/report.hpp"
 #include "slam_mms/io/kitti_raw_reader.hpp"
 #include "slam_mms/io/map_io.hpp"
+#include "slam_mms/io/trajectory_io.hpp"
 #include "slam_mms/pipeline/mapping_system.hpp"
 #include "slam_mms/sim/drive_simulator.hpp"
 #include "slam_mms_run/cli.hpp"
@@ -179,6 +180,14 @@ int main(int argc, char** argv) {
         continue;
       }
       gts.emplace_back(*origin, std::move(gt).value());
+      // The ground truth in the run's world frame, so that slam_mms_eval can compare any output
+      // (e.g. <method>_level1.tum) with it.
+      const std::string name = gts.size() == 1
+                                   ? "ground_truth.tum"
+                                   : "ground_truth_" + std::to_string(gts.size()) + ".tum";
+      const Status written =
+          WriteTrajectoryTum(gts.back().second.T_world_body, args.out_dir / name);
+      if (!written.ok()) SLAM_MMS_LOG(kWarning) << written.ToString();
     }
   }
   for (size_t i = 0; i < runs.size(); ++i) {

@@ -83,7 +83,7 @@ Options:
 
 Outputs in DIR: <method>.tum, <method>.kitti, <method>_cov.csv per method; <method>_scans.csv
 (per-scan level-1 results and stage times) and <method>_level1.tum (level 1 before level 2) for
-full and lidar_only; map_full and
+full and lidar_only; ground_truth.tum (in the run's world frame, for slam_mms_eval); map_full and
 map_gnss_ins as .ply, .pcd and geo-referenced .las (UTM); report.json; summary.txt;
 trajectories.png, position_error.png, map_<method>_height.png.
 Exit status: 0 done; 1 input or processing error (outputs computed so far are written);

@@ -84,7 +84,9 @@ void AssignStreets(const CityWorld::Options& o, std::vector<PathSample>* samples
   auto key = [](const Eigen::Vector2d& p) {
     const int64_t x = static_cast<int64_t>(std::floor(p.x() / 4.0));
     const int64_t y = static_cast<int64_t>(std::floor(p.y() / 4.0));
-    return (x << 32) ^ (y & 0xffffffffLL);
+    // Shift as unsigned: x << 32 of a negative x is undefined in C++17 (UBSan); same bits.
+    return static_cast<int64_t>((static_cast<uint64_t>(x) << 32) ^
+                                static_cast<uint64_t>(y & 0xffffffffLL));
   };
   for (size_t i = 0; i < samples->size(); ++i) {
     PathSample& s = (*samples)[i];
@@ -268,7 +270,10 @@ class Generator {
   }
 
   // ---- lots and objects ---------------------------------------------------------------------
-  static int64_t CellKey(int64_t x, int64_t y) { return (x << 32) ^ (y & 0xffffffffLL); }
+  static int64_t CellKey(int64_t x, int64_t y) {
+    return static_cast<int64_t>((static_cast<uint64_t>(x) << 32) ^
+                                static_cast<uint64_t>(y & 0xffffffffLL));
+  }
 
   // True where (x, y) is free of streets (road + sidewalk + clearance) and of placed objects.
   bool PointFree(const Eigen::Vector2d& q, double clearance) const {

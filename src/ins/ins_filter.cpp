@@ -357,8 +357,12 @@ StatusOr<GnssDecisionResult> InsFilter::AddGnss(const GnssFix& fix) {
   // Bring the state to the fix time (last sample held), or measure the lag of a late fix.
   double lag = fix.stamp < im.x.stamp ? im.x.stamp.SecondsSince(fix.stamp) : 0.0;
   if (lag > im.options.max_fix_latency_s) {
-    return InvalidArgumentError("InsFilter::AddGnss: fix older than the state by " +
-                                std::to_string(lag) + " s (max_fix_latency_s)");
+    // Too late to be compared with the state: not an input error (a host may deliver its streams
+    // in batches), the fix is rejected and said why.
+    GnssDecisionResult late;
+    late.decision = GnssDecision::kReject;
+    late.reason = "fix older than the state by " + std::to_string(lag) + " s (max_fix_latency_s)";
+    return late;
   }
   if (fix.stamp > im.x.stamp) {
     if (!im.last_imu) return FailedPreconditionError("InsFilter::AddGnss: no IMU sample yet");

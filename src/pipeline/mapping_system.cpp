@@ -378,6 +378,14 @@ Status MappingSystem::AddScan(const Scan& scan) {
                            << ") skipped: no points";
     return OkStatus();
   }
+  const auto& points = scan.cloud.points();
+  if (std::none_of(points.begin(), points.end(),
+                   [](const Eigen::Vector3f& p) { return p.allFinite(); })) {
+    ++m.skipped;
+    SLAM_MMS_LOG(kWarning) << "scan '" << scan.source << "' (index " << scan.index
+                           << ") skipped: no finite point";
+    return OkStatus();
+  }
   if (!(scan.stamp_start <= scan.stamp_end)) {
     ++m.skipped;
     SLAM_MMS_LOG(kWarning) << "scan '" << scan.source << "' skipped: stamp_end before stamp_start";

@@ -16,7 +16,8 @@
 //   biases as random walks. Propagation between consecutive samples uses the mean of the two
 //   samples (second order); a GNSS fix between samples propagates to the fix with the last sample
 //   held. A fix older than the state (latency <= max_fix_latency_s) is compared with the antenna
-//   position extrapolated back by the velocity.
+//   position extrapolated back by the velocity; an older one is rejected (kReject, with the lag
+//   in the reason), not an error.
 // - During GNSS outages (no usable fix) the filter propagates the IMU alone and its covariance
 // grows.
 //

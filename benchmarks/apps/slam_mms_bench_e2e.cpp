@@ -48,6 +48,7 @@ double MsSince(Clock::time_point t0) {
 struct Args {
   double duration_s = 30.0;
   uint64_t seed = 1;
+  std::string scenario = "default";
   std::string mode = "full";
   fs::path kitti_raw;
   int64_t first_frame = 0;
@@ -55,12 +56,15 @@ struct Args {
   fs::path out;
   fs::path sim_dir;
   int rss_samples = 40;
+  fs::path spill_dir = fs::temp_directory_path();  // empty: submap clouds stay in memory
 };
 
 constexpr const char* kUsage =
-    "usage: slam_mms_bench_e2e [--duration-s S] [--seed N] [--sim-dir DIR]\n"
+    "usage: slam_mms_bench_e2e [--duration-s S] [--seed N] [--scenario default|long]\n"
+    "                          [--sim-dir DIR]\n"
     "       slam_mms_bench_e2e --kitti-raw DRIVE_DIR [--frames A:B]\n"
-    "  common: [--mode full|gnss_ins|lidar_only] [--out FILE.json] [--rss-samples N]\n";
+    "  common: [--mode full|gnss_ins|lidar_only] [--out FILE.json] [--rss-samples N]\n"
+    "          [--spill-dir DIR|none]   finished submaps' clouds (default: the temp folder)\n";
 
 bool ParseArgs(int argc, char** argv, Args* a, std::string* error) {
   for (int i = 1; i < argc; ++i) {
@@ -81,6 +85,12 @@ bool ParseArgs(int argc, char** argv, Args* a, std::string* error) {
         *error = "--duration-s " + v + ": must be a number > 0";
         return false;
       }
+    } else if (k == "--scenario") {
+      if (v != "default" && v != "long") {
+        *error = "--scenario " + v + ": must be default or long";
+        return false;
+      }
+      a->scenario = v;
     } else if (k == "--seed") {
       a->seed = std::strtoull(v.c_str(), &end, 10);
       if (*end != '\0' || v.empty()) {
@@ -107,6 +117,8 @@ bool ParseArgs(int argc, char** argv, Args* a, std::string* error) {
       a->last_frame = f1;
     } else if (k == "--out") {
       a->out = v;
+    } else if (k == "--spill-dir") {
+      a->spill_dir = v == "none" ? fs::path() : fs::path(v);
     } else if (k == "--sim-dir") {
       a->sim_dir = v;
     } else if (k == "--rss-samples") {
@@ -160,7 +172,7 @@ Percentiles Summarize(std::vector<double> v) {
 // Simulates the default drive into dir (or reuses it when a marker says it holds the same one).
 StatusOr<fs::path> SimulatedDrive(const Args& a, const fs::path& dir) {
   std::ostringstream want;
-  want << "seed " << a.seed << " duration_s " << a.duration_s << "\n";
+  want << "seed " << a.seed << " duration_s " << a.duration_s << " scenario " << a.scenario << "\n";
   const fs::path marker = dir / "bench_e2e_sim.txt";
   if (std::ifstream in(marker); in) {
     std::string have((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -176,13 +188,13 @@ StatusOr<fs::path> SimulatedDrive(const Args& a, const fs::path& dir) {
     }
   }
   slam_mms::sim::DriveSimulator::Options so;
-  so.scenario = "default";
+  so.scenario = a.scenario;
   so.duration_s = a.duration_s;
   so.seed = a.seed;
   so.write_scene_cloud = false;
   SLAM_MMS_ASSIGN_OR_RETURN(auto simulator, slam_mms::sim::DriveSimulator::Create(so));
-  std::printf("[sim] simulating %.1f s of the default drive (seed %" PRIu64 ") into %s\n",
-              a.duration_s, a.seed, dir.c_str());
+  std::printf("[sim] simulating %.1f s of the %s drive (seed %" PRIu64 ") into %s\n", a.duration_s,
+              a.scenario.c_str(), a.seed, dir.c_str());
   std::fflush(stdout);
   const auto t0 = Clock::now();
   SLAM_MMS_ASSIGN_OR_RETURN(auto summary, simulator.Run(dir));
@@ -197,6 +209,7 @@ struct RssSample {
   size_t scans = 0;
   double seconds = 0.0;
   double rss_mb = 0.0;
+  double hwm_mb = 0.0;  // VmHWM so far: the peak of a drive cut at this point
 };
 
 struct Report {
@@ -210,6 +223,8 @@ struct Report {
   double level1_sum_s = 0.0, outside_level1_s = 0.0;
   slam_mms::SubmapManager::Stats level2;
   double peak_rss_mb = -1.0;
+  double peak_rss_before_finish_mb = -1.0;  // VmHWM just before Finish()
+  bool peak_reset = false;                  // VmHWM was reset after the simulation
   std::vector<RssSample> rss;
   size_t final_surfels = 0;
 };
@@ -234,15 +249,16 @@ void PrintTable(const Report& r) {
       "%d solves, %d loops accepted of %d tested, last solve %.1f ms\n",
       r.level1_sum_s, r.outside_level1_s, r.level2.solves, r.level2.loops_accepted,
       r.level2.loops_tested, r.level2.last_solve_ms);
-  std::printf("memory: peak RSS (VmHWM) %.1f MiB; final surfels %zu\n", r.peak_rss_mb,
-              r.final_surfels);
-  std::printf("| scans done | wall [s] | RSS [MiB] |\n|---:|---:|---:|\n");
+  std::printf("memory: peak RSS (VmHWM%s) %.1f MiB, %.1f MiB before Finish(); final surfels %zu\n",
+              r.peak_reset ? " since the drive started" : ", including the simulation",
+              r.peak_rss_mb, r.peak_rss_before_finish_mb, r.final_surfels);
+  std::printf("| scans done | wall [s] | RSS [MiB] | peak so far [MiB] |\n|---:|---:|---:|---:|\n");
   // At most ~12 rows here (the JSON has every sample).
   const size_t step = std::max<size_t>(1, (r.rss.size() + 11) / 12);
   for (size_t i = 0; i < r.rss.size(); ++i) {
     if (i % step != 0 && i + 1 != r.rss.size()) continue;
     const RssSample& s = r.rss[i];
-    std::printf("| %zu | %.1f | %.1f |\n", s.scans, s.seconds, s.rss_mb);
+    std::printf("| %zu | %.1f | %.1f | %.1f |\n", s.scans, s.seconds, s.rss_mb, s.hwm_mb);
   }
 }
 
@@ -291,12 +307,16 @@ bool WriteJson(const Report& r, const fs::path& path) {
     f << buf;
   }
   f << "  },\n";
-  std::snprintf(buf, sizeof(buf), "  \"peak_rss_mb\": %.2f,\n  \"final_surfels\": %zu,\n",
-                r.peak_rss_mb, r.final_surfels);
+  std::snprintf(buf, sizeof(buf),
+                "  \"peak_rss_mb\": %.2f,\n  \"peak_rss_before_finish_mb\": %.2f,\n"
+                "  \"peak_rss_reset_after_simulation\": %s,\n  \"final_surfels\": %zu,\n",
+                r.peak_rss_mb, r.peak_rss_before_finish_mb, r.peak_reset ? "true" : "false",
+                r.final_surfels);
   f << buf << "  \"rss_samples\": [";
   for (size_t i = 0; i < r.rss.size(); ++i) {
-    std::snprintf(buf, sizeof(buf), "%s\n    {\"scans\": %zu, \"wall_s\": %.3f, \"rss_mb\": %.2f}",
-                  i ? "," : "", r.rss[i].scans, r.rss[i].seconds, r.rss[i].rss_mb);
+    std::snprintf(buf, sizeof(buf),
+                  "%s\n    {\"scans\": %zu, \"wall_s\": %.3f, \"rss_mb\": %.2f, \"hwm_mb\": %.2f}",
+                  i ? "," : "", r.rss[i].scans, r.rss[i].seconds, r.rss[i].rss_mb, r.rss[i].hwm_mb);
     f << buf;
   }
   f << "\n  ]\n}\n";
@@ -306,9 +326,10 @@ bool WriteJson(const Report& r, const fs::path& path) {
 // Feeds the drive in time order (a scan once IMU and GNSS reached its end, as a sensor delivers
 // it), timing every call.
 Status RunDrive(const slam_mms::KittiRawReader& reader, MappingMode mode, int rss_samples,
-                Report* r) {
+                const fs::path& spill_dir, Report* r) {
   MappingSystem::Options options;
   options.mode = mode;
+  options.localizer.spill_dir = spill_dir;
   options.T_body_lidar = reader.T_body_lidar();
   SLAM_MMS_ASSIGN_OR_RETURN(auto system, MappingSystem::Create(options));
 
@@ -319,10 +340,11 @@ Status RunDrive(const slam_mms::KittiRawReader& reader, MappingMode mode, int rs
   system->SetResultCallback([&](const slam_mms::LocalizationResult& res) {
     results.push_back(res);
     if (results.size() % every == 0 || results.size() == n_scans) {
-      r->rss.push_back({results.size(), MsSince(t_start) / 1000.0, ProcStatusMb("VmRSS")});
+      r->rss.push_back({results.size(), MsSince(t_start) / 1000.0, ProcStatusMb("VmRSS"),
+                        ProcStatusMb("VmHWM")});
     }
   });
-  r->rss.push_back({0, 0.0, ProcStatusMb("VmRSS")});
+  r->rss.push_back({0, 0.0, ProcStatusMb("VmRSS"), ProcStatusMb("VmHWM")});
 
   // Initial POS attitude and velocity from the earliest OXTS record (as slam_mms_run does).
   const slam_mms::StampedOxts* first = nullptr;
@@ -363,13 +385,14 @@ Status RunDrive(const slam_mms::KittiRawReader& reader, MappingMode mode, int rs
     SLAM_MMS_RETURN_IF_ERROR(system->AddScan(*scan));
     feed_ms += MsSince(t0);
   }
+  r->peak_rss_before_finish_mb = ProcStatusMb("VmHWM");
   auto t0 = Clock::now();
   while (i_imu < imu.size()) SLAM_MMS_RETURN_IF_ERROR(system->AddImu(imu[i_imu++]));
   while (i_gnss < gnss.size()) SLAM_MMS_RETURN_IF_ERROR(system->AddGnss(gnss[i_gnss++]));
   SLAM_MMS_RETURN_IF_ERROR(system->Finish());
   const double finish_ms = MsSince(t0);
   r->wall_s = MsSince(t_start) / 1000.0;
-  r->rss.push_back({results.size(), r->wall_s, ProcStatusMb("VmRSS")});
+  r->rss.push_back({results.size(), r->wall_s, ProcStatusMb("VmRSS"), ProcStatusMb("VmHWM")});
   r->peak_rss_mb = ProcStatusMb("VmHWM");
 
   r->scans_processed = results.size();
@@ -432,9 +455,14 @@ int main(int argc, char** argv) {
     }
     drive = *simulated;
     char name[96];
-    std::snprintf(name, sizeof(name), "simulated default drive, %.1f s, seed %" PRIu64,
-                  args.duration_s, args.seed);
+    std::snprintf(name, sizeof(name), "simulated %s drive, %.1f s, seed %" PRIu64,
+                  args.scenario.c_str(), args.duration_s, args.seed);
     report.input = name;
+    // The simulation's own peak is not the library's: reset VmHWM (Linux >= 4.0).
+    std::ofstream clear_refs("/proc/self/clear_refs");
+    clear_refs << "5";
+    clear_refs.close();
+    report.peak_reset = static_cast<bool>(clear_refs);
   } else {
     if (!fs::exists(drive)) {
       std::fprintf(stderr, "slam_mms_bench_e2e: %s does not exist\n", drive.c_str());
@@ -460,7 +488,7 @@ int main(int argc, char** argv) {
     if (report.scans_total > 0) {
       report.drive_s = reader->ScanEnd(report.scans_total - 1).SecondsSince(reader->ScanStart(0));
     }
-    const Status s = RunDrive(*reader, mode, args.rss_samples, &report);
+    const Status s = RunDrive(*reader, mode, args.rss_samples, args.spill_dir, &report);
     if (!s.ok()) {
       std::fprintf(stderr, "slam_mms_bench_e2e: run failed: %s\n", s.ToString().c_str());
       rc = 1;

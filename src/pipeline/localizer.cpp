@@ -1,14 +1,18 @@
 #include "slam_mms/pipeline/localizer.hpp"
 
 #include <ceres/normal_prior.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <deque>
 #include <map>
 #include <string>
+#include <system_error>
 
+#include "pipeline/cloud_file.hpp"
 #include "pipeline/pose_covariance.hpp"
 #include "pipeline/voxel_accumulator.hpp"
 #include "slam_mms/core/lie.hpp"
@@ -137,7 +141,36 @@ struct Localizer::Impl {
   std::vector<uint32_t> active_ids;
   std::vector<uint32_t> model_ids;
 
+  /// Private spill folder (empty: clouds stay in memory).
+  std::filesystem::path spill_folder;
+
+  ~Impl() {
+    if (!spill_folder.empty()) {
+      std::error_code ec;
+      std::filesystem::remove_all(spill_folder, ec);
+    }
+  }
+
   SubmapRecord& current() { return submaps.back(); }
+
+  /// Moves one cloud of `rec` to a file in the spill folder; on failure it stays in memory.
+  void Spill(SubmapRecord& rec, CloudKind kind) {
+    PointCloud& cloud = kind == CloudKind::kMap ? rec.cloud : rec.registration_cloud;
+    std::filesystem::path& file =
+        kind == CloudKind::kMap ? rec.cloud_file : rec.registration_cloud_file;
+    if (spill_folder.empty() || !file.empty()) return;
+    const std::filesystem::path path =
+        spill_folder / ("submap_" + std::to_string(rec.id) +
+                        (kind == CloudKind::kMap ? "_map.bin" : "_registration.bin"));
+    const Status st = internal::WriteCloudFile(path, cloud);
+    if (!st.ok()) {
+      SLAM_MMS_LOG(kWarning) << "Localizer: submap " << rec.id
+                             << " cloud kept in memory, spilling failed: " << st.ToString();
+      return;
+    }
+    file = path;
+    cloud = PointCloud();
+  }
 
   Status StartWindow(const Eigen::Vector3d& v_submap, const Vector6d& bias) {
     auto w = SlidingWindowGraph::Create(opt.window);
@@ -205,9 +238,14 @@ struct Localizer::Impl {
     SubmapRecord& rec = submaps.back();
     rec.cloud = map_acc.Cloud();
     rec.registration_cloud = reg_acc.Cloud();
+    rec.cloud_size = rec.cloud.size();
     rec.finished = true;
     map_acc.Clear();
     reg_acc.Clear();
+    // Level 2 reads only the final map cloud's file; it registers this submap with the previous
+    // one next, so the registration clouds of older ones leave memory.
+    Spill(rec, CloudKind::kMap);
+    if (submaps.size() >= 3) Spill(submaps[submaps.size() - 3], CloudKind::kRegistration);
   }
 
   /// Body motion over `duration` seconds at the mean velocity of the last `intervals` scan
@@ -285,6 +323,20 @@ StatusOr<std::unique_ptr<Localizer>> Localizer::Create(const Options& options,
   SLAM_MMS_ASSIGN_OR_RETURN(m.icp, ProjectiveIcp::Create(m.projection, options.icp));
   m.map_acc = internal::VoxelAccumulator(options.map_voxel_m);
   m.reg_acc = internal::VoxelAccumulator(options.registration_voxel_m);
+  if (!options.spill_dir.empty()) {
+    static std::atomic<uint64_t> counter{0};
+    const auto now = std::chrono::steady_clock::now().time_since_epoch().count();
+    const std::filesystem::path folder =
+        options.spill_dir / ("slam_mms_spill_" + std::to_string(::getpid()) + "_" +
+                             std::to_string(counter++) + "_" + std::to_string(now % 1000000007));
+    std::error_code ec;
+    std::filesystem::create_directories(folder, ec);
+    if (ec) {
+      return UnavailableError("Localizer::Options::spill_dir: cannot create " + folder.string() +
+                              ": " + ec.message());
+    }
+    m.spill_folder = folder;
+  }
   SLAM_MMS_LOG(kInfo) << "Localizer: mode " << MappingModeName(options.mode) << ", renderer "
                       << m.renderer->Name() << ", WT " << options.submap_duration_s << " s";
   return loc;
@@ -658,10 +710,36 @@ Status Localizer::SetSubmapPose(int32_t id, const Eigen::Isometry3d& T_world_sub
 void Localizer::ReleaseSubmapClouds(int32_t id, bool keep_registration_cloud) {
   for (SubmapRecord& rec : impl_->submaps) {
     if (rec.id != id) continue;
+    std::error_code ec;
     rec.cloud = PointCloud();
-    if (!keep_registration_cloud) rec.registration_cloud = PointCloud();
+    rec.cloud_size = 0;
+    if (!rec.cloud_file.empty()) std::filesystem::remove(rec.cloud_file, ec);
+    rec.cloud_file.clear();
+    if (keep_registration_cloud) continue;
+    rec.registration_cloud = PointCloud();
+    if (!rec.registration_cloud_file.empty()) {
+      std::filesystem::remove(rec.registration_cloud_file, ec);
+    }
+    rec.registration_cloud_file.clear();
   }
 }
+
+StatusOr<PointCloud> Localizer::SubmapCloud(int32_t id, CloudKind kind) const {
+  for (const SubmapRecord& rec : impl_->submaps) {
+    if (rec.id != id) continue;
+    const std::filesystem::path& file =
+        kind == CloudKind::kMap ? rec.cloud_file : rec.registration_cloud_file;
+    if (file.empty()) return kind == CloudKind::kMap ? rec.cloud : rec.registration_cloud;
+    auto cloud = internal::ReadCloudFile(file);
+    if (!cloud.ok()) {
+      return cloud.status().WithContext("Localizer: spilled cloud of submap " + std::to_string(id));
+    }
+    return cloud;
+  }
+  return NotFoundError("Localizer::SubmapCloud: no submap " + std::to_string(id));
+}
+
+const std::filesystem::path& Localizer::spill_folder() const { return impl_->spill_folder; }
 
 void Localizer::FinishCurrentSubmap() { impl_->CloseCurrentSubmap(); }
 

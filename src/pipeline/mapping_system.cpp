@@ -459,11 +459,21 @@ PointCloud MappingSystem::FinalMap() const {
   const Impl& m = *impl_;
   if (!m.loc) return m.pos_map.Cloud();
   PointCloud merged;
+  size_t total = 0;
+  for (const SubmapRecord& rec : m.loc->submaps()) total += rec.cloud_size;
+  merged.reserve(total);
   for (const SubmapRecord& rec : m.loc->submaps()) {
+    // From memory, or read back from the spill folder (Localizer::Options::spill_dir).
+    auto cloud = m.loc->SubmapCloud(rec.id, Localizer::CloudKind::kMap);
+    if (!cloud.ok()) {
+      SLAM_MMS_LOG(kError) << "MappingSystem::FinalMap: submap " << rec.id
+                           << " left out: " << cloud.status().ToString();
+      continue;
+    }
     const Eigen::Matrix3f R = rec.T_world_submap.linear().cast<float>();
     const Eigen::Vector3f t = rec.T_world_submap.translation().cast<float>();
-    for (size_t i = 0; i < rec.cloud.size(); ++i) {
-      merged.Add(R * rec.cloud.points()[i] + t, rec.cloud.intensities()[i]);
+    for (size_t i = 0; i < cloud->size(); ++i) {
+      merged.Add(R * cloud->points()[i] + t, cloud->intensities()[i]);
     }
   }
   auto down = eval::VoxelDownsample(merged, m.opt.map_voxel_m);

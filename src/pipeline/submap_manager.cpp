@@ -198,7 +198,14 @@ Status SubmapManager::OnSubmapFinished(Localizer* localizer, int32_t submap_id,
         internal::DiagonalPoseCovariance(m.opt.reckon_sigma_rot_rad, m.opt.reckon_sigma_trans_m)));
     // F_Reg (§5.2.1): map-to-map registration with the previous submap (point-based ICP).
     if (m.opt.use_map_to_map) {
-      auto reg = m.Register(prev->registration_cloud, rec->registration_cloud, rec->T_prev_this);
+      auto prev_cloud = localizer->SubmapCloud(prev->id, Localizer::CloudKind::kRegistration);
+      if (!prev_cloud.ok()) {
+        SLAM_MMS_LOG(kWarning) << "level 2: map-to-map registration " << prev->id << " -> "
+                               << submap_id << " skipped: " << prev_cloud.status().ToString();
+      }
+      auto reg = prev_cloud.ok()
+                     ? m.Register(*prev_cloud, rec->registration_cloud, rec->T_prev_this)
+                     : std::nullopt;
       if (reg && reg->inlier_ratio >= 0.3) {
         const Vector6d correction = se3::Log(rec->T_prev_this.inverse() * reg->T_target_source);
         if (correction.head<3>().norm() < 0.05 && correction.tail<3>().norm() < 1.0) {
@@ -227,7 +234,13 @@ Status SubmapManager::OnSubmapFinished(Localizer* localizer, int32_t submap_id,
       if (cand == nullptr) continue;
       ++m.stats.loops_tested;
       const Eigen::Isometry3d T_init = cand->T_world_submap.inverse() * rec->T_world_submap;
-      auto reg = m.Register(cand->registration_cloud, rec->registration_cloud, T_init);
+      auto cand_cloud = localizer->SubmapCloud(cand->id, Localizer::CloudKind::kRegistration);
+      if (!cand_cloud.ok()) {
+        SLAM_MMS_LOG(kWarning) << "level 2: loop candidate " << cand->id
+                               << " skipped: " << cand_cloud.status().ToString();
+        continue;
+      }
+      auto reg = m.Register(*cand_cloud, rec->registration_cloud, T_init);
       if (!reg) continue;
       const Vector6d correction = se3::Log(T_init.inverse() * reg->T_target_source);
       const bool verified = reg->inlier_ratio >= m.opt.loop_min_inlier_ratio &&

@@ -25,19 +25,15 @@ double RoadHeight(const Eigen::Vector2d& p) {
          1.5 * std::sin(2.0 * M_PI * p.y() / 450.0 + 1.0);
 }
 
-}  // namespace
+struct Leg {
+  Eigen::Vector2d start;
+  double cruise_mps;
+};
 
-std::vector<PoseSample> DefaultUrbanRouteSamples() {
-  // Corners of the route in the city frame (x east-ish, y north-ish) with the cruise speed of the
-  // leg that starts there: east along street A, north, west, south, east along A again (revisit),
-  // then south into a new street.
-  struct Leg {
-    Eigen::Vector2d start;
-    double cruise_mps;
-  };
-  const std::vector<Leg> legs = {{{0.0, 0.0}, 9.5},     {{300.0, 0.0}, 10.0}, {{300.0, 200.0}, 8.5},
-                                 {{-20.0, 200.0}, 9.0}, {{-20.0, 0.0}, 9.5},  {{150.0, 0.0}, 8.0},
-                                 {{150.0, -160.0}, 0.0}};
+// Pose samples at 10 Hz along the polyline of `legs` (corners rounded, the last leg's start is the
+// end), with standstills at the arc lengths in `stops` ({metres along the path, dwell seconds}).
+std::vector<PoseSample> RouteSamples(const std::vector<Leg>& legs,
+                                     const std::vector<std::pair<double, double>>& stop_at) {
   const double corner_radius_m = 11.0;
   const double lateral_accel_mps2 = 2.0;
   const double accel_mps2 = 1.2, decel_mps2 = 1.6;
@@ -84,8 +80,7 @@ std::vector<PoseSample> DefaultUrbanRouteSamples() {
   for (size_t i = 0; i < m; ++i) v[i] = path[i].v_limit;
   std::vector<std::pair<size_t, double>> stops;  // index, dwell [s]
   auto index_at = [&](double s) { return std::min(m - 1, static_cast<size_t>(s / kStep_m)); };
-  stops.push_back({index_at(470.0), 6.0});  // before the second corner
-  stops.push_back({index_at(860.0), 8.0});  // mid west street
+  for (const auto& [s_m, dwell_s] : stop_at) stops.push_back({index_at(s_m), dwell_s});
   v.front() = 0.0;
   v.back() = 0.0;
   for (auto& s : stops) v[s.first] = 0.0;
@@ -140,6 +135,40 @@ std::vector<PoseSample> DefaultUrbanRouteSamples() {
     out.push_back(sample);
   }
   return out;
+}
+
+}  // namespace
+
+std::vector<PoseSample> DefaultUrbanRouteSamples() {
+  // Corners of the route in the city frame (x east-ish, y north-ish) with the cruise speed of the
+  // leg that starts there: east along street A, north, west, south, east along A again (revisit),
+  // then south into a new street.
+  const std::vector<Leg> legs = {{{0.0, 0.0}, 9.5},     {{300.0, 0.0}, 10.0}, {{300.0, 200.0}, 8.5},
+                                 {{-20.0, 200.0}, 9.0}, {{-20.0, 0.0}, 9.5},  {{150.0, 0.0}, 8.0},
+                                 {{150.0, -160.0}, 0.0}};
+  // Stops before the second corner and mid west street.
+  return RouteSamples(legs, {{470.0, 6.0}, {860.0, 8.0}});
+}
+
+std::vector<PoseSample> LongUrbanRouteSamples(double min_duration_s) {
+  // A serpentine through a street grid: 420 m east, 120 m north, 420 m west, 120 m north, ...,
+  // always into new streets, so the area mapped grows with the drive. A traffic-light stop every
+  // fourth long street.
+  constexpr double kStreet_m = 420.0, kBlock_m = 120.0, kMeanSpeed_mps = 8.0;
+  const int num_streets = std::max(
+      2, static_cast<int>(std::ceil(min_duration_s * kMeanSpeed_mps / (kStreet_m + kBlock_m))) + 1);
+  std::vector<Leg> legs;
+  std::vector<std::pair<double, double>> stops;
+  const double speeds[] = {9.5, 10.0, 8.5, 9.0};
+  for (int i = 0; i < num_streets; ++i) {
+    const double y = i * kBlock_m;
+    const bool east = i % 2 == 0;
+    legs.push_back({{east ? 0.0 : kStreet_m, y}, speeds[i % 4]});
+    legs.push_back({{east ? kStreet_m : 0.0, y}, 8.0});
+    if (i % 4 == 1) stops.push_back({i * (kStreet_m + kBlock_m) + 0.5 * kStreet_m, 6.0});
+  }
+  legs.push_back({{legs.back().start.x(), num_streets * kBlock_m}, 0.0});
+  return RouteSamples(legs, stops);
 }
 
 }  // namespace slam_mms::sim

@@ -37,8 +37,11 @@ Status DriveSimulator::Options::Validate() const {
   auto fail = [](const std::string& name, const std::string& v, const char* rule) {
     return InvalidArgumentError("DriveSimulator::Options::" + name + " = " + v + "; " + rule);
   };
-  if (oxts_drive_dir.empty() && scenario != "default")
-    return fail("scenario", "'" + scenario + "'", "must be \"default\" (or set oxts_drive_dir)");
+  if (oxts_drive_dir.empty() && scenario != "default" && scenario != "long")
+    return fail("scenario", "'" + scenario + "'",
+                "must be \"default\" or \"long\" (or set oxts_drive_dir)");
+  if (oxts_drive_dir.empty() && scenario == "long" && !(duration_s > 0.0))
+    return fail("duration_s", std::to_string(duration_s), "must be > 0 for scenario \"long\"");
   if (!(duration_s >= 0.0)) return fail("duration_s", std::to_string(duration_s), "must be >= 0");
   if (!(lead_in_s >= 0.0)) return fail("lead_in_s", std::to_string(lead_in_s), "must be >= 0");
   if (!(std::abs(origin_latitude_deg) <= 90.0))
@@ -132,7 +135,8 @@ StatusOr<DriveSimulator> DriveSimulator::Create(const Options& options_in) {
     }
   } else {
     SLAM_MMS_ASSIGN_OR_RETURN(epoch, ParseKittiTimestamp(o.start_time));
-    samples = DefaultUrbanRouteSamples();
+    samples = o.scenario == "long" ? LongUrbanRouteSamples(o.duration_s + o.lead_in_s + 5.0)
+                                   : DefaultUrbanRouteSamples();
     if (o.date.empty()) o.date = "2026_01_15";
     if (o.drive_id < 0) o.drive_id = 1;
   }

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <functional>
 #include <map>
 
 #include "slam_mms/core/lie.hpp"
@@ -30,7 +31,8 @@ struct RunOutput {
 /// Feeds a drive to a MappingSystem in time order (scans at their end time, as a sensor delivers
 /// them) and finishes it.
 StatusOr<RunOutput> RunDrive(const std::filesystem::path& drive, MappingSystem::Options options,
-                             int64_t last_frame = -1) {
+                             int64_t last_frame = -1,
+                             const std::function<void(const MappingSystem&)>& after_finish = {}) {
   KittiRawReader::Options ropt;
   ropt.last_frame = last_frame;
   SLAM_MMS_ASSIGN_OR_RETURN(KittiRawReader reader, KittiRawReader::Open(drive, ropt));
@@ -61,6 +63,7 @@ StatusOr<RunOutput> RunDrive(const std::filesystem::path& drive, MappingSystem::
   while (i_imu < imu.size()) SLAM_MMS_RETURN_IF_ERROR(system->AddImu(imu[i_imu++]));
   while (i_gnss < gnss.size()) SLAM_MMS_RETURN_IF_ERROR(system->AddGnss(gnss[i_gnss++]));
   SLAM_MMS_RETURN_IF_ERROR(system->Finish());
+  if (after_finish) after_finish(*system);
   RunOutput out;
   out.trajectory = system->FinalTrajectory();
   out.map = system->FinalMap();
@@ -177,6 +180,57 @@ TEST_F(SimulatedDriveTest, SameInputGivesTheSameTrajectory) {
   for (size_t i = 0; i < a->trajectory.size(); ++i) {
     EXPECT_EQ(a->trajectory[i].T_world_body.matrix(), b->trajectory[i].T_world_body.matrix());
   }
+}
+
+TEST_F(SimulatedDriveTest, SpilledSubmapCloudsGiveTheSameResultsAndAreRemoved) {
+  // Short submaps so that map and registration clouds are spilled within 6 s of drive.
+  MappingSystem::Options o = OptionsFor(MappingMode::kFull);
+  o.localizer.submap_duration_s = 1.5;
+  const auto in_memory = RunDrive(*drive_, o, /*last_frame=*/60);
+  ASSERT_TRUE(in_memory.ok()) << in_memory.status().ToString();
+  const std::filesystem::path spill = std::filesystem::temp_directory_path() /
+                                      ("slam_mms_spill_test_" + std::to_string(::getpid()));
+  o.localizer.spill_dir = spill;
+  size_t spilled_files = 0;
+  const auto spilled = RunDrive(*drive_, o, /*last_frame=*/60, [&](const MappingSystem&) {
+    for (const auto& e : std::filesystem::recursive_directory_iterator(spill)) {
+      spilled_files += e.is_regular_file();
+    }
+  });
+  ASSERT_TRUE(spilled.ok()) << spilled.status().ToString();
+  // Every finished submap's map cloud, and the registration clouds of all but the last two.
+  size_t num_submaps = 0;
+  for (const LocalizationResult& r : spilled->results) {
+    num_submaps = std::max(num_submaps, static_cast<size_t>(r.submap_id) + 1);
+  }
+  ASSERT_GE(num_submaps, 4u);
+  EXPECT_EQ(spilled_files, num_submaps + (num_submaps - 2));
+  ASSERT_TRUE(spilled.ok()) << spilled.status().ToString();
+  // The Localizer is gone: its private folder too, the parent stays.
+  EXPECT_TRUE(std::filesystem::exists(spill));
+  EXPECT_TRUE(std::filesystem::is_empty(spill));
+  std::error_code ec;
+  std::filesystem::remove_all(spill, ec);
+
+  ASSERT_EQ(in_memory->trajectory.size(), spilled->trajectory.size());
+  for (size_t i = 0; i < in_memory->trajectory.size(); ++i) {
+    EXPECT_EQ(in_memory->trajectory[i].T_world_body.matrix(),
+              spilled->trajectory[i].T_world_body.matrix());
+  }
+  ASSERT_EQ(in_memory->map.size(), spilled->map.size());
+  EXPECT_GT(spilled->map.size(), 10000u);
+  for (size_t i = 0; i < spilled->map.size(); ++i) {
+    ASSERT_EQ(in_memory->map.points()[i], spilled->map.points()[i]) << i;
+  }
+}
+
+TEST(MappingSystemTest, SpillFolderThatCannotBeCreatedIsAnError) {
+  MappingSystem::Options o;
+  o.localizer.spill_dir = "/proc/slam_mms_cannot_create_this";
+  auto system = MappingSystem::Create(o);
+  ASSERT_FALSE(system.ok());
+  EXPECT_NE(system.status().message().find("spill_dir"), std::string::npos)
+      << system.status().ToString();
 }
 
 TEST(MappingSystemTest, OptionsAreValidatedByName) {

@@ -42,6 +42,31 @@ TEST(ReferenceTrajectoryTest, DefaultRouteIsAFewMinutesWithALoop) {
   EXPECT_GT(stopped_samples, 50);
 }
 
+TEST(ReferenceTrajectoryTest, LongRouteLastsAtLeastTheDurationAndExploresNewStreets) {
+  for (double duration : {60.0, 1800.0}) {
+    const auto samples = LongUrbanRouteSamples(duration);
+    ASSERT_GT(samples.size(), 100u);
+    const double span = samples.back().t_s - samples.front().t_s;
+    EXPECT_GE(span, duration);
+    EXPECT_LT(span, duration + 150.0);  // at most one more street and block
+    auto traj = ReferenceTrajectory::Fit(Timestamp::FromSeconds(1.7e9), samples,
+                                         ReferenceTrajectory::FitOptions());
+    ASSERT_TRUE(traj.ok()) << traj.status().ToString();
+    // Never back to an earlier place: a point 60 s later is > 100 m from every earlier one's
+    // street, checked on a coarse grid of times.
+    double min_gap = 1e9;
+    for (double t0 = 5.0; t0 + 60.0 < traj->end_s(); t0 += 20.0) {
+      for (double t1 = t0 + 60.0; t1 < traj->end_s(); t1 += 20.0) {
+        min_gap = std::min(
+            min_gap,
+            (traj->Pose(t1).translation() - traj->Pose(t0).translation()).head<2>().norm());
+      }
+    }
+    EXPECT_GT(min_gap, 50.0) << duration;
+    for (const auto& s : samples) ASSERT_TRUE(s.p_world.allFinite() && s.rpy_rad.allFinite());
+  }
+}
+
 TEST(ReferenceTrajectoryTest, DerivativesMatchFiniteDifferences) {
   const ReferenceTrajectory traj = DefaultTrajectory();
   const double h = 1e-4;

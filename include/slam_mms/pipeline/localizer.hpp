@@ -27,6 +27,7 @@
 // Thread safety: not thread-safe.
 
 #include <Eigen/Geometry>
+#include <filesystem>
 #include <memory>
 #include <optional>
 #include <vector>
@@ -73,9 +74,15 @@ struct SubmapRecord {
   Eigen::Isometry3d T_prev_this = Eigen::Isometry3d::Identity();
   Matrix6d cov_prev_this = Matrix6d::Identity();
   /// De-skewed points of the submap's scans in the submap frame, voxel-downsampled (map output).
+  /// Empty once spilled to `cloud_file` (Localizer::Options::spill_dir): read it with
+  /// Localizer::SubmapCloud, which serves both cases.
   PointCloud cloud;
-  /// A coarser cloud for map-to-map registration and loop closure.
+  /// A coarser cloud for map-to-map registration and loop closure; spilled like `cloud` once the
+  /// submap is two behind the current one.
   PointCloud registration_cloud;
+  std::filesystem::path cloud_file;               ///< Empty while `cloud` is in memory.
+  std::filesystem::path registration_cloud_file;  ///< Empty while in memory.
+  size_t cloud_size = 0;                          ///< Points of the map cloud, wherever it is.
   bool finished = false;
 };
 
@@ -127,6 +134,13 @@ class Localizer {
     /// left the live map, for AllSurfels(). Off by default: they grow with the drive (measured
     /// +0.3 MB a scan, 385 MB after 2 min), while the point-cloud map is the product's output.
     bool archive_surfels = false;
+    /// Bounded memory on long drives: where finished submaps' point clouds go. Empty (default):
+    /// they stay in memory. Otherwise a private folder is created inside it (an error at Create
+    /// when that fails) and removed with the Localizer; a submap's map cloud is written there when
+    /// the submap is finished and its registration cloud when it is two behind, and read back on
+    /// demand (SubmapCloud: the final map, loop closure). A failed write keeps the cloud in memory
+    /// (logged); nothing is lost.
+    std::filesystem::path spill_dir;
     int num_threads = 2;
     [[nodiscard]] Status Validate() const;
   };
@@ -150,6 +164,13 @@ class Localizer {
   Status SetSubmapPose(int32_t id, const Eigen::Isometry3d& T_world_submap);
   /// Frees the point clouds of submaps that level 2 no longer needs (memory bound).
   void ReleaseSubmapClouds(int32_t id, bool keep_registration_cloud);
+  enum class CloudKind { kMap, kRegistration };
+  /// A submap's map or registration cloud (submap frame), from memory or read back from its spill
+  /// file. NotFound for an unknown id; DataLoss / NotFound naming the file when the spill file is
+  /// unreadable or corrupt.
+  StatusOr<PointCloud> SubmapCloud(int32_t id, CloudKind kind) const;
+  /// The private spill folder (empty without Options::spill_dir).
+  const std::filesystem::path& spill_folder() const;
   /// Ends the current submap (Finish()).
   void FinishCurrentSubmap();
   /// The live surfel map (the current and the previous submap when per_submap_surfels).

@@ -45,7 +45,8 @@ Eigen::Isometry3d KittiTLidarBody();
 class DriveSimulator {
  public:
   struct Options {
-    /// "default" (the embedded urban drive); ignored when oxts_drive_dir is set.
+    /// "default" (the embedded urban drive, ~190 s) or "long" (a serpentine through new streets,
+    /// as long as duration_s, which must then be > 0); ignored when oxts_drive_dir is set.
     std::string scenario = "default";
     /// An unpacked KITTI OXTS drive folder (<drive>_sync with oxts/): real motion.
     std::filesystem::path oxts_drive_dir;

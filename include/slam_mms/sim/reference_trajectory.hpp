@@ -91,6 +91,12 @@ class ReferenceTrajectory {
 /// route) so drives with different seeds share their motion.
 std::vector<PoseSample> DefaultUrbanRouteSamples();
 
+/// Trajectory samples of the long urban drive ("--scenario long"): a serpentine through a street
+/// grid (420 m streets, 120 m apart), always into new streets, of at least `min_duration_s`
+/// (plus up to one street), at 30-36 km/h with a stop every fourth street. For long-run and memory
+/// benchmarks: the mapped area grows with the drive.
+std::vector<PoseSample> LongUrbanRouteSamples(double min_duration_s);
+
 /// Pose samples of an unpacked KITTI OXTS drive folder (`<drive>_sync` with oxts/timestamps.txt
 /// and oxts/data/*.txt), converted to local ENU about the WGS-84 origin (lat, lon [deg], h [m])
 /// with GeographicLib; `origin_from_first` replaces the origin by the first record's position.

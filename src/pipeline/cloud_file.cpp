@@ -1,0 +1,91 @@
+#include "pipeline/cloud_file.hpp"
+
+#include <array>
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <system_error>
+#include <vector>
+
+namespace slam_mms::internal {
+namespace {
+
+constexpr char kMagic[8] = {'S', 'M', 'M', 'S', 'C', 'L', 'D', '1'};
+constexpr size_t kHeaderBytes = sizeof(kMagic) + sizeof(uint64_t);
+constexpr size_t kPointBytes = 4 * sizeof(float);
+// Points per write/read batch.
+constexpr size_t kBatch = 4096;
+
+}  // namespace
+
+Status WriteCloudFile(const std::filesystem::path& path, const PointCloud& cloud) {
+  static_assert(sizeof(float) == 4, "IEEE floats expected");
+  const auto fail = [&path](const char* what) {
+    std::error_code ec;
+    std::filesystem::remove(path, ec);
+    return UnavailableError(path.string() + ": " + what);
+  };
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  if (!out) return UnavailableError(path.string() + ": cannot be created");
+  const uint64_t n = cloud.size();
+  out.write(kMagic, sizeof(kMagic));
+  out.write(reinterpret_cast<const char*>(&n), sizeof(n));
+  std::vector<float> buf;
+  buf.reserve(4 * kBatch);
+  const auto& p = cloud.points();
+  const auto& in = cloud.intensities();
+  for (size_t i0 = 0; i0 < n && out; i0 += kBatch) {
+    const size_t i1 = std::min<size_t>(n, i0 + kBatch);
+    buf.clear();
+    for (size_t i = i0; i < i1; ++i) {
+      buf.insert(buf.end(), {p[i].x(), p[i].y(), p[i].z(), i < in.size() ? in[i] : 0.0f});
+    }
+    out.write(reinterpret_cast<const char*>(buf.data()),
+              static_cast<std::streamsize>(buf.size() * sizeof(float)));
+  }
+  out.flush();
+  if (!out) return fail("write failed (disk full?)");
+  out.close();
+  if (!out) return fail("close failed");
+  return OkStatus();
+}
+
+StatusOr<PointCloud> ReadCloudFile(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return NotFoundError(path.string() + ": cannot be opened");
+  std::error_code ec;
+  const uintmax_t bytes = std::filesystem::file_size(path, ec);
+  if (ec) return NotFoundError(path.string() + ": cannot read its size: " + ec.message());
+  std::array<char, sizeof(kMagic)> magic{};
+  uint64_t n = 0;
+  in.read(magic.data(), magic.size());
+  in.read(reinterpret_cast<char*>(&n), sizeof(n));
+  if (!in || bytes < kHeaderBytes) {
+    return DataLossError(path.string() + ": truncated header (" + std::to_string(bytes) +
+                         " bytes)");
+  }
+  if (std::memcmp(magic.data(), kMagic, sizeof(kMagic)) != 0) {
+    return DataLossError(path.string() + ": not a slam_mms cloud file (bad magic)");
+  }
+  if (n > (bytes - kHeaderBytes) / kPointBytes || bytes != kHeaderBytes + n * kPointBytes) {
+    return DataLossError(path.string() + ": header says " + std::to_string(n) +
+                         " points, the file has " + std::to_string(bytes) + " bytes (expected " +
+                         std::to_string(kHeaderBytes + n * kPointBytes) + ")");
+  }
+  PointCloud cloud;
+  cloud.reserve(static_cast<size_t>(n));
+  std::vector<float> buf(4 * kBatch);
+  for (uint64_t i0 = 0; i0 < n; i0 += kBatch) {
+    const size_t m = static_cast<size_t>(std::min<uint64_t>(kBatch, n - i0));
+    in.read(reinterpret_cast<char*>(buf.data()), static_cast<std::streamsize>(m * kPointBytes));
+    if (!in) {
+      return DataLossError(path.string() + ": read failed at point " + std::to_string(i0));
+    }
+    for (size_t k = 0; k < m; ++k) {
+      cloud.Add(Eigen::Vector3f(buf[4 * k], buf[4 * k + 1], buf[4 * k + 2]), buf[4 * k + 3]);
+    }
+  }
+  return cloud;
+}
+
+}  // namespace slam_mms::internal

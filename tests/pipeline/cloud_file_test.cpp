@@ -1,0 +1,99 @@
+// Spill files of submap clouds (src/pipeline/cloud_file): round trip and every corruption named.
+#include "pipeline/cloud_file.hpp"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+namespace slam_mms::internal {
+namespace {
+
+namespace fs = std::filesystem;
+
+class CloudFileTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("slam_mms_cloud_file_test_" + std::to_string(::getpid()));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(dir_, ec);
+  }
+  static PointCloud MakeCloud(size_t n) {
+    PointCloud c;
+    for (size_t i = 0; i < n; ++i) {
+      const float f = static_cast<float>(i);
+      c.Add(Eigen::Vector3f(0.1f * f, -2.0f * f, 1e3f + f), 0.001f * f);
+    }
+    return c;
+  }
+  fs::path dir_;
+};
+
+TEST_F(CloudFileTest, RoundTripIsExact) {
+  for (size_t n : {size_t{0}, size_t{1}, size_t{4095}, size_t{4096}, size_t{10001}}) {
+    const PointCloud c = MakeCloud(n);
+    const fs::path p = dir_ / "c.bin";
+    ASSERT_TRUE(WriteCloudFile(p, c).ok());
+    EXPECT_EQ(fs::file_size(p), 16u + 16u * n);
+    auto r = ReadCloudFile(p);
+    ASSERT_TRUE(r.ok()) << r.status().ToString();
+    ASSERT_EQ(r->size(), n);
+    for (size_t i = 0; i < n; ++i) {
+      EXPECT_EQ(r->points()[i], c.points()[i]);
+      EXPECT_EQ(r->intensities()[i], c.intensities()[i]);
+    }
+  }
+}
+
+TEST_F(CloudFileTest, MissingTruncatedAndCorruptFilesAreNamed) {
+  const fs::path missing = dir_ / "missing.bin";
+  auto r = ReadCloudFile(missing);
+  EXPECT_EQ(r.status().code(), StatusCode::kNotFound);
+  EXPECT_NE(r.status().message().find("missing.bin"), std::string::npos);
+
+  const fs::path p = dir_ / "c.bin";
+  ASSERT_TRUE(WriteCloudFile(p, MakeCloud(100)).ok());
+  fs::resize_file(p, 16 + 16 * 99 + 7);  // a point cut short
+  r = ReadCloudFile(p);
+  EXPECT_EQ(r.status().code(), StatusCode::kDataLoss);
+  EXPECT_NE(r.status().message().find("header says 100 points"), std::string::npos)
+      << r.status().message();
+  EXPECT_NE(r.status().message().find("c.bin"), std::string::npos);
+
+  fs::resize_file(p, 10);  // header cut short
+  r = ReadCloudFile(p);
+  EXPECT_EQ(r.status().code(), StatusCode::kDataLoss);
+  EXPECT_NE(r.status().message().find("truncated header"), std::string::npos);
+
+  {
+    std::ofstream f(p, std::ios::binary | std::ios::trunc);
+    f << "NOTACLOUD_______________";
+  }
+  r = ReadCloudFile(p);
+  EXPECT_EQ(r.status().code(), StatusCode::kDataLoss);
+  EXPECT_NE(r.status().message().find("bad magic"), std::string::npos);
+
+  // A count that would overflow the size arithmetic.
+  {
+    std::ofstream f(p, std::ios::binary | std::ios::trunc);
+    const uint64_t n = ~uint64_t{0} / 8;
+    f.write("SMMSCLD1", 8);
+    f.write(reinterpret_cast<const char*>(&n), 8);
+  }
+  r = ReadCloudFile(p);
+  EXPECT_EQ(r.status().code(), StatusCode::kDataLoss);
+}
+
+TEST_F(CloudFileTest, UnwritablePathIsAnErrorNamingIt) {
+  const fs::path p = dir_ / "no_such_folder" / "c.bin";
+  const Status st = WriteCloudFile(p, MakeCloud(3));
+  EXPECT_EQ(st.code(), StatusCode::kUnavailable);
+  EXPECT_NE(st.message().find("no_such_folder"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace slam_mms::internal

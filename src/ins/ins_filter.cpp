@@ -109,6 +109,7 @@ struct InsFilter::Impl {
   std::optional<Eigen::Quaterniond> pending_q;  // attitude waiting for a GNSS position
   Eigen::Vector3d pending_v = Eigen::Vector3d::Zero();
   Eigen::Vector3d pending_bg = Eigen::Vector3d::Zero();
+  std::optional<Timestamp> pending_stamp;  // when pending_q / pending_v hold (carried by the IMU)
   Nominal x;
   Matrix15d P = Matrix15d::Zero();
   std::optional<ImuSample> last_imu;
@@ -249,7 +250,8 @@ Status InsFilter::Initialize(const InsState& state) {
 }
 
 Status InsFilter::InitializeAttitude(const Eigen::Quaterniond& q_world_body,
-                                     const Eigen::Vector3d& v_world_mps) {
+                                     const Eigen::Vector3d& v_world_mps,
+                                     std::optional<Timestamp> stamp) {
   if (impl_->mode == Mode::kExternal)
     return FailedPreconditionError("InsFilter: external POS mode");
   if (!q_world_body.coeffs().allFinite() || q_world_body.norm() < 0.5 || !v_world_mps.allFinite()) {
@@ -258,6 +260,7 @@ Status InsFilter::InitializeAttitude(const Eigen::Quaterniond& q_world_body,
   impl_->pending_q = q_world_body.normalized();
   impl_->pending_v = v_world_mps;
   impl_->pending_bg.setZero();
+  impl_->pending_stamp = stamp;
   impl_->initialized = false;
   impl_->mode = Mode::kImu;
   return OkStatus();
@@ -310,6 +313,27 @@ Status InsFilter::AddImu(const ImuSample& sample) {
   }
   const std::optional<ImuSample> prev = im.last_imu;
   im.last_imu = sample;
+  if (!im.initialized && im.pending_q && im.pending_stamp && sample.stamp > *im.pending_stamp) {
+    // Attitude and velocity known at pending_stamp, the position not yet: carry them forward
+    // (strapdown, mean of the interval's end samples) to the first usable fix.
+    Eigen::Vector3d a = sample.accel_mps2, w = sample.gyro_radps;
+    if (prev && prev->stamp >= *im.pending_stamp) {
+      a = 0.5 * (a + prev->accel_mps2);
+      w = 0.5 * (w + prev->gyro_radps);
+    }
+    const double dt = sample.stamp.SecondsSince(*im.pending_stamp);
+    if (dt > im.options.max_imu_gap_s) {
+      // No IMU data near the attitude's stamp (or no real stamp given): carry it from here on.
+      im.pending_stamp = sample.stamp;
+      return OkStatus();
+    }
+    const Eigen::Matrix3d R = im.pending_q->toRotationMatrix();
+    const Eigen::Vector3d dtheta = (w - im.pending_bg) * dt;
+    im.pending_v += (R * a + im.g()) * dt;
+    im.pending_q = (*im.pending_q * so3::ExpQuaternion(dtheta)).normalized();
+    im.pending_stamp = sample.stamp;
+    return OkStatus();
+  }
   if (!im.initialized || sample.stamp <= im.x.stamp) return OkStatus();
   im.mode = Mode::kImu;
   const double dt = sample.stamp.SecondsSince(im.x.stamp);
@@ -343,6 +367,16 @@ StatusOr<GnssDecisionResult> InsFilter::AddGnss(const GnssFix& fix) {
       im.x.q = *im.pending_q;
       im.x.v = im.pending_v;
       im.x.bg = im.pending_bg;
+      if (im.pending_stamp && fix.stamp > *im.pending_stamp) {
+        // The last sample held over the rest of the interval.
+        const double dt = fix.stamp.SecondsSince(*im.pending_stamp);
+        if (im.last_imu) {
+          im.x.v += (im.x.q.toRotationMatrix() * im.last_imu->accel_mps2 + im.g()) * dt;
+          im.x.q = (im.x.q * so3::ExpQuaternion((im.last_imu->gyro_radps - im.pending_bg) * dt))
+                       .normalized();
+        }
+      }
+      im.pending_stamp.reset();
       im.x.p = r.measurement.p_world_antenna - im.x.q.toRotationMatrix() * t_ba;
       const Eigen::Matrix3d& C = r.measurement.cov_world_antenna;
       im.InitCovariance(std::sqrt(C(0, 0)), std::sqrt(C(2, 2)));

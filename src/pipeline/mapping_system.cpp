@@ -356,8 +356,9 @@ Status MappingSystem::InitializePos(const InsState& state) {
   if (!state.T_world_body.matrix().allFinite() || !state.v_world_mps.allFinite()) {
     return InvalidArgumentError("MappingSystem::InitializePos: non-finite state");
   }
+  // The stamp lets the IMU carry the attitude to the first usable fix (which may come later).
   return m.ins.InitializeAttitude(Eigen::Quaterniond(state.T_world_body.linear()),
-                                  state.v_world_mps);
+                                  state.v_world_mps, state.stamp);
 }
 
 Status MappingSystem::AddInsPose(const InsState& state) {

@@ -81,8 +81,12 @@ class InsFilter {
   [[nodiscard]] Status Initialize(const InsState& state);
   /// Attitude and velocity known; the position comes from the next usable GNSS fix (through the
   /// lever arm), which also sets the filter's time.
+  /// With `stamp` (the time the attitude and velocity hold at), IMU samples after it carry them
+  /// forward until that fix: a vehicle turning at 20 deg/s would otherwise start with 20 deg of
+  /// heading error when the first usable fix comes 1 s later.
   [[nodiscard]] Status InitializeAttitude(const Eigen::Quaterniond& q_world_body,
-                                          const Eigen::Vector3d& v_world_mps);
+                                          const Eigen::Vector3d& v_world_mps,
+                                          std::optional<Timestamp> stamp = std::nullopt);
   /// Attitude and velocity from an OXTS record (KITTI), position from its fix (or the next usable).
   [[nodiscard]] Status InitializeFromOxts(const OxtsRecord& record, Timestamp stamp);
   /// Static alignment: roll and pitch from the mean specific force, gyro bias from the mean rate,

@@ -76,8 +76,9 @@ class MappingSystem {
   // ---- input (time-ordered per stream) --------------------------------------------------------
   [[nodiscard]] Status AddImu(const ImuSample& sample);
   [[nodiscard]] Status AddGnss(const GnssFix& fix);
-  /// Initial attitude and velocity from a POS record (KITTI OXTS); optional, else the filter aligns
-  /// from the first records it gets (see InsFilter).
+  /// Initial attitude and velocity from a POS record (KITTI OXTS) at state.stamp; optional, else
+  /// the filter aligns from the first records it gets (see InsFilter). IMU samples after the stamp
+  /// carry the attitude to the first usable GNSS fix, which sets the position.
   [[nodiscard]] Status InitializePos(const InsState& state);
   /// An external POS solution instead of IMU + GNSS (AddImu/AddGnss then unused for the POS).
   [[nodiscard]] Status AddInsPose(const InsState& state);

@@ -100,6 +100,9 @@ int main(int argc, char** argv) {
 
   // Options: defaults, then the config file (checked before any work).
   MappingSystem::Options options;
+  // Finished submaps' clouds go to a private folder inside --out (removed at the end), so memory
+  // stays flat on long drives; `localizer.spill_dir = none` in the config keeps them in memory.
+  options.localizer.spill_dir = args.out_dir;
   if (!args.config.empty()) {
     const Status s = ApplyConfigFile(args.config, &options);
     if (!s.ok()) return Fail(s, kExitUsage);

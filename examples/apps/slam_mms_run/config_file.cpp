@@ -132,6 +132,18 @@ KeyHandler Enum(std::function<E*(Options*)> field, std::vector<std::pair<std::st
             return std::string("?");
           }};
 }
+// A folder; "none" = empty (the option's "not used").
+KeyHandler Path(std::function<std::filesystem::path*(Options*)> field) {
+  return {"path",
+          [field](const std::string& v, Options* o) {
+            *field(o) = v == "none" ? std::filesystem::path() : std::filesystem::path(v);
+            return true;
+          },
+          [field](const Options& o) {
+            const std::filesystem::path& p = *field(const_cast<Options*>(&o));
+            return p.empty() ? std::string("none") : p.string();
+          }};
+}
 // The origin is optional in the options: the three keys together set it.
 KeyHandler OriginField(double GeodeticPoint::*member) {
   return {"double",
@@ -222,6 +234,7 @@ const std::vector<std::pair<std::string, KeyHandler>>& Handlers() {
     SLAM_MMS_KEY_D("localizer.registration_voxel_m", o->localizer.registration_voxel_m);
     SLAM_MMS_KEY_B("localizer.per_submap_surfels", o->localizer.per_submap_surfels);
     SLAM_MMS_KEY_B("localizer.archive_surfels", o->localizer.archive_surfels);
+    h.emplace_back("localizer.spill_dir", Path([](Options* o) { return &o->localizer.spill_dir; }));
     SLAM_MMS_KEY_I("localizer.num_threads", o->localizer.num_threads);
     SLAM_MMS_KEY_I("localizer.surfels.renderer.projection.cols",
                    o->localizer.surfels.renderer.projection.cols);

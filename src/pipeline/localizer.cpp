@@ -696,10 +696,7 @@ Status Localizer::SetSubmapPose(int32_t id, const Eigen::Isometry3d& T_world_sub
     if (auto it = impl_->archived_surfels.find(id); it != impl_->archived_surfels.end()) {
       const Eigen::Matrix3f R = T_new_old.linear().cast<float>();
       const Eigen::Vector3f t = T_new_old.translation().cast<float>();
-      for (Surfel& s : it->second) {
-        s.position = R * s.position + t;
-        s.normal = (R * s.normal).normalized();
-      }
+      for (Surfel& s : it->second) TransformSurfel(R, t, &s);
     }
     rec.T_world_submap = T_world_submap;
     return OkStatus();

@@ -209,8 +209,7 @@ size_t SurfelMap::TransformSubmap(int32_t submap_id, const Eigen::Isometry3d& T_
   for (uint32_t id = 0; id < m.surfels.size(); ++id) {
     Surfel& s = m.surfels[id];
     if (!m.alive[id] || s.submap_id != submap_id) continue;
-    s.position = R * s.position + t;
-    s.normal = (R * s.normal).normalized();
+    TransformSurfel(R, t, &s);
     m.index.Update(id, s.position);
     ++n;
   }

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cstdint>
 #include <filesystem>
 #include <functional>
 #include <map>
@@ -16,6 +17,7 @@
 #include "slam_mms/io/kitti_raw_reader.hpp"
 #include "slam_mms/io/trajectory_io.hpp"
 #include "slam_mms/sim/drive_simulator.hpp"
+#include "testing/feed_streams.hpp"
 #include "testing/test_data.hpp"
 
 namespace slam_mms {
@@ -50,18 +52,13 @@ StatusOr<RunOutput> RunDrive(const std::filesystem::path& drive, MappingSystem::
   const std::vector<GnssFix> gnss = reader.GnssFixes();
   size_t i_imu = 0, i_gnss = 0;
   for (size_t k = 0; k < reader.NumScans(); ++k) {
-    const Timestamp deliver = reader.ScanEnd(k);
-    while (i_imu < imu.size() && imu[i_imu].stamp <= deliver) {
-      SLAM_MMS_RETURN_IF_ERROR(system->AddImu(imu[i_imu++]));
-    }
-    while (i_gnss < gnss.size() && gnss[i_gnss].stamp <= deliver) {
-      SLAM_MMS_RETURN_IF_ERROR(system->AddGnss(gnss[i_gnss++]));
-    }
+    SLAM_MMS_RETURN_IF_ERROR(
+        testing::FeedStreamsUpTo(system.get(), imu, gnss, reader.ScanEnd(k), &i_imu, &i_gnss));
     SLAM_MMS_ASSIGN_OR_RETURN(Scan scan, reader.ReadScan(k));
     SLAM_MMS_RETURN_IF_ERROR(system->AddScan(scan));
   }
-  while (i_imu < imu.size()) SLAM_MMS_RETURN_IF_ERROR(system->AddImu(imu[i_imu++]));
-  while (i_gnss < gnss.size()) SLAM_MMS_RETURN_IF_ERROR(system->AddGnss(gnss[i_gnss++]));
+  SLAM_MMS_RETURN_IF_ERROR(testing::FeedStreamsUpTo(
+      system.get(), imu, gnss, Timestamp::FromNanoseconds(INT64_MAX), &i_imu, &i_gnss));
   SLAM_MMS_RETURN_IF_ERROR(system->Finish());
   if (after_finish) after_finish(*system);
   RunOutput out;

@@ -18,6 +18,7 @@
 #include "slam_mms/io/trajectory_io.hpp"
 #include "slam_mms/pipeline/mapping_system.hpp"
 #include "slam_mms/sim/drive_simulator.hpp"
+#include "testing/feed_streams.hpp"
 
 namespace slam_mms {
 namespace {
@@ -103,16 +104,7 @@ class SensorFaultTest : public ::testing::Test {
   /// Feeds IMU samples and GNSS fixes merged in time order up to `t`.
   static Status FeedUpTo(MappingSystem* system, const DriveData& d, Timestamp t, size_t* i_imu,
                          size_t* i_gnss) {
-    for (;;) {
-      const bool imu_next = *i_imu < d.imu.size() && d.imu[*i_imu].stamp <= t;
-      const bool gnss_next = *i_gnss < d.gnss.size() && d.gnss[*i_gnss].stamp <= t;
-      if (!imu_next && !gnss_next) return OkStatus();
-      if (imu_next && (!gnss_next || d.imu[*i_imu].stamp <= d.gnss[*i_gnss].stamp)) {
-        SLAM_MMS_RETURN_IF_ERROR(system->AddImu(d.imu[(*i_imu)++]));
-      } else {
-        SLAM_MMS_RETURN_IF_ERROR(system->AddGnss(d.gnss[(*i_gnss)++]));
-      }
-    }
+    return testing::FeedStreamsUpTo(system, d.imu, d.gnss, t, i_imu, i_gnss);
   }
 
   /// Feeds `d` in time order (each scan once the streams have passed its end) and finishes.

@@ -30,4 +30,10 @@ struct Surfel {
 
 static_assert(sizeof(Surfel) == 64, "Surfel is a 64-byte record");
 
+/// Moves a surfel by the rigid transform (R, t): position R p + t, normal R n (re-normalised).
+inline void TransformSurfel(const Eigen::Matrix3f& R, const Eigen::Vector3f& t, Surfel* s) {
+  s->position = R * s->position + t;
+  s->normal = (R * s->normal).normalized();
+}
+
 }  // namespace slam_mms

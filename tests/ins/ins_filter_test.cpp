@@ -34,6 +34,18 @@ struct DriveResult {
   double max_interp_pos_err_m = 0.0, max_interp_att_err_deg = 0.0;
 };
 
+// An RTK-fixed fix (2 cm) of the antenna at `p`.
+GnssFix RtkFixAt(Timestamp stamp, const GeodeticPoint& p) {
+  GnssFix fix;
+  fix.stamp = stamp;
+  fix.latitude_deg = p.latitude_deg;
+  fix.longitude_deg = p.longitude_deg;
+  fix.height_m = p.height_m;
+  fix.type = GnssFixType::kRtkFixed;
+  fix.sigma_horizontal_m = 0.02;
+  return fix;
+}
+
 InsFilter::Options FilterOptions() {
   InsFilter::Options o;
   o.gravity_mps2 = 9.80665;  // the generator's
@@ -310,14 +322,7 @@ TEST(InsFilterTest, StaticAlignmentAndGnssPositionInit) {
   const GeodeticPoint a = geo.ToGeodetic(p_body + R * o.gnss.t_body_antenna).value();
   filter.mutable_gnss_prior().SetReferenceTime(kT0);
   ASSERT_TRUE(filter.mutable_gnss_prior().SetOrigin(kOrigin).ok());
-  GnssFix fix;
-  fix.stamp = kT0.PlusSeconds(2.0);
-  fix.latitude_deg = a.latitude_deg;
-  fix.longitude_deg = a.longitude_deg;
-  fix.height_m = a.height_m;
-  fix.type = GnssFixType::kRtkFixed;
-  fix.sigma_horizontal_m = 0.02;
-  ASSERT_TRUE(filter.AddGnss(fix).ok());
+  ASSERT_TRUE(filter.AddGnss(RtkFixAt(kT0.PlusSeconds(2.0), a)).ok());
   ASSERT_TRUE(filter.initialized());
   const InsState s = filter.CurrentState().value();
   EXPECT_LT((s.T_world_body.translation() - p_body).norm(), 1e-6);
@@ -358,14 +363,7 @@ TEST(InsFilterTest, StampedAttitudeIsCarriedToTheFirstFix) {
       ASSERT_TRUE(filter.AddImu(drive.PerfectImu(t, kT0)).ok());
     }
     const GeodeticPoint g = geo.ToGeodetic(f.p + f.R * o.gnss.t_body_antenna).value();
-    GnssFix fix;
-    fix.stamp = kT0.PlusSeconds(t_fix);
-    fix.latitude_deg = g.latitude_deg;
-    fix.longitude_deg = g.longitude_deg;
-    fix.height_m = g.height_m;
-    fix.type = GnssFixType::kRtkFixed;
-    fix.sigma_horizontal_m = 0.02;
-    ASSERT_TRUE(filter.AddGnss(fix).ok());
+    ASSERT_TRUE(filter.AddGnss(RtkFixAt(kT0.PlusSeconds(t_fix), g)).ok());
     ASSERT_TRUE(filter.initialized());
     const InsState s = filter.CurrentState().value();
     heading_err_deg[with_stamp] =

@@ -2,12 +2,14 @@
 
 #include <algorithm>
 #include <deque>
+#include <optional>
 #include <string>
 
 #include "pipeline/voxel_accumulator.hpp"
 #include "slam_mms/core/lie.hpp"
 #include "slam_mms/core/logging.hpp"
 #include "slam_mms/eval/voxel_downsample.hpp"
+#include "slam_mms/ins/imu_preintegration.hpp"
 #include "slam_mms/pipeline/scan_deskewer.hpp"
 
 namespace slam_mms {
@@ -37,6 +39,11 @@ Status MappingSystem::Options::Validate() const {
   if (!(map_voxel_m > 0.0)) {
     return InvalidArgumentError(
         "MappingSystem::Options::map_voxel_m = " + std::to_string(map_voxel_m) + "; must be > 0");
+  }
+  if (!(max_pos_jump_m > 0.0) || !(max_pos_jump_rad > 0.0)) {
+    return InvalidArgumentError(
+        "MappingSystem::Options::max_pos_jump_m = " + std::to_string(max_pos_jump_m) +
+        ", max_pos_jump_rad = " + std::to_string(max_pos_jump_rad) + "; both must be > 0");
   }
   if (num_threads < 1) {
     return InvalidArgumentError(
@@ -76,6 +83,8 @@ struct MappingSystem::Impl {
   std::vector<LocalizationResult> results;
   std::function<void(const LocalizationResult&)> callback;
   int skipped = 0;
+  int pos_jumps = 0;
+  std::optional<InsState> prev_pos;  // the POS state at the previous scan's start
   bool in_outage = false;
   Timestamp outage_start;
   bool gnss_returned_pending = false;
@@ -146,6 +155,45 @@ struct MappingSystem::Impl {
     return out;
   }
 
+  /// How far the POS moved from `a` to `b` beyond what its IMU measured between them (position
+  /// [m], rotation [rad]); empty where the IMU does not cover [a, b].
+  std::optional<std::pair<double, double>> PosJump(const InsState& a, const InsState& b) const {
+    if (!(a.stamp < b.stamp)) return std::nullopt;
+    const std::vector<ImuSample> imu = ImuBetween(a.stamp, b.stamp);
+    ImuPreintegration pre(ImuPreintegration::Options(), a.accel_bias_mps2, a.gyro_bias_radps);
+    if (imu.empty() || !pre.IntegrateWindow(imu, a.stamp, b.stamp).ok()) return std::nullopt;
+    NavState s;
+    s.q_world_body = Eigen::Quaterniond(a.T_world_body.linear());
+    s.p_world = a.T_world_body.translation();
+    s.v_world = a.v_world_mps;
+    const NavState e = pre.Predict(s, ins.gravity_world());
+    const double dp = (e.p_world - b.T_world_body.translation()).norm();
+    const double dr =
+        Eigen::AngleAxisd(e.q_world_body.toRotationMatrix().transpose() * b.T_world_body.linear())
+            .angle();
+    return std::make_pair(dp, dr);
+  }
+
+  /// Whether the POS jumped from the previous scan to this one or within this scan (then its
+  /// relative motion is no odometry measurement).
+  bool PosJumped(const Scan& scan, const InsState& s0, const InsState& s1) {
+    for (const auto& [a, b] :
+         {std::make_pair(prev_pos, std::optional<InsState>(s0)),
+          std::make_pair(std::optional<InsState>(s0), std::optional<InsState>(s1))}) {
+      if (!a) continue;
+      const auto jump = PosJump(*a, *b);
+      if (!jump || (jump->first <= opt.max_pos_jump_m && jump->second <= opt.max_pos_jump_rad)) {
+        continue;
+      }
+      ++pos_jumps;
+      SLAM_MMS_LOG(kInfo) << "POS jumped by " << jump->first << " m, " << jump->second
+                          << " rad beyond its IMU before scan '" << scan.source
+                          << "': level 1 uses F_Prein for it, not F_Odom";
+      return true;
+    }
+    return false;
+  }
+
   Status ProcessQueued() {
     while (!queue.empty() && Ready(queue.front())) {
       Scan scan = std::move(queue.front());
@@ -210,7 +258,7 @@ struct MappingSystem::Impl {
         const bool gnss_valid = external_pos || ins.gnss_prior().AvailabilityAt(scan.stamp_start) !=
                                                     GnssAvailability::kOutage;
         UpdateOutageState(gnss_valid, scan.stamp_start);
-        if (gnss_valid && s0.ok() && s1.ok()) {
+        if (gnss_valid && s0.ok() && s1.ok() && !PosJumped(scan, *s0, *s1)) {
           motion.type = MotionFactorType::kOdometry;
           motion.T_world_body_pos_start = s0->T_world_body;
           motion.T_world_body_pos_end = s1->T_world_body;
@@ -243,6 +291,7 @@ struct MappingSystem::Impl {
     }
     last_scan_start = scan.stamp_start;
     have_scan = true;
+    prev_pos = s0.ok() ? std::optional<InsState>(*s0) : std::nullopt;
     results.push_back(res);
     if (callback) callback(results.back());
     return OkStatus();
@@ -499,6 +548,7 @@ std::vector<GnssAvailabilityInterval> MappingSystem::GnssAvailability() const {
   return impl_->ins.gnss_prior().AvailabilityIntervals();
 }
 
+int MappingSystem::num_pos_jumps() const { return impl_->pos_jumps; }
 int MappingSystem::num_skipped_scans() const { return impl_->skipped; }
 
 SubmapManager::Stats MappingSystem::level2_stats() const {

@@ -32,6 +32,9 @@ const std::vector<BadOption>& Cases() {
        "MappingSystem::Options::map_voxel_m = 0.000000; must be > 0"},
       {"map_max_range_m", [](O* o) { o->map_max_range_m = kNaN; },
        "MappingSystem::Options::map_max_range_m = nan; must be > 0"},
+      {"max_pos_jump_m", [](O* o) { o->max_pos_jump_m = kNaN; },
+       "MappingSystem::Options::max_pos_jump_m = nan, max_pos_jump_rad = 0.006000; both must be "
+       "> 0"},
       {"num_threads", [](O* o) { o->num_threads = 0; },
        "MappingSystem::Options::num_threads = 0; must be >= 1"},
       {"gnss_outages",

@@ -1,9 +1,9 @@
 // Simulated sensor faults fed to MappingSystem (issue 10): dropped scans, timestamp jitter, an IMU
-// gap, GNSS jumps of 20-100 m, a GNSS outage over most of the drive, an open field where
-// registration is degenerate, and bad scans. Each run must finish without error, keep a continuous
-// trajectory (no step longer than the vehicle can drive) close to the simulator's ground truth, and
-// report what happened in its results. The drive is short (kDurationS) to keep CI fast; each test
-// process simulates it once (ctest runs every test in its own process).
+// gap, GNSS jumps of 20-100 m, a GNSS outage over most of the drive, a POS that jumps, an open
+// field where registration is degenerate, and bad scans. Each run must finish without error, keep a
+// continuous trajectory (no step longer than the vehicle can drive) close to the simulator's ground
+// truth, and report what happened in its results. The drive is short (kDurationS) to keep CI fast;
+// each test process simulates it once (ctest runs every test in its own process).
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -58,6 +58,9 @@ class SensorFaultTest : public ::testing::Test {
     auto gt = ReadTrajectoryTum(summary->drive_dir / "ground_truth" / "scan_start.tum");
     ASSERT_TRUE(gt.ok()) << gt.status().ToString();
     ground_truth_ = new Trajectory(std::move(gt).value());
+    auto gt100 = ReadTrajectoryTum(summary->drive_dir / "ground_truth" / "poses_100hz.tum");
+    ASSERT_TRUE(gt100.ok()) << gt100.status().ToString();
+    poses_100hz_ = new Trajectory(std::move(gt100).value());
 
     auto reader = KittiRawReader::Open(summary->drive_dir);
     ASSERT_TRUE(reader.ok()) << reader.status().ToString();
@@ -90,6 +93,7 @@ class SensorFaultTest : public ::testing::Test {
     delete dir_;
     delete origin_;
     delete ground_truth_;
+    delete poses_100hz_;
     delete drive_;
   }
 
@@ -167,12 +171,14 @@ class SensorFaultTest : public ::testing::Test {
   static std::filesystem::path* dir_;
   static GeodeticPoint* origin_;
   static Trajectory* ground_truth_;
+  static Trajectory* poses_100hz_;  // T_world_body at 100 Hz (ground truth)
   static DriveData* drive_;
   static double max_speed_mps_;
 };
 std::filesystem::path* SensorFaultTest::dir_ = nullptr;
 GeodeticPoint* SensorFaultTest::origin_ = nullptr;
 Trajectory* SensorFaultTest::ground_truth_ = nullptr;
+Trajectory* SensorFaultTest::poses_100hz_ = nullptr;
 DriveData* SensorFaultTest::drive_ = nullptr;
 double SensorFaultTest::max_speed_mps_ = 0.0;
 
@@ -262,6 +268,61 @@ TEST_F(SensorFaultTest, GnssOutageOverMostOfTheDriveFallsBackToPreintegration) {
   ASSERT_GT(after_start, 10);
   EXPECT_EQ(preintegration, after_start) << "F_Prein for every scan once GNSS is lost";
   ExpectContinuousAndClose(out.trajectory, kMaxErrorM);
+}
+
+TEST_F(SensorFaultTest, PosJumpIsNotTakenAsMotion) {
+  // A POS corrects itself with a jump when GNSS returns after an outage (by metres after a long
+  // one). The jump is no vehicle motion: it must not enter level 1 as F_Odom. Before the check,
+  // level 1 stepped with it inside a submap, and level 2, which keeps a submap rigid, then bent
+  // the whole outage to fit. Here an external POS (the ground truth at 100 Hz) jumps 1 m up.
+  constexpr double kJumpS = 2.0, kJumpM = 1.0;
+  std::vector<InsState> pos;
+  const Trajectory& gt = *poses_100hz_;
+  for (size_t i = 1; i + 1 < gt.size(); ++i) {
+    InsState s;
+    s.stamp = gt[i].stamp;
+    s.T_world_body = gt[i].T_world_body;
+    s.v_world_mps = (gt[i + 1].T_world_body.translation() - gt[i - 1].T_world_body.translation()) /
+                    gt[i + 1].stamp.SecondsSince(gt[i - 1].stamp);
+    s.cov_T_world_body = Matrix6d::Identity() * 1e-4;
+    if (Since0(s.stamp) >= kJumpS) s.T_world_body.translation().z() += kJumpM;
+    pos.push_back(s);
+  }
+  MappingSystem::Options o = DefaultOptions();
+  auto created = MappingSystem::Create(o);
+  ASSERT_TRUE(created.ok()) << created.status().ToString();
+  std::unique_ptr<MappingSystem> system = std::move(created).value();
+  size_t i_pos = 0, i_imu = 0;
+  for (const Scan& scan : drive_->scans) {
+    for (; i_pos < pos.size() && pos[i_pos].stamp <= scan.stamp_end.PlusSeconds(0.05); ++i_pos) {
+      ASSERT_TRUE(system->AddInsPose(pos[i_pos]).ok());
+    }
+    for (; i_imu < drive_->imu.size() && drive_->imu[i_imu].stamp <= scan.stamp_end; ++i_imu) {
+      ASSERT_TRUE(system->AddImu(drive_->imu[i_imu]).ok());
+    }
+    ASSERT_TRUE(system->AddScan(scan).ok());
+  }
+  ASSERT_TRUE(system->Finish().ok());
+  EXPECT_GE(system->num_pos_jumps(), 1);
+  // Level 1 (the per-scan results) moves as the vehicle did across the jump: the height change
+  // between consecutive scans of a submap follows the ground truth's within 0.1 m.
+  const auto& results = system->results();
+  ASSERT_EQ(results.size(), drive_->scans.size());
+  double worst = 0.0, worst_at = 0.0;
+  for (size_t i = 1; i < results.size(); ++i) {
+    if (results[i].new_submap) continue;
+    auto g0 = ground_truth_->Interpolate(results[i - 1].stamp, 0.05);
+    auto g1 = ground_truth_->Interpolate(results[i].stamp, 0.05);
+    ASSERT_TRUE(g0.ok() && g1.ok());
+    const double dz =
+        results[i].T_world_body.translation().z() - results[i - 1].T_world_body.translation().z();
+    const double err = std::abs(dz - (g1->translation().z() - g0->translation().z()));
+    if (err > worst) {
+      worst = err;
+      worst_at = Since0(results[i].stamp);
+    }
+  }
+  EXPECT_LE(worst, 0.1) << "level-1 height step at " << worst_at << " s";
 }
 
 TEST_F(SensorFaultTest, OpenFieldIsReportedDegenerateAndStaysOnTrack) {

@@ -181,6 +181,8 @@ const std::vector<std::pair<std::string, KeyHandler>>& Handlers() {
     h.emplace_back("origin_height_m", OriginField(&GeodeticPoint::height_m));
     SLAM_MMS_KEY_D("map_max_range_m", o->map_max_range_m);
     SLAM_MMS_KEY_D("map_voxel_m", o->map_voxel_m);
+    SLAM_MMS_KEY_D("max_pos_jump_m", o->max_pos_jump_m);
+    SLAM_MMS_KEY_D("max_pos_jump_rad", o->max_pos_jump_rad);
     SLAM_MMS_KEY_I("num_threads", o->num_threads);
     // POS (InsFilter).
     SLAM_MMS_KEY_D("ins.gyro_noise_density", o->ins.gyro_noise_density);

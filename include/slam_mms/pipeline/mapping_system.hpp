@@ -63,6 +63,12 @@ class MappingSystem {
     double map_max_range_m = 60.0;
     /// Final map voxel size [m] (the paper evaluates entropy on a 0.1 m grid).
     double map_voxel_m = 0.1;
+    /// Level 1 takes the POS relative motion between scans (F_Odom) only where the POS moved as
+    /// its IMU measured: a correction jump (GNSS back after an outage, float -> fixed) larger than
+    /// this [m] or max_pos_jump_rad between two scans, or within a scan, switches that interval to
+    /// IMU preintegration (F_Prein). Only checked where IMU samples cover the interval. > 0.
+    double max_pos_jump_m = 0.06;
+    double max_pos_jump_rad = 0.006;  ///< See max_pos_jump_m [rad], > 0.
     int num_threads = 2;
     [[nodiscard]] Status Validate() const;
   };
@@ -108,6 +114,8 @@ class MappingSystem {
   std::vector<GnssAvailabilityInterval> GnssAvailability() const;
   /// Scans skipped as bad input.
   int num_skipped_scans() const;
+  /// Scan intervals where the POS jumped (see Options::max_pos_jump_m): F_Prein instead of F_Odom.
+  int num_pos_jumps() const;
   /// Level-2 statistics (loops found, solves).
   SubmapManager::Stats level2_stats() const;
   const Options& options() const;

@@ -85,6 +85,7 @@ int main(int argc, char** argv) {
   StatusOr<RunArgs> parsed = ParseRunArgs(argc, argv);
   if (!parsed.ok()) return Fail(parsed.status(), kExitUsage);
   const RunArgs& args = *parsed;
+  SetMinLogLevel(args.log_level);
   if (args.help) {
     std::fputs(RunUsage().c_str(), stdout);
     return 0;

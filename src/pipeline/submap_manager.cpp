@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <deque>
+#include <optional>
 #include <string>
 
 #include "pipeline/pose_covariance.hpp"
@@ -54,6 +55,9 @@ Status SubmapManager::Options::Validate() const {
     return bad("reckon_sigma_trans_m", reckon_sigma_trans_m, "must be > 0");
   }
   if (!(gnss_sigma_scale > 0.0)) return bad("gnss_sigma_scale", gnss_sigma_scale, "must be > 0");
+  if (!(gnss_correlation_s >= 0.0)) {
+    return bad("gnss_correlation_s", gnss_correlation_s, "must be >= 0");
+  }
   if (!(attitude_prior_sigma_rad >= 0.0)) {
     return bad("attitude_prior_sigma_rad", attitude_prior_sigma_rad, "must be >= 0");
   }
@@ -72,6 +76,7 @@ struct SubmapManager::Impl {
     Eigen::Vector3d t_body_antenna;
   };
   std::deque<PendingGnss> pending_gnss;
+  std::optional<Timestamp> last_gnss_stamp;  // of the last fix attached
   int32_t last_id = -1;
 
   /// Registers source (frame b) against target (frame a) from T_a_b_init; empty when it fails.
@@ -95,8 +100,15 @@ struct SubmapManager::Impl {
       const PendingGnss g = pending_gnss.front();
       pending_gnss.pop_front();
       if (g.m.stamp.SecondsSince(rec.start) < -0.15) continue;  // before the first submap
+      double correlated = 1.0;  // how many fixes share one error (Options::gnss_correlation_s)
+      if (opt.gnss_correlation_s > 0.0 && last_gnss_stamp) {
+        const double dt =
+            std::clamp(g.m.stamp.SecondsSince(*last_gnss_stamp), 1e-3, opt.gnss_correlation_s);
+        correlated = opt.gnss_correlation_s / dt;
+      }
+      last_gnss_stamp = g.m.stamp;
       const Eigen::Matrix3d cov =
-          opt.gnss_sigma_scale * opt.gnss_sigma_scale * g.m.cov_world_antenna;
+          correlated * opt.gnss_sigma_scale * opt.gnss_sigma_scale * g.m.cov_world_antenna;
       SLAM_MMS_RETURN_IF_ERROR(graph->AddGnssPrior(rec.id, g.m.p_world_antenna, cov,
                                                    BodyPoseAt(rec, g.m.stamp), g.t_body_antenna));
       ++stats.gnss_factors;

@@ -154,6 +154,10 @@ case $case_name in
     [[ $? == 2 ]] || fail "--mode fast: expected exit status 2"
     run "$tmp/log" --kitti-raw "$tmp/x"
     [[ $? == 2 ]] || fail "missing --out: expected exit status 2"
+    run "$tmp/log" --out "$tmp/out" --log-level chatty
+    [[ $? == 2 ]] || fail "--log-level chatty: expected exit status 2"
+    grep -q -- "--log-level chatty: expected debug, info, warning or error" "$tmp/log" ||
+      fail "--log-level message: $(cat "$tmp/log")"
     run "$tmp/log" --bogus
     [[ $? == 2 ]] || fail "--bogus: expected exit status 2"
     run "$tmp/log" --help

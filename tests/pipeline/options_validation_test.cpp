@@ -88,6 +88,8 @@ const std::vector<BadOption>& Cases() {
        "SubmapManager::Options::loop_min_submap_gap = 0.000000; must be >= 1"},
       {"level2.long_outage_s", [](O* o) { o->level2.long_outage_s = kNaN; },
        "SubmapManager::Options::long_outage_s = nan; must be >= 0"},
+      {"level2.gnss_correlation_s", [](O* o) { o->level2.gnss_correlation_s = -1.0; },
+       "SubmapManager::Options::gnss_correlation_s = -1.000000; must be >= 0"},
       {"level2.max_iterations", [](O* o) { o->level2.max_iterations = 0; },
        "SubmapManager::Options::max_iterations = 0.000000; must be >= 1"},
       {"level2.icp.num_normal_neighbors", [](O* o) { o->level2.icp.num_normal_neighbors = 2; },

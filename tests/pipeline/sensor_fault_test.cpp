@@ -325,6 +325,40 @@ TEST_F(SensorFaultTest, PosJumpIsNotTakenAsMotion) {
   EXPECT_LE(worst, 0.1) << "level-1 height step at " << worst_at << " s";
 }
 
+TEST_F(SensorFaultTest, CorrelatedFloatBiasIsNotFollowedByLevel2) {
+  // From 1.5 s the fixes are RTK float with a bias of 0.6 m up that stays (as a float solution's
+  // bias wanders over tens of seconds), reported with a 0.3 m sigma. Taken as 10 independent fixes
+  // a second, they outweigh the level-1 chain from the fixed part; counted as one per
+  // level2.gnss_correlation_s they do not.
+  DriveData d = *drive_;
+  for (GnssFix& f : d.gnss) {
+    if (Since0(f.stamp) < 1.5) continue;
+    f.height_m += 0.6;
+    f.type = GnssFixType::kRtkFloat;
+    f.sigma_horizontal_m = 0.2;
+    f.sigma_vertical_m = 0.3;
+  }
+  auto max_height_error = [&](double correlation_s) {
+    MappingSystem::Options o = DefaultOptions();
+    o.localizer.submap_duration_s = 1.0;  // level 2 can move the biased part on its own
+    o.level2.gnss_correlation_s = correlation_s;
+    const RunOutput out = RunOrFail(d, o);
+    double worst = 0.0;
+    for (const StampedPose& p : out.trajectory.poses()) {
+      if (Since0(p.stamp) < 2.5) continue;
+      auto gt = ground_truth_->Interpolate(p.stamp, 0.05);
+      if (!gt.ok()) continue;
+      worst = std::max(worst, std::abs(p.T_world_body.translation().z() - gt->translation().z()));
+    }
+    return worst;
+  };
+  const double independent = max_height_error(0.0);
+  const double correlated = max_height_error(10.0);
+  EXPECT_LE(correlated, 0.15);
+  EXPECT_LE(correlated, 0.5 * independent)
+      << "independent fixes: " << independent << " m, correlated: " << correlated << " m";
+}
+
 TEST_F(SensorFaultTest, OpenFieldIsReportedDegenerateAndStaysOnTrack) {
   DriveData d = *drive_;
   // Only the ground is left (no building, pole or car): an open field. Registration cannot

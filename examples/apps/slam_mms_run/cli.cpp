@@ -78,6 +78,9 @@ Options:
                           docs/user_guide.md, "Options"); unknown keys and bad values are errors.
   --sim-duration S        seconds of the default drive to simulate (default 30; 0 = all ~3 min).
   --sim-seed N            simulator seed (default 1).
+  --log-level L           debug | info | warning | error: the library's messages on stderr from
+                          this level (default warning; info adds GNSS loss/return, POS jumps,
+                          level-2 solves; debug adds loop candidates and per-submap events).
   --config-keys           print every --config key with its type and default, then exit.
   --help                  this text.
 
@@ -140,6 +143,20 @@ StatusOr<RunArgs> ParseRunArgs(int argc, const char* const* argv) {
       SLAM_MMS_RETURN_IF_ERROR(value(&v));
       if (!ParseDouble(v, &args.sim_duration_s) || args.sim_duration_s < 0.0) {
         return InvalidArgumentError("--sim-duration " + v + ": expected seconds >= 0");
+      }
+    } else if (flag == "--log-level") {
+      SLAM_MMS_RETURN_IF_ERROR(value(&v));
+      if (v == "debug") {
+        args.log_level = LogLevel::kDebug;
+      } else if (v == "info") {
+        args.log_level = LogLevel::kInfo;
+      } else if (v == "warning") {
+        args.log_level = LogLevel::kWarning;
+      } else if (v == "error") {
+        args.log_level = LogLevel::kError;
+      } else {
+        return InvalidArgumentError("--log-level " + v +
+                                    ": expected debug, info, warning or error");
       }
     } else if (flag == "--sim-seed") {
       SLAM_MMS_RETURN_IF_ERROR(value(&v));

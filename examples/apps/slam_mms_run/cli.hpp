@@ -3,7 +3,7 @@
 //   slam_mms_run --kitti-raw DRIVE_DIR --out DIR [--mode full|gnss_ins|lidar_only|all]
 //                [--frames A:B] [--gnss-outage START_S:DURATION_S ...] [--config FILE]
 //   slam_mms_run --out DIR      (no data: simulates the embedded default drive into DIR/sim first)
-// plus --sim-duration S and --sim-seed N for the simulated drive, and --help.
+// plus --sim-duration S and --sim-seed N for the simulated drive, --log-level, and --help.
 
 #include <cstdint>
 #include <filesystem>
@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "slam_mms/core/logging.hpp"
 #include "slam_mms/core/status.hpp"
 #include "slam_mms/pipeline/localization_result.hpp"
 
@@ -27,6 +28,8 @@ struct RunArgs {
   std::filesystem::path config;  ///< Empty: none.
   double sim_duration_s = 30.0;  ///< Seconds of the default drive to simulate (0 = all).
   uint64_t sim_seed = 1;
+  LogLevel log_level =
+      LogLevel::kWarning;  ///< --log-level: the library's messages from this level.
   bool help = false;
   bool list_config_keys = false;  ///< --config-keys: print the config keys (markdown table).
 };

@@ -37,6 +37,11 @@ class SubmapManager {
     double reckon_sigma_rot_rad = 0.002;
     double reckon_sigma_trans_m = 0.05;
     double gnss_sigma_scale = 1.0;  ///< Multiplies the GNSS measurement covariance.
+    /// GNSS errors are time-correlated (an RTK-float or single-point bias wanders over tens of
+    /// seconds), so fixes at 10 Hz are not independent: the fixes within this window [s] count as
+    /// one, i.e. each fix's covariance is multiplied by window / (time since the previous fix),
+    /// at least 1. 0 treats every fix as independent. >= 0.
+    double gnss_correlation_s = 0.0;
     /// With GNSS: a roll/pitch prior on each submap from level 1 (1 sigma) [rad]; 0 disables it.
     double attitude_prior_sigma_rad = 0.0175;
     int max_iterations = 100;

@@ -218,10 +218,24 @@ struct MappingSystem::Impl {
                : StatusOr<InsState>(FailedPreconditionError("POS not initialized"));
     if (!s0.ok() && s1.ok() && scan.DurationSeconds() <= 0.25) {
       // The POS starts inside this scan (KITTI: the first OXTS record is stamped mid-scan): take
-      // the scan-end state back to the scan start at constant velocity.
+      // the scan-end state back to the scan start at constant velocity and, as the vehicle may be
+      // turning (13 deg/s at the start of KITTI sequence 07: 1.3 deg in a scan), at the mean gyro
+      // rate. Level 1 keeps the first scan's attitude as its reference.
+      const double dt = s1->stamp.SecondsSince(scan.stamp_start);
       InsState back = *s1;
       back.stamp = scan.stamp_start;
-      back.T_world_body.translation() -= s1->v_world_mps * scan.DurationSeconds();
+      back.T_world_body.translation() -= s1->v_world_mps * dt;
+      Eigen::Vector3d w = Eigen::Vector3d::Zero();
+      int n = 0;
+      for (const ImuSample& imu : imu_history) {
+        if (imu.stamp < scan.stamp_start || s1->stamp < imu.stamp) continue;
+        w += imu.gyro_radps;
+        ++n;
+      }
+      if (n > 0) {
+        w = w / n - s1->gyro_bias_radps;
+        back.T_world_body.linear() = s1->T_world_body.linear() * so3::Exp(-w * dt);
+      }
       s0 = back;
     }
     LocalizationResult res;

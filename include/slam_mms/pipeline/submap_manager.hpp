@@ -40,8 +40,9 @@ class SubmapManager {
     /// GNSS errors are time-correlated (an RTK-float or single-point bias wanders over tens of
     /// seconds), so fixes at 10 Hz are not independent: the fixes within this window [s] count as
     /// one, i.e. each fix's covariance is multiplied by window / (time since the previous fix),
-    /// at least 1. 0 treats every fix as independent. >= 0.
-    double gnss_correlation_s = 0.0;
+    /// at least 1. 0 treats every fix as independent. >= 0. On the default drive with a 60 s
+    /// outage, 10 s brings the largest error in the outage from 0.81 to 0.45 m (docs/results.md).
+    double gnss_correlation_s = 10.0;
     /// With GNSS: a roll/pitch prior on each submap from level 1 (1 sigma) [rad]; 0 disables it.
     double attitude_prior_sigma_rad = 0.0175;
     int max_iterations = 100;

@@ -1,6 +1,10 @@
 #include "pipeline/cloud_file.hpp"
 
+#include <unistd.h>
+
 #include <array>
+#include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <cstring>
 #include <fstream>
@@ -86,6 +90,58 @@ StatusOr<PointCloud> ReadCloudFile(const std::filesystem::path& path) {
     }
   }
   return cloud;
+}
+
+StatusOr<SpillFolder> SpillFolder::Create(const std::filesystem::path& parent) {
+  static std::atomic<uint64_t> counter{0};
+  const auto now = std::chrono::steady_clock::now().time_since_epoch().count();
+  SpillFolder folder;
+  const std::filesystem::path path =
+      parent / ("slam_mms_spill_" + std::to_string(::getpid()) + "_" + std::to_string(counter++) +
+                "_" + std::to_string(now % 1000000007));
+  std::error_code ec;
+  std::filesystem::create_directories(path, ec);
+  if (ec) return UnavailableError("cannot create " + path.string() + ": " + ec.message());
+  folder.path_ = path;
+  return folder;
+}
+
+SpillFolder::SpillFolder(SpillFolder&& other) noexcept : path_(std::move(other.path_)) {
+  other.path_.clear();
+}
+
+SpillFolder& SpillFolder::operator=(SpillFolder&& other) noexcept {
+  if (this != &other) {
+    Remove();
+    path_ = std::move(other.path_);
+    other.path_.clear();
+  }
+  return *this;
+}
+
+SpillFolder::~SpillFolder() { Remove(); }
+
+void SpillFolder::Remove() {
+  if (path_.empty()) return;
+  std::error_code ec;
+  std::filesystem::remove_all(path_, ec);
+  path_.clear();
+}
+
+Status SpillFolder::Spill(const std::string& name, PointCloud* cloud,
+                          std::filesystem::path* file) const {
+  if (!enabled() || !file->empty()) return OkStatus();
+  const std::filesystem::path target = path_ / name;
+  SLAM_MMS_RETURN_IF_ERROR(WriteCloudFile(target, *cloud));
+  *file = target;
+  *cloud = PointCloud();
+  return OkStatus();
+}
+
+StatusOr<PointCloud> CloudFromMemoryOrFile(const PointCloud& cloud,
+                                           const std::filesystem::path& file) {
+  if (file.empty()) return cloud;
+  return ReadCloudFile(file);
 }
 
 }  // namespace slam_mms::internal

@@ -1,10 +1,8 @@
 #include "slam_mms/pipeline/localizer.hpp"
 
 #include <ceres/normal_prior.h>
-#include <unistd.h>
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <deque>
@@ -141,35 +139,22 @@ struct Localizer::Impl {
   std::vector<uint32_t> active_ids;
   std::vector<uint32_t> model_ids;
 
-  /// Private spill folder (empty: clouds stay in memory).
-  std::filesystem::path spill_folder;
-
-  ~Impl() {
-    if (!spill_folder.empty()) {
-      std::error_code ec;
-      std::filesystem::remove_all(spill_folder, ec);
-    }
-  }
+  /// Private spill folder (disabled: clouds stay in memory).
+  internal::SpillFolder spill;
 
   SubmapRecord& current() { return submaps.back(); }
 
   /// Moves one cloud of `rec` to a file in the spill folder; on failure it stays in memory.
   void Spill(SubmapRecord& rec, CloudKind kind) {
-    PointCloud& cloud = kind == CloudKind::kMap ? rec.cloud : rec.registration_cloud;
-    std::filesystem::path& file =
-        kind == CloudKind::kMap ? rec.cloud_file : rec.registration_cloud_file;
-    if (spill_folder.empty() || !file.empty()) return;
-    const std::filesystem::path path =
-        spill_folder / ("submap_" + std::to_string(rec.id) +
-                        (kind == CloudKind::kMap ? "_map.bin" : "_registration.bin"));
-    const Status st = internal::WriteCloudFile(path, cloud);
+    const bool map = kind == CloudKind::kMap;
+    const Status st =
+        spill.Spill("submap_" + std::to_string(rec.id) + (map ? "_map.bin" : "_registration.bin"),
+                    map ? &rec.cloud : &rec.registration_cloud,
+                    map ? &rec.cloud_file : &rec.registration_cloud_file);
     if (!st.ok()) {
       SLAM_MMS_LOG(kWarning) << "Localizer: submap " << rec.id
                              << " cloud kept in memory, spilling failed: " << st.ToString();
-      return;
     }
-    file = path;
-    cloud = PointCloud();
   }
 
   Status StartWindow(const Eigen::Vector3d& v_submap, const Vector6d& bias) {
@@ -324,18 +309,9 @@ StatusOr<std::unique_ptr<Localizer>> Localizer::Create(const Options& options,
   m.map_acc = internal::VoxelAccumulator(options.map_voxel_m);
   m.reg_acc = internal::VoxelAccumulator(options.registration_voxel_m);
   if (!options.spill_dir.empty()) {
-    static std::atomic<uint64_t> counter{0};
-    const auto now = std::chrono::steady_clock::now().time_since_epoch().count();
-    const std::filesystem::path folder =
-        options.spill_dir / ("slam_mms_spill_" + std::to_string(::getpid()) + "_" +
-                             std::to_string(counter++) + "_" + std::to_string(now % 1000000007));
-    std::error_code ec;
-    std::filesystem::create_directories(folder, ec);
-    if (ec) {
-      return UnavailableError("Localizer::Options::spill_dir: cannot create " + folder.string() +
-                              ": " + ec.message());
-    }
-    m.spill_folder = folder;
+    auto spill = internal::SpillFolder::Create(options.spill_dir);
+    if (!spill.ok()) return spill.status().WithContext("Localizer::Options::spill_dir");
+    m.spill = std::move(spill).value();
   }
   SLAM_MMS_LOG(kInfo) << "Localizer: mode " << MappingModeName(options.mode) << ", renderer "
                       << m.renderer->Name() << ", WT " << options.submap_duration_s << " s";
@@ -724,10 +700,10 @@ void Localizer::ReleaseSubmapClouds(int32_t id, bool keep_registration_cloud) {
 StatusOr<PointCloud> Localizer::SubmapCloud(int32_t id, CloudKind kind) const {
   for (const SubmapRecord& rec : impl_->submaps) {
     if (rec.id != id) continue;
-    const std::filesystem::path& file =
-        kind == CloudKind::kMap ? rec.cloud_file : rec.registration_cloud_file;
-    if (file.empty()) return kind == CloudKind::kMap ? rec.cloud : rec.registration_cloud;
-    auto cloud = internal::ReadCloudFile(file);
+    const bool map = kind == CloudKind::kMap;
+    auto cloud =
+        internal::CloudFromMemoryOrFile(map ? rec.cloud : rec.registration_cloud,
+                                        map ? rec.cloud_file : rec.registration_cloud_file);
     if (!cloud.ok()) {
       return cloud.status().WithContext("Localizer: spilled cloud of submap " + std::to_string(id));
     }
@@ -736,7 +712,7 @@ StatusOr<PointCloud> Localizer::SubmapCloud(int32_t id, CloudKind kind) const {
   return NotFoundError("Localizer::SubmapCloud: no submap " + std::to_string(id));
 }
 
-const std::filesystem::path& Localizer::spill_folder() const { return impl_->spill_folder; }
+const std::filesystem::path& Localizer::spill_folder() const { return impl_->spill.path(); }
 
 void Localizer::FinishCurrentSubmap() { impl_->CloseCurrentSubmap(); }
 

@@ -95,5 +95,52 @@ TEST_F(CloudFileTest, UnwritablePathIsAnErrorNamingIt) {
   EXPECT_NE(st.message().find("no_such_folder"), std::string::npos);
 }
 
+TEST_F(CloudFileTest, SpillFolderHoldsTheFilesAndIsRemovedWithItsOwner) {
+  fs::path folder;
+  {
+    auto created = SpillFolder::Create(dir_);
+    ASSERT_TRUE(created.ok()) << created.status().ToString();
+    SpillFolder spill = std::move(created).value();  // moved from: must not remove it
+    ASSERT_TRUE(spill.enabled());
+    folder = spill.path();
+    EXPECT_TRUE(fs::is_directory(folder));
+    EXPECT_EQ(folder.parent_path(), dir_);
+
+    PointCloud cloud = MakeCloud(50);
+    const PointCloud original = cloud;
+    fs::path file;
+    ASSERT_TRUE(spill.Spill("a.bin", &cloud, &file).ok());
+    EXPECT_EQ(file, folder / "a.bin");
+    EXPECT_TRUE(cloud.empty());
+    auto back = CloudFromMemoryOrFile(cloud, file);
+    ASSERT_TRUE(back.ok()) << back.status().ToString();
+    EXPECT_EQ(back->points(), original.points());
+
+    // Already spilled: nothing happens.
+    PointCloud other = MakeCloud(5);
+    ASSERT_TRUE(spill.Spill("b.bin", &other, &file).ok());
+    EXPECT_EQ(file, folder / "a.bin");
+    EXPECT_EQ(other.size(), 5u);
+  }
+  EXPECT_FALSE(fs::exists(folder));
+
+  // Disabled: the cloud stays in memory.
+  SpillFolder disabled;
+  PointCloud cloud = MakeCloud(4);
+  fs::path file;
+  ASSERT_TRUE(disabled.Spill("c.bin", &cloud, &file).ok());
+  EXPECT_TRUE(file.empty());
+  EXPECT_EQ(cloud.size(), 4u);
+  auto same = CloudFromMemoryOrFile(cloud, file);
+  ASSERT_TRUE(same.ok());
+  EXPECT_EQ(same->size(), 4u);
+}
+
+TEST_F(CloudFileTest, SpillFolderThatCannotBeCreatedIsNamed) {
+  auto created = SpillFolder::Create("/proc/slam_mms_no_such_place");
+  EXPECT_EQ(created.status().code(), StatusCode::kUnavailable);
+  EXPECT_NE(created.status().message().find("/proc/slam_mms_no_such_place"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace slam_mms::internal

@@ -97,6 +97,14 @@ Status Localizer::Options::Validate() const {
   return OkStatus();
 }
 
+/// What ProcessScan predicts for a scan before registering it.
+struct Prediction {
+  Eigen::Isometry3d T_submap = Eigen::Isometry3d::Identity();  ///< T_submap_body.
+  Eigen::Vector3d v_submap = Eigen::Vector3d::Zero();          ///< Body velocity in the submap.
+  MotionFactorType factor = MotionFactorType::kNone;           ///< The motion factor to add.
+  std::optional<ImuPreintegration> pre;  ///< F_Prein's preintegration (kPreintegration).
+};
+
 struct Localizer::Impl {
   Options opt;
   Eigen::Isometry3d T_body_lidar = Eigen::Isometry3d::Identity();
@@ -233,6 +241,142 @@ struct Localizer::Impl {
     if (submaps.size() >= 3) Spill(submaps[submaps.size() - 3], CloudKind::kRegistration);
   }
 
+  /// Step 2 of ProcessScan: the pose and velocity predicted for `scan` from the previous one and
+  /// the motion factor that will tie them (F_Odom only where the previous scan had a POS pose).
+  Prediction Predict(const Scan& scan, const ScanMotionInput& motion, bool is_reference,
+                     const Eigen::Isometry3d& T_world_submap,
+                     const Eigen::Vector3d& g_submap) const {
+    Prediction out;
+    out.T_submap = T_submap_prev;
+    out.v_submap = v_submap_prev;
+    out.factor = is_reference ? MotionFactorType::kNone : motion.type;
+    if (!is_reference) {
+      const double dt = scan.stamp_start.SecondsSince(prev_stamp);
+      if (out.factor == MotionFactorType::kOdometry && !has_pos_prev) {
+        out.factor = use_imu_states && !motion.imu.empty() ? MotionFactorType::kPreintegration
+                                                           : MotionFactorType::kConstantVelocity;
+      }
+      if (out.factor == MotionFactorType::kOdometry) {
+        out.T_submap = T_submap_prev * (pos_prev_start.inverse() * motion.T_world_body_pos_start);
+        out.v_submap = T_world_submap.linear().transpose() * motion.v_world_pos;
+      } else if (out.factor == MotionFactorType::kPreintegration) {
+        ImuPreintegration pre(opt.imu, bias_prev.head<3>(), bias_prev.tail<3>());
+        const Status st = pre.IntegrateWindow(motion.imu, prev_stamp, scan.stamp_start);
+        if (st.ok() && pre.num_samples() > 0) {
+          NavState s;
+          s.q_world_body = Eigen::Quaterniond(T_submap_prev.linear());
+          s.p_world = T_submap_prev.translation();
+          s.v_world = v_submap_prev;
+          const NavState e = pre.Predict(s, g_submap);
+          out.T_submap = MakeIsometry(e.q_world_body, e.p_world);
+          out.v_submap = e.v_world;
+          out.pre = std::move(pre);
+        } else {
+          SLAM_MMS_LOG(kWarning) << "Localizer: scan " << scan.index
+                                 << ": IMU does not cover the scan interval (" << st.message()
+                                 << "); constant-velocity prediction instead";
+          out.factor = MotionFactorType::kConstantVelocity;
+        }
+      }
+      if (out.factor == MotionFactorType::kConstantVelocity) {
+        // The prediction follows the last interval (it tracks acceleration; registration corrects
+        // it, so it does not feed back like the de-skew).
+        if (auto motion_cv = ConstantVelocityMotion(dt, 1))
+          out.T_submap = T_submap_prev * *motion_cv;
+      }
+    }
+    return out;
+  }
+
+  /// Step 5 of ProcessScan, the motion factor between the previous scan's state and `cur_state`:
+  /// F_Odom (eq 12), F_Prein (eq 14) or the constant-velocity factor. Returns its covariance (the
+  /// registration's consistency check uses it).
+  StatusOr<Matrix6d> AddMotionFactor(StateId cur_state, const ScanMotionInput& motion,
+                                     const Prediction& pred, double dt,
+                                     const Eigen::Isometry3d& T_world_submap,
+                                     const Eigen::Vector3d& g_submap) {
+    Matrix6d cov_motion =
+        internal::DiagonalPoseCovariance(opt.cv_sigma_rot_rad, opt.cv_sigma_trans_m);
+    if (pred.factor == MotionFactorType::kOdometry) {
+      // F_Odom (eq 12) between consecutive scans: the POS relative motion.
+      cov_motion = internal::DiagonalPoseCovariance(opt.odom_sigma_rot_rad, opt.odom_sigma_trans_m);
+      SLAM_MMS_RETURN_IF_ERROR(
+          window
+              ->AddRelativePoseFactor(prev_id, cur_state,
+                                      pos_prev_start.inverse() * motion.T_world_body_pos_start,
+                                      cov_motion, FactorKind::kMotion)
+              .status());
+      if (use_imu_states) {
+        const Eigen::Vector3d v_submap = T_world_submap.linear().transpose() * motion.v_world_pos;
+        SLAM_MMS_RETURN_IF_ERROR(
+            window
+                ->AddCostFunction(MakeNormalPrior(v_submap, Eigen::Vector3d::Constant(0.05)),
+                                  {{cur_state, StateBlock::kVelocity}})
+                .status());
+        Eigen::VectorXd b_sigma(6);
+        b_sigma << Eigen::Vector3d::Constant(0.05), Eigen::Vector3d::Constant(1e-3);
+        SLAM_MMS_RETURN_IF_ERROR(window
+                                     ->AddCostFunction(MakeNormalPrior(motion.pos_bias, b_sigma),
+                                                       {{cur_state, StateBlock::kBias}})
+                                     .status());
+      }
+    } else if (pred.factor == MotionFactorType::kPreintegration) {
+      // F_Prein (eq 14) with bias random walk between consecutive scans.
+      auto factor = ImuPreintegrationFactor::Create(*pred.pre, g_submap);
+      if (!factor.ok()) return factor.status().WithContext("Localizer: preintegration factor");
+      SLAM_MMS_RETURN_IF_ERROR(
+          window
+              ->AddCostFunction(std::move(factor).value(), {{prev_id, StateBlock::kPose},
+                                                            {prev_id, StateBlock::kVelocity},
+                                                            {prev_id, StateBlock::kBias},
+                                                            {cur_state, StateBlock::kPose},
+                                                            {cur_state, StateBlock::kVelocity},
+                                                            {cur_state, StateBlock::kBias}})
+              .status());
+      cov_motion = internal::DiagonalPoseCovariance(0.002 + 0.001 * dt, 0.02 + 0.05 * dt);
+    } else {
+      // LiDAR only: a weak constant-velocity factor keeps degenerate directions bounded.
+      cov_motion = internal::DiagonalPoseCovariance(opt.cv_sigma_rot_rad, opt.cv_sigma_trans_m);
+      SLAM_MMS_RETURN_IF_ERROR(
+          window
+              ->AddRelativePoseFactor(prev_id, cur_state, T_submap_prev.inverse() * pred.T_submap,
+                                      cov_motion, FactorKind::kMotion, RobustLoss::Huber(3.0))
+              .status());
+    }
+    return cov_motion;
+  }
+
+  /// The submap cut every WT (end of ProcessScan): `scan`, at T_submap_cur in the current submap,
+  /// becomes the reference of a new submap; the level-1 state is re-expressed in it.
+  Status CutSubmap(const Scan& scan, const Eigen::Isometry3d& T_world_submap,
+                   const Eigen::Isometry3d& T_submap_cur, LocalizationResult* res) {
+    const Eigen::Isometry3d T_prev_this = T_submap_cur;
+    const Matrix6d cov_prev_this = res->cov_T_world_body;
+    // The scan belongs to the new submap (it is its reference), not to the old one.
+    SubmapRecord& old = current();
+    old.scan_indices.pop_back();
+    old.scan_stamps.pop_back();
+    old.T_submap_scan.pop_back();
+    old.cov_submap_scan.pop_back();
+    old.end = old.scan_stamps.back();
+    CloseCurrentSubmap();
+    StartSubmap(T_world_submap * T_submap_cur, scan.stamp_start, scan.index, T_prev_this,
+                cov_prev_this);
+    // Re-express the level-1 state in the new frame.
+    const Eigen::Isometry3d T_new_old = T_submap_cur.inverse();
+    for (auto& [stamp, T] : recent) T = T_new_old * T;
+    T_submap_prev = Eigen::Isometry3d::Identity();
+    v_submap_prev = T_submap_cur.linear().transpose() * v_submap_prev;
+    SLAM_MMS_RETURN_IF_ERROR(StartWindow(v_submap_prev, bias_prev));
+    map_acc.Add(deskewed, T_body_lidar, opt.map_max_range_m);
+    reg_acc.Add(deskewed, T_body_lidar, opt.map_max_range_m);
+    res->new_submap = true;
+    res->submap_id = current().id;
+    SLAM_MMS_LOG(kDebug) << "Localizer: submap " << current().id << " starts at scan "
+                         << scan.index;
+    return OkStatus();
+  }
+
   /// Body motion over `duration` seconds at the mean velocity of the last `intervals` scan
   /// intervals (fewer at the start); nullopt before two scans.
   std::optional<Eigen::Isometry3d> ConstantVelocityMotion(double duration, size_t intervals) const {
@@ -363,46 +507,10 @@ StatusOr<LocalizationResult> Localizer::ProcessScan(const Scan& scan,
 
   // ---- 2. predict (done first: the preintegration de-skew starts from the prediction) ----------
   auto t0 = Clock::now();
-  Eigen::Isometry3d T_submap_pred = m.T_submap_prev;
-  Eigen::Vector3d v_submap_pred = m.v_submap_prev;
-  MotionFactorType factor_type = is_reference ? MotionFactorType::kNone : motion.type;
-  std::optional<ImuPreintegration> pre_between;
-  if (!is_reference) {
-    const double dt = scan.stamp_start.SecondsSince(m.prev_stamp);
-    if (factor_type == MotionFactorType::kOdometry && !m.has_pos_prev) {
-      factor_type = m.use_imu_states && !motion.imu.empty() ? MotionFactorType::kPreintegration
-                                                            : MotionFactorType::kConstantVelocity;
-    }
-    if (factor_type == MotionFactorType::kOdometry) {
-      T_submap_pred =
-          m.T_submap_prev * (m.pos_prev_start.inverse() * motion.T_world_body_pos_start);
-      v_submap_pred = T_world_submap.linear().transpose() * motion.v_world_pos;
-    } else if (factor_type == MotionFactorType::kPreintegration) {
-      ImuPreintegration pre(m.opt.imu, m.bias_prev.head<3>(), m.bias_prev.tail<3>());
-      const Status st = pre.IntegrateWindow(motion.imu, m.prev_stamp, scan.stamp_start);
-      if (st.ok() && pre.num_samples() > 0) {
-        NavState s;
-        s.q_world_body = Eigen::Quaterniond(m.T_submap_prev.linear());
-        s.p_world = m.T_submap_prev.translation();
-        s.v_world = m.v_submap_prev;
-        const NavState e = pre.Predict(s, g_submap);
-        T_submap_pred = MakeIsometry(e.q_world_body, e.p_world);
-        v_submap_pred = e.v_world;
-        pre_between = std::move(pre);
-      } else {
-        SLAM_MMS_LOG(kWarning) << "Localizer: scan " << scan.index
-                               << ": IMU does not cover the scan interval (" << st.message()
-                               << "); constant-velocity prediction instead";
-        factor_type = MotionFactorType::kConstantVelocity;
-      }
-    }
-    if (factor_type == MotionFactorType::kConstantVelocity) {
-      // The prediction follows the last interval (it tracks acceleration; registration corrects
-      // it, so it does not feed back like the de-skew).
-      if (auto motion_cv = m.ConstantVelocityMotion(dt, 1))
-        T_submap_pred = m.T_submap_prev * *motion_cv;
-    }
-  }
+  Prediction pred = m.Predict(scan, motion, is_reference, T_world_submap, g_submap);
+  const Eigen::Isometry3d& T_submap_pred = pred.T_submap;
+  const Eigen::Vector3d& v_submap_pred = pred.v_submap;
+  const MotionFactorType factor_type = pred.factor;
   res.motion_factor = factor_type;
   res.timings.predict_ms = MsSince(t0);
 
@@ -493,56 +601,9 @@ StatusOr<LocalizationResult> Localizer::ProcessScan(const Scan& scan,
       init.imu_bias = m.bias_prev;
     }
     SLAM_MMS_RETURN_IF_ERROR(m.window->AddState(cur_state, init));
-    Matrix6d cov_motion =
-        internal::DiagonalPoseCovariance(m.opt.cv_sigma_rot_rad, m.opt.cv_sigma_trans_m);
-    if (factor_type == MotionFactorType::kOdometry) {
-      // F_Odom (eq 12) between consecutive scans: the POS relative motion.
-      cov_motion =
-          internal::DiagonalPoseCovariance(m.opt.odom_sigma_rot_rad, m.opt.odom_sigma_trans_m);
-      SLAM_MMS_RETURN_IF_ERROR(
-          m.window
-              ->AddRelativePoseFactor(m.prev_id, cur_state,
-                                      m.pos_prev_start.inverse() * motion.T_world_body_pos_start,
-                                      cov_motion, FactorKind::kMotion)
-              .status());
-      if (m.use_imu_states) {
-        const Eigen::Vector3d v_submap = T_world_submap.linear().transpose() * motion.v_world_pos;
-        SLAM_MMS_RETURN_IF_ERROR(
-            m.window
-                ->AddCostFunction(MakeNormalPrior(v_submap, Eigen::Vector3d::Constant(0.05)),
-                                  {{cur_state, StateBlock::kVelocity}})
-                .status());
-        Eigen::VectorXd b_sigma(6);
-        b_sigma << Eigen::Vector3d::Constant(0.05), Eigen::Vector3d::Constant(1e-3);
-        SLAM_MMS_RETURN_IF_ERROR(m.window
-                                     ->AddCostFunction(MakeNormalPrior(motion.pos_bias, b_sigma),
-                                                       {{cur_state, StateBlock::kBias}})
-                                     .status());
-      }
-    } else if (factor_type == MotionFactorType::kPreintegration) {
-      // F_Prein (eq 14) with bias random walk between consecutive scans.
-      auto factor = ImuPreintegrationFactor::Create(*pre_between, g_submap);
-      if (!factor.ok()) return factor.status().WithContext("Localizer: preintegration factor");
-      SLAM_MMS_RETURN_IF_ERROR(
-          m.window
-              ->AddCostFunction(std::move(factor).value(), {{m.prev_id, StateBlock::kPose},
-                                                            {m.prev_id, StateBlock::kVelocity},
-                                                            {m.prev_id, StateBlock::kBias},
-                                                            {cur_state, StateBlock::kPose},
-                                                            {cur_state, StateBlock::kVelocity},
-                                                            {cur_state, StateBlock::kBias}})
-              .status());
-      cov_motion = internal::DiagonalPoseCovariance(0.002 + 0.001 * dt, 0.02 + 0.05 * dt);
-    } else {
-      // LiDAR only: a weak constant-velocity factor keeps degenerate directions bounded.
-      cov_motion = internal::DiagonalPoseCovariance(m.opt.cv_sigma_rot_rad, m.opt.cv_sigma_trans_m);
-      SLAM_MMS_RETURN_IF_ERROR(
-          m.window
-              ->AddRelativePoseFactor(m.prev_id, cur_state,
-                                      m.T_submap_prev.inverse() * T_submap_pred, cov_motion,
-                                      FactorKind::kMotion, RobustLoss::Huber(3.0))
-              .status());
-    }
+    SLAM_MMS_ASSIGN_OR_RETURN(
+        const Matrix6d cov_motion,
+        m.AddMotionFactor(cur_state, motion, pred, dt, T_world_submap, g_submap));
     if (T_submap_reg) {
       // F_Reg (eq 16): reference -> scan, checked against the motion prediction.
       MotionPrediction prediction;
@@ -627,30 +688,7 @@ StatusOr<LocalizationResult> Localizer::ProcessScan(const Scan& scan,
   // ---- submap cut every WT: this scan becomes the next submap's reference -----------------------
   if (!is_reference &&
       scan.stamp_start.SecondsSince(m.current().start) >= m.opt.submap_duration_s) {
-    const Eigen::Isometry3d T_prev_this = T_submap_cur;
-    const Matrix6d cov_prev_this = res.cov_T_world_body;
-    // The scan belongs to the new submap (it is its reference), not to the old one.
-    SubmapRecord& old = m.current();
-    old.scan_indices.pop_back();
-    old.scan_stamps.pop_back();
-    old.T_submap_scan.pop_back();
-    old.cov_submap_scan.pop_back();
-    old.end = old.scan_stamps.back();
-    m.CloseCurrentSubmap();
-    m.StartSubmap(T_world_submap * T_submap_cur, scan.stamp_start, scan.index, T_prev_this,
-                  cov_prev_this);
-    // Re-express the level-1 state in the new frame.
-    const Eigen::Isometry3d T_new_old = T_submap_cur.inverse();
-    for (auto& [stamp, T] : m.recent) T = T_new_old * T;
-    m.T_submap_prev = Eigen::Isometry3d::Identity();
-    m.v_submap_prev = T_submap_cur.linear().transpose() * m.v_submap_prev;
-    SLAM_MMS_RETURN_IF_ERROR(m.StartWindow(m.v_submap_prev, m.bias_prev));
-    m.map_acc.Add(m.deskewed, m.T_body_lidar, m.opt.map_max_range_m);
-    m.reg_acc.Add(m.deskewed, m.T_body_lidar, m.opt.map_max_range_m);
-    res.new_submap = true;
-    res.submap_id = m.current().id;
-    SLAM_MMS_LOG(kDebug) << "Localizer: submap " << m.current().id << " starts at scan "
-                         << scan.index;
+    SLAM_MMS_RETURN_IF_ERROR(m.CutSubmap(scan, T_world_submap, T_submap_cur, &res));
   } else if (is_reference) {
     res.new_submap = true;
   }

@@ -18,6 +18,7 @@
 #include "slam_mms/io/trajectory_io.hpp"
 #include "slam_mms/sim/drive_simulator.hpp"
 #include "testing/feed_streams.hpp"
+#include "testing/simulated_drive.hpp"
 #include "testing/test_data.hpp"
 
 namespace slam_mms {
@@ -72,32 +73,17 @@ StatusOr<RunOutput> RunDrive(const std::filesystem::path& drive, MappingSystem::
 class SimulatedDriveTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    // One folder per process: ctest runs each test in its own process, two at a time.
-    dir_ = new std::filesystem::path(std::filesystem::temp_directory_path() /
-                                     ("slam_mms_pipeline_sim_drive_" + std::to_string(::getpid())));
-    sim::DriveSimulator::Options opt;
-    opt.seed = 3;
-    opt.duration_s = kDurationS;
-    opt.write_scene_cloud = false;
-    auto simulator = sim::DriveSimulator::Create(opt);
-    ASSERT_TRUE(simulator.ok()) << simulator.status().ToString();
-    auto summary = simulator->Run(*dir_);
-    ASSERT_TRUE(summary.ok()) << summary.status().ToString();
-    drive_ = new std::filesystem::path(summary->drive_dir);
-    origin_ = new GeodeticPoint{simulator->options().origin_latitude_deg,
-                                simulator->options().origin_longitude_deg,
-                                simulator->options().origin_height_m};
-    auto gt = ReadTrajectoryTum(*drive_ / "ground_truth" / "scan_start.tum");
-    ASSERT_TRUE(gt.ok()) << gt.status().ToString();
-    ground_truth_ = new Trajectory(std::move(gt).value());
+    auto drive = testing::SimulateDrive("slam_mms_pipeline_sim_drive", /*seed=*/3, kDurationS);
+    ASSERT_TRUE(drive.ok()) << drive.status().ToString();
+    sim_ = new testing::SimulatedDrive(std::move(drive).value());
+    drive_ = &sim_->drive_dir;
+    origin_ = &sim_->origin;
+    ground_truth_ = &sim_->ground_truth;
   }
   static void TearDownTestSuite() {
     std::error_code ec;
-    std::filesystem::remove_all(*dir_, ec);
-    delete dir_;
-    delete drive_;
-    delete origin_;
-    delete ground_truth_;
+    std::filesystem::remove_all(sim_->dir, ec);
+    delete sim_;
   }
 
   static MappingSystem::Options OptionsFor(MappingMode mode) {
@@ -114,15 +100,15 @@ class SimulatedDriveTest : public ::testing::Test {
   }
 
   static constexpr double kDurationS = 12.0;
-  static std::filesystem::path* dir_;
-  static std::filesystem::path* drive_;
-  static GeodeticPoint* origin_;
-  static Trajectory* ground_truth_;
+  static testing::SimulatedDrive* sim_;
+  static const std::filesystem::path* drive_;
+  static const GeodeticPoint* origin_;
+  static const Trajectory* ground_truth_;
 };
-std::filesystem::path* SimulatedDriveTest::dir_ = nullptr;
-std::filesystem::path* SimulatedDriveTest::drive_ = nullptr;
-GeodeticPoint* SimulatedDriveTest::origin_ = nullptr;
-Trajectory* SimulatedDriveTest::ground_truth_ = nullptr;
+testing::SimulatedDrive* SimulatedDriveTest::sim_ = nullptr;
+const std::filesystem::path* SimulatedDriveTest::drive_ = nullptr;
+const GeodeticPoint* SimulatedDriveTest::origin_ = nullptr;
+const Trajectory* SimulatedDriveTest::ground_truth_ = nullptr;
 
 TEST_F(SimulatedDriveTest, AllModesRunAndFullIsAtLeastAsAccurateAsThePos) {
   std::map<MappingMode, eval::AteResult> ate;

@@ -19,6 +19,7 @@
 #include "slam_mms/pipeline/mapping_system.hpp"
 #include "slam_mms/sim/drive_simulator.hpp"
 #include "testing/feed_streams.hpp"
+#include "testing/simulated_drive.hpp"
 
 namespace slam_mms {
 namespace {
@@ -42,27 +43,14 @@ struct RunOutput {
 class SensorFaultTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    dir_ = new std::filesystem::path(std::filesystem::temp_directory_path() /
-                                     ("slam_mms_sensor_fault_" + std::to_string(::getpid())));
-    sim::DriveSimulator::Options opt;
-    opt.seed = 11;
-    opt.duration_s = kDurationS;
-    opt.write_scene_cloud = false;
-    auto simulator = sim::DriveSimulator::Create(opt);
-    ASSERT_TRUE(simulator.ok()) << simulator.status().ToString();
-    auto summary = simulator->Run(*dir_);
-    ASSERT_TRUE(summary.ok()) << summary.status().ToString();
-    origin_ = new GeodeticPoint{simulator->options().origin_latitude_deg,
-                                simulator->options().origin_longitude_deg,
-                                simulator->options().origin_height_m};
-    auto gt = ReadTrajectoryTum(summary->drive_dir / "ground_truth" / "scan_start.tum");
-    ASSERT_TRUE(gt.ok()) << gt.status().ToString();
-    ground_truth_ = new Trajectory(std::move(gt).value());
-    auto gt100 = ReadTrajectoryTum(summary->drive_dir / "ground_truth" / "poses_100hz.tum");
-    ASSERT_TRUE(gt100.ok()) << gt100.status().ToString();
-    poses_100hz_ = new Trajectory(std::move(gt100).value());
+    auto drive = testing::SimulateDrive("slam_mms_sensor_fault", /*seed=*/11, kDurationS);
+    ASSERT_TRUE(drive.ok()) << drive.status().ToString();
+    sim_ = new testing::SimulatedDrive(std::move(drive).value());
+    origin_ = &sim_->origin;
+    ground_truth_ = &sim_->ground_truth;
+    poses_100hz_ = &sim_->poses_100hz;
 
-    auto reader = KittiRawReader::Open(summary->drive_dir);
+    auto reader = KittiRawReader::Open(sim_->drive_dir);
     ASSERT_TRUE(reader.ok()) << reader.status().ToString();
     drive_ = new DriveData;
     drive_->T_body_lidar = reader->T_body_lidar();
@@ -89,11 +77,8 @@ class SensorFaultTest : public ::testing::Test {
   }
   static void TearDownTestSuite() {
     std::error_code ec;
-    std::filesystem::remove_all(*dir_, ec);
-    delete dir_;
-    delete origin_;
-    delete ground_truth_;
-    delete poses_100hz_;
+    std::filesystem::remove_all(sim_->dir, ec);
+    delete sim_;
     delete drive_;
   }
 
@@ -168,17 +153,17 @@ class SensorFaultTest : public ::testing::Test {
   /// Worst position error vs ground truth of any run; the clean run's is about 0.86 m (the GNSS of
   /// the simulated drive is partly single-point).
   static constexpr double kMaxErrorM = 1.5;
-  static std::filesystem::path* dir_;
-  static GeodeticPoint* origin_;
-  static Trajectory* ground_truth_;
-  static Trajectory* poses_100hz_;  // T_world_body at 100 Hz (ground truth)
+  static testing::SimulatedDrive* sim_;
+  static const GeodeticPoint* origin_;
+  static const Trajectory* ground_truth_;
+  static const Trajectory* poses_100hz_;  // T_world_body at 100 Hz (ground truth)
   static DriveData* drive_;
   static double max_speed_mps_;
 };
-std::filesystem::path* SensorFaultTest::dir_ = nullptr;
-GeodeticPoint* SensorFaultTest::origin_ = nullptr;
-Trajectory* SensorFaultTest::ground_truth_ = nullptr;
-Trajectory* SensorFaultTest::poses_100hz_ = nullptr;
+testing::SimulatedDrive* SensorFaultTest::sim_ = nullptr;
+const GeodeticPoint* SensorFaultTest::origin_ = nullptr;
+const Trajectory* SensorFaultTest::ground_truth_ = nullptr;
+const Trajectory* SensorFaultTest::poses_100hz_ = nullptr;
 DriveData* SensorFaultTest::drive_ = nullptr;
 double SensorFaultTest::max_speed_mps_ = 0.0;
 

@@ -76,9 +76,6 @@ class SimulatedDriveTest : public ::testing::Test {
     auto drive = testing::SimulateDrive("slam_mms_pipeline_sim_drive", /*seed=*/3, kDurationS);
     ASSERT_TRUE(drive.ok()) << drive.status().ToString();
     sim_ = new testing::SimulatedDrive(std::move(drive).value());
-    drive_ = &sim_->drive_dir;
-    origin_ = &sim_->origin;
-    ground_truth_ = &sim_->ground_truth;
   }
   static void TearDownTestSuite() {
     std::error_code ec;
@@ -89,26 +86,20 @@ class SimulatedDriveTest : public ::testing::Test {
   static MappingSystem::Options OptionsFor(MappingMode mode) {
     MappingSystem::Options o;
     o.mode = mode;
-    o.origin = *origin_;  // the simulator's world frame: ground truth compares directly
+    o.origin = sim_->origin;  // the simulator's world frame: ground truth compares directly
     return o;
   }
 
   static RunOutput RunOrDie(MappingSystem::Options options) {
-    auto out = RunDrive(*drive_, options);
+    auto out = RunDrive(sim_->drive_dir, options);
     EXPECT_TRUE(out.ok()) << out.status().ToString();
     return out.ok() ? std::move(out).value() : RunOutput{};
   }
 
   static constexpr double kDurationS = 12.0;
   static testing::SimulatedDrive* sim_;
-  static const std::filesystem::path* drive_;
-  static const GeodeticPoint* origin_;
-  static const Trajectory* ground_truth_;
 };
 testing::SimulatedDrive* SimulatedDriveTest::sim_ = nullptr;
-const std::filesystem::path* SimulatedDriveTest::drive_ = nullptr;
-const GeodeticPoint* SimulatedDriveTest::origin_ = nullptr;
-const Trajectory* SimulatedDriveTest::ground_truth_ = nullptr;
 
 TEST_F(SimulatedDriveTest, AllModesRunAndFullIsAtLeastAsAccurateAsThePos) {
   std::map<MappingMode, eval::AteResult> ate;
@@ -118,10 +109,10 @@ TEST_F(SimulatedDriveTest, AllModesRunAndFullIsAtLeastAsAccurateAsThePos) {
     ASSERT_GT(out.trajectory.size(), 100u) << MappingModeName(mode);
     EXPECT_EQ(out.skipped, 0);
     EXPECT_GT(out.map.size(), 10000u);
-    auto a = eval::ComputeAte(out.trajectory, *ground_truth_);
+    auto a = eval::ComputeAte(out.trajectory, sim_->ground_truth);
     ASSERT_TRUE(a.ok()) << a.status().ToString();
     ate[mode] = *a;
-    auto r = eval::ComputeRelativeError(out.trajectory, *ground_truth_,
+    auto r = eval::ComputeRelativeError(out.trajectory, sim_->ground_truth,
                                         eval::RelativeErrorOptions::ShortDrive());
     ASSERT_TRUE(r.ok()) << r.status().ToString();
     rel[mode] = *r;
@@ -149,15 +140,15 @@ TEST_F(SimulatedDriveTest, GnssOutageSwitchesToPreintegrationAndBack) {
   }
   EXPECT_GT(pre, 30);  // ~5 s of scans at 10 Hz, minus the outage detection delay
   EXPECT_GT(odo, 40);
-  auto a = eval::ComputeAte(out.trajectory, *ground_truth_);
+  auto a = eval::ComputeAte(out.trajectory, sim_->ground_truth);
   ASSERT_TRUE(a.ok());
   EXPECT_LT(a->ate_max_m, 1.0);
 }
 
 TEST_F(SimulatedDriveTest, SameInputGivesTheSameTrajectory) {
   MappingSystem::Options o = OptionsFor(MappingMode::kLidarOnly);
-  auto a = RunDrive(*drive_, o, /*last_frame=*/30);
-  auto b = RunDrive(*drive_, o, /*last_frame=*/30);
+  auto a = RunDrive(sim_->drive_dir, o, /*last_frame=*/30);
+  auto b = RunDrive(sim_->drive_dir, o, /*last_frame=*/30);
   ASSERT_TRUE(a.ok() && b.ok());
   ASSERT_EQ(a->trajectory.size(), b->trajectory.size());
   for (size_t i = 0; i < a->trajectory.size(); ++i) {
@@ -169,13 +160,13 @@ TEST_F(SimulatedDriveTest, SpilledSubmapCloudsGiveTheSameResultsAndAreRemoved) {
   // Short submaps so that map and registration clouds are spilled within 6 s of drive.
   MappingSystem::Options o = OptionsFor(MappingMode::kFull);
   o.localizer.submap_duration_s = 1.5;
-  const auto in_memory = RunDrive(*drive_, o, /*last_frame=*/60);
+  const auto in_memory = RunDrive(sim_->drive_dir, o, /*last_frame=*/60);
   ASSERT_TRUE(in_memory.ok()) << in_memory.status().ToString();
   const std::filesystem::path spill = std::filesystem::temp_directory_path() /
                                       ("slam_mms_spill_test_" + std::to_string(::getpid()));
   o.localizer.spill_dir = spill;
   size_t spilled_files = 0;
-  const auto spilled = RunDrive(*drive_, o, /*last_frame=*/60, [&](const MappingSystem&) {
+  const auto spilled = RunDrive(sim_->drive_dir, o, /*last_frame=*/60, [&](const MappingSystem&) {
     for (const auto& e : std::filesystem::recursive_directory_iterator(spill)) {
       spilled_files += e.is_regular_file();
     }

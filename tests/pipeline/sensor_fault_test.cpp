@@ -46,9 +46,6 @@ class SensorFaultTest : public ::testing::Test {
     auto drive = testing::SimulateDrive("slam_mms_sensor_fault", /*seed=*/11, kDurationS);
     ASSERT_TRUE(drive.ok()) << drive.status().ToString();
     sim_ = new testing::SimulatedDrive(std::move(drive).value());
-    origin_ = &sim_->origin;
-    ground_truth_ = &sim_->ground_truth;
-    poses_100hz_ = &sim_->poses_100hz;
 
     auto reader = KittiRawReader::Open(sim_->drive_dir);
     ASSERT_TRUE(reader.ok()) << reader.status().ToString();
@@ -67,9 +64,9 @@ class SensorFaultTest : public ::testing::Test {
       drive_->scans.push_back(std::move(scan).value());
     }
     // The fastest the vehicle moves between scans (ground truth), for the continuity check.
-    for (size_t i = 1; i < ground_truth_->size(); ++i) {
-      const auto& a = (*ground_truth_)[i - 1];
-      const auto& b = (*ground_truth_)[i];
+    for (size_t i = 1; i < sim_->ground_truth.size(); ++i) {
+      const auto& a = sim_->ground_truth[i - 1];
+      const auto& b = sim_->ground_truth[i];
       max_speed_mps_ = std::max(
           max_speed_mps_, (b.T_world_body.translation() - a.T_world_body.translation()).norm() /
                               b.stamp.SecondsSince(a.stamp));
@@ -85,7 +82,7 @@ class SensorFaultTest : public ::testing::Test {
   static MappingSystem::Options DefaultOptions() {
     MappingSystem::Options o;
     o.mode = MappingMode::kFull;
-    o.origin = *origin_;
+    o.origin = sim_->origin;
     o.T_body_lidar = drive_->T_body_lidar;
     return o;
   }
@@ -141,7 +138,7 @@ class SensorFaultTest : public ::testing::Test {
         EXPECT_LE(step, allowed) << "jump between poses " << i - 1 << " and " << i << " at "
                                  << Since0(p.stamp) << " s";
       }
-      auto gt = ground_truth_->Interpolate(p.stamp, 0.05);
+      auto gt = sim_->ground_truth.Interpolate(p.stamp, 0.05);
       ASSERT_TRUE(gt.ok()) << gt.status().ToString();
       const double e = (p.T_world_body.translation() - gt->translation()).norm();
       worst_error = std::max(worst_error, e);
@@ -154,16 +151,10 @@ class SensorFaultTest : public ::testing::Test {
   /// the simulated drive is partly single-point).
   static constexpr double kMaxErrorM = 1.5;
   static testing::SimulatedDrive* sim_;
-  static const GeodeticPoint* origin_;
-  static const Trajectory* ground_truth_;
-  static const Trajectory* poses_100hz_;  // T_world_body at 100 Hz (ground truth)
   static DriveData* drive_;
   static double max_speed_mps_;
 };
 testing::SimulatedDrive* SensorFaultTest::sim_ = nullptr;
-const GeodeticPoint* SensorFaultTest::origin_ = nullptr;
-const Trajectory* SensorFaultTest::ground_truth_ = nullptr;
-const Trajectory* SensorFaultTest::poses_100hz_ = nullptr;
 DriveData* SensorFaultTest::drive_ = nullptr;
 double SensorFaultTest::max_speed_mps_ = 0.0;
 
@@ -262,7 +253,7 @@ TEST_F(SensorFaultTest, PosJumpIsNotTakenAsMotion) {
   // the whole outage to fit. Here an external POS (the ground truth at 100 Hz) jumps 1 m up.
   constexpr double kJumpS = 2.0, kJumpM = 1.0;
   std::vector<InsState> pos;
-  const Trajectory& gt = *poses_100hz_;
+  const Trajectory& gt = sim_->poses_100hz;
   for (size_t i = 1; i + 1 < gt.size(); ++i) {
     InsState s;
     s.stamp = gt[i].stamp;
@@ -296,8 +287,8 @@ TEST_F(SensorFaultTest, PosJumpIsNotTakenAsMotion) {
   double worst = 0.0, worst_at = 0.0;
   for (size_t i = 1; i < results.size(); ++i) {
     if (results[i].new_submap) continue;
-    auto g0 = ground_truth_->Interpolate(results[i - 1].stamp, 0.05);
-    auto g1 = ground_truth_->Interpolate(results[i].stamp, 0.05);
+    auto g0 = sim_->ground_truth.Interpolate(results[i - 1].stamp, 0.05);
+    auto g1 = sim_->ground_truth.Interpolate(results[i].stamp, 0.05);
     ASSERT_TRUE(g0.ok() && g1.ok());
     const double dz =
         results[i].T_world_body.translation().z() - results[i - 1].T_world_body.translation().z();
@@ -331,7 +322,7 @@ TEST_F(SensorFaultTest, CorrelatedFloatBiasIsNotFollowedByLevel2) {
     double worst = 0.0;
     for (const StampedPose& p : out.trajectory.poses()) {
       if (Since0(p.stamp) < 2.5) continue;
-      auto gt = ground_truth_->Interpolate(p.stamp, 0.05);
+      auto gt = sim_->ground_truth.Interpolate(p.stamp, 0.05);
       if (!gt.ok()) continue;
       worst = std::max(worst, std::abs(p.T_world_body.translation().z() - gt->translation().z()));
     }

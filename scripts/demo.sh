@@ -22,8 +22,10 @@ for a in "${args[@]+"${args[@]}"}"; do [[ "$a" == "--mode" ]] && has_mode=1; don
 if [[ $has_mode -eq 0 ]]; then args+=(--mode all); fi
 
 scripts/install_deps.sh
-cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release -DSLAM_MMS_BUILD_TESTS=OFF \
-  -DSLAM_MMS_BUILD_BENCHMARKS=OFF ${CMAKE_ARGS:-}
+# The same configuration as scripts/test.sh (tests, apps and benchmarks on), so the two scripts can
+# share build/ in either order; only the app is built here.
+cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release -DSLAM_MMS_BUILD_TESTS=ON \
+  -DSLAM_MMS_BUILD_EXAMPLES=ON -DSLAM_MMS_BUILD_BENCHMARKS=ON ${CMAKE_ARGS:-}
 cmake --build "$BUILD_DIR" -j"$JOBS" --target slam_mms_run
 mkdir -p "$out"
 "$BUILD_DIR/examples/slam_mms_run" --out "$out" "${args[@]}"

@@ -9,7 +9,10 @@ BUILD_DIR=${BUILD_DIR:-build}
 JOBS=${JOBS:-2}
 
 scripts/install_deps.sh
-cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release ${CMAKE_ARGS:-}
+# Tests, apps and benchmarks named explicitly: a build/ configured earlier with other values (an
+# older scripts/demo.sh turned tests off) must not leave the suite empty.
+cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release -DSLAM_MMS_BUILD_TESTS=ON \
+  -DSLAM_MMS_BUILD_EXAMPLES=ON -DSLAM_MMS_BUILD_BENCHMARKS=ON ${CMAKE_ARGS:-}
 cmake --build "$BUILD_DIR" -j"$JOBS"
 cd "$BUILD_DIR"
 ctest -j"$JOBS" --output-on-failure --timeout 900 "$@"

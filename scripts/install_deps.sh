@@ -7,8 +7,10 @@ PACKAGES=(
   build-essential cmake pkg-config git clang-format
   libeigen3-dev libceres-dev libsuitesparse-dev libgoogle-glog-dev libgflags-dev
   libnanoflann-dev libopencv-dev libgeographiclib-dev libembree-dev
-  libgtest-dev libgmock-dev libbenchmark-dev
+  libgtest-dev libgmock-dev libbenchmark-dev libyaml-cpp-dev
   libegl-dev libgl-dev libgl1-mesa-dev libegl-mesa0 libgl1-mesa-dri libgbm1
+  libcli11-dev
+  librosbag-storage-dev libsensor-msgs-dev python3-rosbag python3-sensor-msgs python3-geometry-msgs
 )
 if [[ "${SLAM_MMS_WITH_CLANG:-0}" == "1" ]]; then
   PACKAGES+=(clang libclang-rt-14-dev)

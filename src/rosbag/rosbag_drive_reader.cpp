@@ -1,0 +1,554 @@
+#include "slam_mms/rosbag/rosbag_drive_reader.hpp"
+
+#include <geometry_msgs/TwistStamped.h>
+#include <rosbag/bag.h>
+#include <rosbag/view.h>
+#include <sensor_msgs/Imu.h>
+#include <sensor_msgs/NavSatFix.h>
+#include <sensor_msgs/PointCloud2.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <map>
+#include <mutex>
+#include <set>
+
+#include "rosbag/point_cloud2_codec.hpp"
+#include "rosbag/ros_conversions.hpp"
+#include "slam_mms/core/logging.hpp"
+
+namespace slam_mms {
+namespace fs = std::filesystem;
+using rosbag_internal::StampString;
+
+namespace {
+
+constexpr const char* kPointCloud2 = "sensor_msgs/PointCloud2";
+constexpr const char* kImu = "sensor_msgs/Imu";
+constexpr const char* kNavSatFix = "sensor_msgs/NavSatFix";
+constexpr const char* kTwistStamped = "geometry_msgs/TwistStamped";
+constexpr double kDefaultScanPeriod_s = 0.1;
+
+std::string TopicList(const std::vector<RosbagTopic>& topics) {
+  if (topics.empty()) return "the bag has no topics";
+  std::string s = "the bag has:";
+  for (const RosbagTopic& t : topics) {
+    s += " " + t.name + " [" + t.datatype + ", " + std::to_string(t.num_messages) + " messages]";
+  }
+  return s;
+}
+
+std::vector<RosbagTopic> TopicsOf(const rosbag::Bag& bag) {
+  std::map<std::string, RosbagTopic> by_name;
+  rosbag::View all(bag);
+  for (const rosbag::ConnectionInfo* c : all.getConnections()) {
+    RosbagTopic& t = by_name[c->topic];
+    t.name = c->topic;
+    if (t.datatype.empty()) t.datatype = c->datatype;
+  }
+  std::vector<RosbagTopic> topics;
+  for (auto& [name, t] : by_name) {
+    rosbag::View v(bag, rosbag::TopicQuery(name));
+    t.num_messages = v.size();
+    topics.push_back(t);
+  }
+  return topics;
+}
+
+// The topic for one stream: the requested one (checked), else the only one of its type.
+StatusOr<std::string> ChooseTopic(const std::vector<RosbagTopic>& topics,
+                                  const std::string& requested, const char* datatype,
+                                  const char* option, bool required, const std::string& bag) {
+  if (!requested.empty()) {
+    for (const RosbagTopic& t : topics) {
+      if (t.name != requested) continue;
+      if (t.datatype != datatype) {
+        return InvalidArgumentError(bag + ": topic " + requested + " (Options::" + option +
+                                    ") is " + t.datatype + ", not " + datatype + "; " +
+                                    TopicList(topics));
+      }
+      return requested;
+    }
+    return InvalidArgumentError(bag + ": topic " + requested + " (Options::" + option +
+                                ") is not in the bag; " + TopicList(topics));
+  }
+  std::vector<std::string> candidates;
+  for (const RosbagTopic& t : topics) {
+    if (t.datatype == datatype) candidates.push_back(t.name);
+  }
+  if (candidates.size() == 1) return candidates.front();
+  if (candidates.empty()) {
+    if (!required) return std::string();
+    return InvalidArgumentError(bag + ": no " + datatype + " topic for Options::" + option + "; " +
+                                TopicList(topics));
+  }
+  std::string names;
+  for (const std::string& c : candidates) names += (names.empty() ? "" : ", ") + c;
+  return InvalidArgumentError(bag + ": " + std::to_string(candidates.size()) + " " + datatype +
+                              " topics (" + names + "): choose one with Options::" + option + "; " +
+                              TopicList(topics));
+}
+
+// Strictly increasing header stamps within one stream.
+// prev_number < 0: no previous message.
+Status CheckIncreasing(int64_t prev_ns, int64_t ns, int64_t prev_number,
+                       const std::string& source) {
+  if (prev_number >= 0 && ns <= prev_ns) {
+    return DataLossError(source + ": header.stamp " + StampString(ns) + " is not after message " +
+                         std::to_string(prev_number) + "'s " + StampString(prev_ns) +
+                         " (each stream must be strictly increasing)");
+  }
+  return OkStatus();
+}
+
+template <typename T>
+StatusOr<boost::shared_ptr<T>> Instantiate(const rosbag::MessageInstance& m,
+                                           const std::string& source) {
+  boost::shared_ptr<T> msg = m.instantiate<T>();
+  if (!msg) {
+    return DataLossError(source + ": message is " + m.getDataType() + " (md5 " + m.getMD5Sum() +
+                         "), not " + ros::message_traits::DataType<T>::value());
+  }
+  return msg;
+}
+
+double Median(std::vector<double> v) {
+  const size_t mid = v.size() / 2;
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(mid), v.end());
+  return v[mid];
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+Status RosbagDriveReader::Options::Validate() const {
+  if (first_scan < 0) {
+    return InvalidArgumentError("RosbagDriveReader::Options::first_scan = " +
+                                std::to_string(first_scan) + "; must be >= 0");
+  }
+  if (last_scan < -1 || (last_scan >= 0 && last_scan < first_scan)) {
+    return InvalidArgumentError(
+        "RosbagDriveReader::Options::last_scan = " + std::to_string(last_scan) +
+        "; must be -1 or >= first_scan (" + std::to_string(first_scan) + ")");
+  }
+  if (!(scan_period_s >= 0.0) || !std::isfinite(scan_period_s)) {
+    return InvalidArgumentError("RosbagDriveReader::Options::scan_period_s = " +
+                                std::to_string(scan_period_s) + "; must be >= 0 (0 = auto)");
+  }
+  for (auto [name, v] :
+       {std::pair<const char*, double>{"unknown_covariance_sigma_horizontal_m",
+                                       unknown_covariance_sigma_horizontal_m},
+        {"unknown_covariance_sigma_vertical_m", unknown_covariance_sigma_vertical_m},
+        {"rtk_fixed_max_sigma_horizontal_m", rtk_fixed_max_sigma_horizontal_m}}) {
+    if (!(v > 0.0) || !std::isfinite(v)) {
+      return InvalidArgumentError(std::string("RosbagDriveReader::Options::") + name + " = " +
+                                  std::to_string(v) + "; must be > 0 and finite");
+    }
+  }
+  if (!T_body_lidar.matrix().allFinite() || !T_body_lidar.linear().isUnitary(1e-6)) {
+    return InvalidArgumentError(
+        "RosbagDriveReader::Options::T_body_lidar: not a rigid transform (rotation not "
+        "orthonormal within 1e-6 or non-finite)");
+  }
+  if (t_body_antenna_m && !t_body_antenna_m->allFinite()) {
+    return InvalidArgumentError("RosbagDriveReader::Options::t_body_antenna_m: not finite");
+  }
+  return OkStatus();
+}
+
+struct RosbagDriveReader::Impl {
+  struct ScanEntry {
+    int64_t receipt_ns = 0;  ///< Bag receipt time, the key ReadScan looks the message up by.
+    uint32_t ordinal = 0;    ///< Among the lidar messages with the same receipt time.
+    int64_t header_ns = 0;
+    Timestamp start, end;
+    int64_t message_number = 0;
+    bool has_time_field = false;
+    double start_from_header_s = 0.0;
+    std::string error;  ///< Non-empty: what ReadScan returns as kDataLoss.
+  };
+
+  fs::path path;
+  std::string name;  ///< path as a string, for messages.
+  Options options;
+  mutable std::mutex bag_mutex;
+  mutable rosbag::Bag bag;  // Guarded by bag_mutex (rosbag::Bag is not thread-safe).
+  std::string lidar_topic, imu_topic, gnss_topic, velocity_topic;
+  std::vector<ScanEntry> scans;
+  DriveStreams streams;
+  std::atomic<uint64_t> dropped{0};
+  uint64_t skipped_gnss = 0;
+
+  std::string Source(const std::string& topic, uint64_t n) const {
+    return name + ": " + topic + " message " + std::to_string(n);
+  }
+
+  Status ReadImu();
+  Status ReadVelocity();
+  Status ReadGnss();
+  Status IndexScans();
+};
+
+Status RosbagDriveReader::Impl::ReadImu() {
+  rosbag::View view(bag, rosbag::TopicQuery(imu_topic));
+  uint64_t n = 0;
+  int64_t prev_ns = 0;
+  bool have_attitude = false;
+  for (const rosbag::MessageInstance& m : view) {
+    const std::string source = Source(imu_topic, n);
+    SLAM_MMS_ASSIGN_OR_RETURN(const auto msg, Instantiate<sensor_msgs::Imu>(m, source));
+    const int64_t ns = static_cast<int64_t>(msg->header.stamp.toNSec());
+    SLAM_MMS_RETURN_IF_ERROR(CheckIncreasing(prev_ns, ns, static_cast<int64_t>(n) - 1, source));
+    ImuSample s;
+    s.stamp = Timestamp::FromNanoseconds(ns);
+    s.accel_mps2 = Eigen::Vector3d(msg->linear_acceleration.x, msg->linear_acceleration.y,
+                                   msg->linear_acceleration.z);
+    s.gyro_radps =
+        Eigen::Vector3d(msg->angular_velocity.x, msg->angular_velocity.y, msg->angular_velocity.z);
+    if (!s.accel_mps2.allFinite() || !s.gyro_radps.allFinite()) {
+      return DataLossError(source + ": non-finite linear_acceleration or angular_velocity");
+    }
+    if (!have_attitude && msg->orientation_covariance[0] >= 0.0) {
+      const Eigen::Quaterniond q(msg->orientation.w, msg->orientation.x, msg->orientation.y,
+                                 msg->orientation.z);
+      if (q.coeffs().allFinite() && std::abs(q.norm() - 1.0) < 1e-3) {
+        InsState state;
+        state.stamp = s.stamp;
+        state.T_world_body.linear() = q.normalized().toRotationMatrix();
+        streams.initial_state = state;
+        streams.initial_state_source = source;
+        have_attitude = true;
+      }
+    }
+    streams.imu.push_back(s);
+    streams.imu_source.push_back(source);
+    prev_ns = ns;
+    ++n;
+  }
+  if (streams.imu.empty()) {
+    return InvalidArgumentError(name + ": IMU topic " + imu_topic + " has no messages");
+  }
+  if (!have_attitude) {
+    SLAM_MMS_LOG(kInfo) << name << ": no IMU message on " << imu_topic
+                        << " carries an orientation: the filter aligns itself";
+  }
+  return OkStatus();
+}
+
+Status RosbagDriveReader::Impl::ReadVelocity() {
+  if (velocity_topic.empty()) return OkStatus();
+  rosbag::View view(bag, rosbag::TopicQuery(velocity_topic));
+  uint64_t n = 0;
+  int64_t prev_ns = 0;
+  // The message nearest to the attitude's stamp (no attitude: nothing to attach it to).
+  std::optional<Eigen::Vector3d> best_v;
+  std::string best_source;
+  int64_t best_gap_ns = 0;
+  const int64_t attitude_ns =
+      streams.initial_state ? streams.initial_state->stamp.nanoseconds() : 0;
+  for (const rosbag::MessageInstance& m : view) {
+    const std::string source = Source(velocity_topic, n);
+    SLAM_MMS_ASSIGN_OR_RETURN(const auto msg, Instantiate<geometry_msgs::TwistStamped>(m, source));
+    const int64_t ns = static_cast<int64_t>(msg->header.stamp.toNSec());
+    SLAM_MMS_RETURN_IF_ERROR(CheckIncreasing(prev_ns, ns, static_cast<int64_t>(n) - 1, source));
+    prev_ns = ns;
+    ++n;
+    if (!streams.initial_state) continue;
+    const Eigen::Vector3d v(msg->twist.linear.x, msg->twist.linear.y, msg->twist.linear.z);
+    if (!v.allFinite()) continue;
+    const int64_t gap = std::abs(ns - attitude_ns);
+    if (best_v && gap >= best_gap_ns) continue;
+    const Eigen::Matrix3d& R_enu_body = streams.initial_state->T_world_body.linear();
+    best_v =
+        rosbag_internal::IsEnuFrameId(msg->header.frame_id) ? v : Eigen::Vector3d(R_enu_body * v);
+    best_source = source + " (frame_id '" + msg->header.frame_id + "')";
+    best_gap_ns = gap;
+  }
+  if (best_v) {
+    streams.initial_state->v_world_mps = *best_v;
+    streams.initial_state_source += "; velocity " + best_source;
+    if (best_gap_ns > 100000000) {
+      SLAM_MMS_LOG(kWarning) << name << ": the initial velocity (" << best_source << ") is "
+                             << best_gap_ns * 1e-9 << " s from the initial attitude";
+    }
+  } else if (n > 0 && !streams.initial_state) {
+    SLAM_MMS_LOG(kInfo) << name << ": " << velocity_topic
+                        << " ignored: no IMU orientation to start from";
+  }
+  return OkStatus();
+}
+
+Status RosbagDriveReader::Impl::ReadGnss() {
+  if (gnss_topic.empty()) {
+    SLAM_MMS_LOG(kInfo) << name << ": no " << kNavSatFix << " topic: no GNSS";
+    return OkStatus();
+  }
+  rosbag::View view(bag, rosbag::TopicQuery(gnss_topic));
+  uint64_t n = 0;
+  int64_t prev_ns = 0;
+  for (const rosbag::MessageInstance& m : view) {
+    const std::string source = Source(gnss_topic, n);
+    SLAM_MMS_ASSIGN_OR_RETURN(const auto msg, Instantiate<sensor_msgs::NavSatFix>(m, source));
+    const int64_t ns = static_cast<int64_t>(msg->header.stamp.toNSec());
+    SLAM_MMS_RETURN_IF_ERROR(CheckIncreasing(prev_ns, ns, static_cast<int64_t>(n) - 1, source));
+    prev_ns = ns;
+    ++n;
+    if (!std::isfinite(msg->latitude) || !std::isfinite(msg->longitude) ||
+        !std::isfinite(msg->altitude)) {
+      ++skipped_gnss;
+      continue;
+    }
+    GnssFix fix;
+    fix.stamp = Timestamp::FromNanoseconds(ns);
+    fix.latitude_deg = msg->latitude;
+    fix.longitude_deg = msg->longitude;
+    fix.height_m = msg->altitude;
+    rosbag_internal::NavSatFixSigmas(*msg, options.unknown_covariance_sigma_horizontal_m,
+                                     options.unknown_covariance_sigma_vertical_m,
+                                     &fix.sigma_horizontal_m, &fix.sigma_vertical_m);
+    fix.type = RosbagFixType(msg->status.status, fix.sigma_horizontal_m,
+                             options.rtk_fixed_max_sigma_horizontal_m);
+    fix.num_satellites = 0;
+    streams.gnss.push_back(fix);
+    streams.gnss_source.push_back(source);
+  }
+  if (skipped_gnss > 0) {
+    SLAM_MMS_LOG(kWarning) << name << ": " << gnss_topic << ": skipped " << skipped_gnss << " of "
+                           << n << " fixes with a NaN latitude/longitude/altitude";
+  }
+  return OkStatus();
+}
+
+Status RosbagDriveReader::Impl::IndexScans() {
+  rosbag::View view(bag, rosbag::TopicQuery(lidar_topic));
+  int64_t n = -1;
+  int64_t prev_receipt_ns = -1;
+  uint32_t ordinal = 0;
+  int64_t prev_header_ns = 0;
+  size_t num_bad = 0;
+  for (const rosbag::MessageInstance& m : view) {
+    ++n;
+    const auto receipt_ns = static_cast<int64_t>(m.getTime().toNSec());
+    ordinal = receipt_ns == prev_receipt_ns ? ordinal + 1 : 0;
+    prev_receipt_ns = receipt_ns;
+    if (n < options.first_scan) continue;
+    if (options.last_scan >= 0 && n > options.last_scan) break;
+    const std::string source = Source(lidar_topic, static_cast<uint64_t>(n));
+    // One cloud at a time: read, take its stamps, drop it.
+    SLAM_MMS_ASSIGN_OR_RETURN(const auto msg, Instantiate<sensor_msgs::PointCloud2>(m, source));
+    ScanEntry e;
+    e.receipt_ns = receipt_ns;
+    e.ordinal = ordinal;
+    e.message_number = n;
+    e.header_ns = static_cast<int64_t>(msg->header.stamp.toNSec());
+    SLAM_MMS_RETURN_IF_ERROR(CheckIncreasing(
+        prev_header_ns, e.header_ns, scans.empty() ? -1 : scans.back().message_number, source));
+    prev_header_ns = e.header_ns;
+    SLAM_MMS_ASSIGN_OR_RETURN(const rosbag_internal::CloudLayout layout,
+                              rosbag_internal::ParseCloudLayout(*msg, source));
+    e.has_time_field = layout.time.present();
+    Status size_ok = rosbag_internal::CheckCloudSize(*msg, source);
+    if (size_ok.ok() && e.has_time_field) {
+      auto range = rosbag_internal::ComputeCloudTimeRange(*msg, layout, options.time_field, source);
+      if (range.ok()) {
+        const double min0 = std::min(0.0, range->min_s);
+        const auto start_offset_ns = static_cast<int64_t>(std::llround(min0 * 1e9));
+        e.start = Timestamp::FromNanoseconds(e.header_ns + start_offset_ns);
+        e.end = Timestamp::FromNanoseconds(
+            std::max(e.start.nanoseconds(),
+                     e.header_ns + static_cast<int64_t>(std::llround(range->max_s * 1e9))));
+        e.start_from_header_s = static_cast<double>(start_offset_ns) * 1e-9;
+      } else {
+        size_ok = range.status();
+      }
+    }
+    if (!size_ok.ok()) {
+      e.error = size_ok.message();
+      ++num_bad;
+      SLAM_MMS_LOG(kWarning) << e.error << " (ReadScan will return kDataLoss)";
+    }
+    scans.push_back(std::move(e));
+  }
+  if (scans.empty()) {
+    return InvalidArgumentError(name + ": no scans on " + lidar_topic +
+                                " in the range first_scan " + std::to_string(options.first_scan) +
+                                " .. last_scan " + std::to_string(options.last_scan) +
+                                " (the topic has " + std::to_string(n + 1) + " messages)");
+  }
+  // Clouds without a time field (or unreadable ones): the scan period.
+  double period_s = options.scan_period_s;
+  if (period_s <= 0.0) {
+    std::vector<double> gaps;
+    for (size_t i = 1; i < scans.size(); ++i) {
+      gaps.push_back(static_cast<double>(scans[i].header_ns - scans[i - 1].header_ns) * 1e-9);
+    }
+    period_s = gaps.empty() ? kDefaultScanPeriod_s : Median(gaps);
+    if (gaps.empty()) {
+      SLAM_MMS_LOG(kInfo) << name << ": one scan: scan period " << period_s << " s assumed";
+    }
+  }
+  const auto period_ns = static_cast<int64_t>(std::llround(period_s * 1e9));
+  for (ScanEntry& e : scans) {
+    if (e.has_time_field && e.error.empty()) continue;
+    if (options.header_stamp == HeaderStamp::kScanStart) {
+      e.start = Timestamp::FromNanoseconds(e.header_ns);
+      e.end = Timestamp::FromNanoseconds(e.header_ns + period_ns);
+    } else {
+      e.start = Timestamp::FromNanoseconds(e.header_ns - period_ns);
+      e.end = Timestamp::FromNanoseconds(e.header_ns);
+    }
+  }
+  if (num_bad > 0) {
+    SLAM_MMS_LOG(kWarning) << name << ": " << num_bad << " of " << scans.size() << " clouds on "
+                           << lidar_topic << " are malformed";
+  }
+  return OkStatus();
+}
+
+// ---------------------------------------------------------------------------------------------
+StatusOr<std::unique_ptr<RosbagDriveReader>> RosbagDriveReader::Open(const fs::path& bag,
+                                                                     const Options& options) {
+  SLAM_MMS_RETURN_IF_ERROR(options.Validate());
+  std::error_code ec;
+  if (!fs::is_regular_file(bag, ec)) {
+    return NotFoundError(bag.string() + ": no such ROS bag file");
+  }
+  auto impl = std::make_unique<Impl>();
+  impl->path = bag;
+  impl->name = bag.string();
+  impl->options = options;
+  try {
+    impl->bag.open(bag.string(), rosbag::bagmode::Read);
+    const std::vector<RosbagTopic> topics = TopicsOf(impl->bag);
+    SLAM_MMS_ASSIGN_OR_RETURN(impl->lidar_topic,
+                              ChooseTopic(topics, options.lidar_topic, kPointCloud2, "lidar_topic",
+                                          /*required=*/true, impl->name));
+    SLAM_MMS_ASSIGN_OR_RETURN(impl->imu_topic, ChooseTopic(topics, options.imu_topic, kImu,
+                                                           "imu_topic", true, impl->name));
+    SLAM_MMS_ASSIGN_OR_RETURN(impl->gnss_topic, ChooseTopic(topics, options.gnss_topic, kNavSatFix,
+                                                            "gnss_topic", false, impl->name));
+    SLAM_MMS_ASSIGN_OR_RETURN(impl->velocity_topic,
+                              ChooseTopic(topics, options.velocity_topic, kTwistStamped,
+                                          "velocity_topic", false, impl->name));
+    SLAM_MMS_RETURN_IF_ERROR(impl->ReadImu());
+    SLAM_MMS_RETURN_IF_ERROR(impl->ReadVelocity());
+    SLAM_MMS_RETURN_IF_ERROR(impl->ReadGnss());
+    SLAM_MMS_RETURN_IF_ERROR(impl->IndexScans());
+  } catch (const rosbag::BagUnindexedException& e) {
+    return DataLossError(impl->name +
+                         ": unindexed ROS bag (`rosbag reindex` repairs it): " + e.what());
+  } catch (const std::exception& e) {
+    return DataLossError(impl->name + ": corrupt or truncated ROS bag: " + e.what());
+  } catch (...) {
+    return DataLossError(impl->name + ": corrupt or truncated ROS bag (unknown exception)");
+  }
+  impl->streams.T_body_lidar = options.T_body_lidar;
+  impl->streams.t_body_antenna_m = options.t_body_antenna_m;
+  SLAM_MMS_LOG(kInfo) << impl->name << ": " << impl->scans.size() << " scans on "
+                      << impl->lidar_topic << ", " << impl->streams.imu.size() << " IMU samples on "
+                      << impl->imu_topic << ", " << impl->streams.gnss.size() << " GNSS fixes"
+                      << (impl->gnss_topic.empty() ? std::string() : " on " + impl->gnss_topic);
+  return std::unique_ptr<RosbagDriveReader>(new RosbagDriveReader(std::move(impl)));
+}
+
+StatusOr<std::vector<RosbagTopic>> RosbagDriveReader::ListTopics(const fs::path& bag) {
+  std::error_code ec;
+  if (!fs::is_regular_file(bag, ec)) return NotFoundError(bag.string() + ": no such ROS bag file");
+  try {
+    rosbag::Bag b(bag.string(), rosbag::bagmode::Read);
+    return TopicsOf(b);
+  } catch (const std::exception& e) {
+    return DataLossError(bag.string() + ": corrupt or truncated ROS bag: " + e.what());
+  } catch (...) {
+    return DataLossError(bag.string() + ": corrupt or truncated ROS bag (unknown exception)");
+  }
+}
+
+RosbagDriveReader::RosbagDriveReader(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+RosbagDriveReader::~RosbagDriveReader() = default;
+
+std::string RosbagDriveReader::Describe() const { return "ROS 1 bag " + impl_->name; }
+size_t RosbagDriveReader::NumScans() const { return impl_->scans.size(); }
+Timestamp RosbagDriveReader::ScanStart(size_t i) const { return impl_->scans.at(i).start; }
+Timestamp RosbagDriveReader::ScanEnd(size_t i) const { return impl_->scans.at(i).end; }
+std::string RosbagDriveReader::ScanSource(size_t i) const {
+  return impl_->Source(impl_->lidar_topic,
+                       static_cast<uint64_t>(impl_->scans.at(i).message_number));
+}
+const DriveStreams& RosbagDriveReader::streams() const { return impl_->streams; }
+uint64_t RosbagDriveReader::TotalDroppedPoints() const { return impl_->dropped.load(); }
+const RosbagDriveReader::Options& RosbagDriveReader::options() const { return impl_->options; }
+const fs::path& RosbagDriveReader::bag_path() const { return impl_->path; }
+const std::string& RosbagDriveReader::lidar_topic() const { return impl_->lidar_topic; }
+const std::string& RosbagDriveReader::imu_topic() const { return impl_->imu_topic; }
+const std::string& RosbagDriveReader::gnss_topic() const { return impl_->gnss_topic; }
+const std::string& RosbagDriveReader::velocity_topic() const { return impl_->velocity_topic; }
+bool RosbagDriveReader::ScanHasTimeField(size_t i) const {
+  return impl_->scans.at(i).has_time_field;
+}
+uint64_t RosbagDriveReader::NumSkippedGnssFixes() const { return impl_->skipped_gnss; }
+
+StatusOr<Scan> RosbagDriveReader::ReadScan(size_t i) const {
+  if (i >= impl_->scans.size()) {
+    return OutOfRangeError("RosbagDriveReader::ReadScan(" + std::to_string(i) + "): only " +
+                           std::to_string(impl_->scans.size()) + " scans");
+  }
+  const Impl::ScanEntry& e = impl_->scans[i];
+  const std::string source = ScanSource(i);
+  if (!e.error.empty()) return DataLossError(e.error);
+  boost::shared_ptr<sensor_msgs::PointCloud2> msg;
+  try {
+    // Only message i: the lidar topic at its receipt time.
+    const std::lock_guard<std::mutex> lock(impl_->bag_mutex);
+    ros::Time t;
+    t.fromNSec(static_cast<uint64_t>(e.receipt_ns));
+    rosbag::View view(impl_->bag, rosbag::TopicQuery(impl_->lidar_topic), t, t);
+    uint32_t k = 0;
+    for (const rosbag::MessageInstance& m : view) {
+      if (m.getTime() != t) continue;
+      if (k++ != e.ordinal) continue;
+      msg = m.instantiate<sensor_msgs::PointCloud2>();
+      break;
+    }
+  } catch (const std::exception& ex) {
+    return DataLossError(source + ": reading the message failed: " + ex.what());
+  } catch (...) {
+    return DataLossError(source + ": reading the message failed (unknown exception)");
+  }
+  if (!msg || static_cast<int64_t>(msg->header.stamp.toNSec()) != e.header_ns) {
+    return DataLossError(source + ": not found again at receipt time " + StampString(e.receipt_ns) +
+                         " (the bag changed since Open?)");
+  }
+  // Decoding needs no bag: outside the lock.
+  SLAM_MMS_ASSIGN_OR_RETURN(const rosbag_internal::CloudLayout layout,
+                            rosbag_internal::ParseCloudLayout(*msg, source));
+  SLAM_MMS_RETURN_IF_ERROR(rosbag_internal::CheckCloudSize(*msg, source));
+  const size_t n = static_cast<size_t>(msg->width) * msg->height;
+  if (n == 0) return DataLossError(source + ": cloud contains no points");
+  rosbag_internal::DecodeParams params;
+  params.time_field = impl_->options.time_field;
+  params.start_from_header_s = e.start_from_header_s;
+  params.duration_s = e.end.SecondsSince(e.start);
+  params.spin = impl_->options.spin;
+  params.per_point_time = impl_->options.per_point_time;
+  Scan scan;
+  scan.index = e.message_number;
+  scan.stamp_start = e.start;
+  scan.stamp_end = e.end;
+  scan.stamp_trigger = Timestamp::FromNanoseconds(e.header_ns);
+  scan.source = source;
+  const size_t dropped = rosbag_internal::DecodeCloud(*msg, layout, params, &scan.cloud);
+  if (dropped > 0) {
+    impl_->dropped += dropped;
+    SLAM_MMS_LOG(kWarning) << source << ": dropped " << dropped << " of " << n
+                           << " points with NaN/Inf values";
+  }
+  if (scan.cloud.empty()) {
+    return DataLossError(source + ": cloud has no finite point (" + std::to_string(n) +
+                         " points, all NaN/Inf)");
+  }
+  return scan;
+}
+
+}  // namespace slam_mms

@@ -481,7 +481,8 @@ Status io_internal::ParseKittiTextScan(const std::vector<std::string>& lines,
 
 size_t io_internal::KittiPointsToCloud(const std::vector<float>& xyzr,
                                        const KittiRawReader::Options& o, double duration_s,
-                                       PointCloud* cloud) {
+                                       PointCloud* cloud,
+                                       const std::vector<float>* time_offsets_s) {
   const size_t n = xyzr.size() / 4;
   const double angle = o.vertical_correction_deg * M_PI / 180.0;
   const double cos_a = std::cos(angle);
@@ -498,7 +499,8 @@ size_t io_internal::KittiPointsToCloud(const std::vector<float>& xyzr,
   for (size_t k = 0; k < n; ++k) {
     const float* v = &xyzr[4 * k];
     if (!std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2]) ||
-        !std::isfinite(v[3])) {
+        !std::isfinite(v[3]) ||
+        (time_offsets_s != nullptr && !std::isfinite((*time_offsets_s)[k]))) {
       continue;
     }
     Eigen::Vector3f q(v[0], v[1], v[2]);
@@ -517,7 +519,9 @@ size_t io_internal::KittiPointsToCloud(const std::vector<float>& xyzr,
     out_pts[kept] = q;
     out_refl[kept] = v[3];
     // Azimuth of the recorded point (the vertical correction keeps it).
-    if (o.per_point_time) {
+    if (o.per_point_time && time_offsets_s != nullptr) {
+      out_time[kept] = (*time_offsets_s)[k];
+    } else if (o.per_point_time) {
       const float f = 1.0f + time_sign * std::atan2(v[1], v[0]) * kInvPi;  // [0, 2] up to rounding
       out_time[kept] = half_duration * std::min(2.0f, std::max(0.0f, f));
     } else {

@@ -29,9 +29,12 @@ Status ParseKittiTextScan(const std::vector<std::string>& lines, const std::stri
 
 /// Turns raw x y z reflectance quadruples into `cloud` as KittiRawReader::ReadScan does: drops
 /// non-finite points, applies the vertical-angle correction and the azimuth time of `options` over
-/// a scan of `duration_s`. Returns the number of points dropped.
+/// a scan of `duration_s`. Returns the number of points dropped. Where `time_offsets_s` is given
+/// (one per point: a drive folder scan's own time field), it replaces the azimuth time when
+/// options.per_point_time, and a point whose time is not finite is dropped too.
 size_t KittiPointsToCloud(const std::vector<float>& xyzr, const KittiRawReader::Options& options,
-                          double duration_s, PointCloud* cloud);
+                          double duration_s, PointCloud* cloud,
+                          const std::vector<float>* time_offsets_s = nullptr);
 
 /// One oxts/data/NNNNNNNNNN.txt file: exactly one non-blank line, parsed by ParseOxtsLine.
 StatusOr<OxtsRecord> ParseOxtsFileLines(const std::vector<std::string>& lines,

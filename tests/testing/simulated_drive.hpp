@@ -7,6 +7,7 @@
 #include <string>
 #include <utility>
 
+#include "slam_mms/ins/gnss_prior.hpp"  // GeodeticPoint
 #include "slam_mms/io/trajectory_io.hpp"
 #include "slam_mms/sim/drive_simulator.hpp"
 

@@ -1,0 +1,533 @@
+// RosbagDriveReader / WriteRosbag: (a) round trips of a simulated drive and of the real KITTI
+// frames (KittiDriveReader -> WriteRosbag -> RosbagDriveReader), (b) a kitti2bag-style bag written
+// independently by python3-rosbag, (c) malformed bags.
+#include "slam_mms/rosbag/rosbag_drive_reader.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <sensor_msgs/NavSatStatus.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <map>
+#include <thread>
+
+#include "rosbag/bag_test_util.hpp"
+#include "rosbag/ros_conversions.hpp"
+#include "slam_mms/io/kitti_drive_reader.hpp"
+#include "slam_mms/rosbag/rosbag_writer.hpp"
+#include "testing/simulated_drive.hpp"
+#include "testing/test_data.hpp"
+
+namespace slam_mms {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+
+// ---------------------------------------------------------------------------------------------
+// (a) Round trip.
+
+struct RoundTripTolerances {
+  double time_offset_s = 1e-6;  // float32 seconds
+  double scan_end_s = 1e-3;     // end = start + max per-point time (not the file's end)
+};
+
+// Everything the bag carries must come back: scans bitwise (times within float32), streams
+// bitwise, sigmas within 1e-12, fix types through RosbagFixType, the initial state within 1e-9.
+void ExpectSameDrive(const DriveReader& in, const RosbagDriveReader& out) {
+  ASSERT_EQ(in.NumScans(), out.NumScans());
+  for (size_t i = 0; i < in.NumScans(); ++i) {
+    SCOPED_TRACE("scan " + std::to_string(i));
+    EXPECT_EQ(in.ScanStart(i), out.ScanStart(i));
+    EXPECT_NEAR(out.ScanEnd(i).SecondsSince(in.ScanEnd(i)), 0.0, RoundTripTolerances().scan_end_s);
+    EXPECT_LE(out.ScanEnd(i), in.ScanEnd(i).PlusSeconds(1e-6));
+    auto a = in.ReadScan(i);
+    auto b = out.ReadScan(i);
+    ASSERT_TRUE(a.ok()) << a.status().ToString();
+    ASSERT_TRUE(b.ok()) << b.status().ToString();
+    EXPECT_EQ(a->index, b->index);
+    EXPECT_EQ(b->stamp_start, a->stamp_start);
+    ASSERT_EQ(a->cloud.size(), b->cloud.size());
+    EXPECT_TRUE(a->cloud.points() == b->cloud.points());
+    EXPECT_TRUE(a->cloud.intensities() == b->cloud.intensities());
+    double max_dt = 0.0;
+    for (size_t k = 0; k < a->cloud.size(); ++k) {
+      max_dt = std::max(max_dt, static_cast<double>(std::abs(a->cloud.time_offsets_s()[k] -
+                                                             b->cloud.time_offsets_s()[k])));
+    }
+    EXPECT_LE(max_dt, RoundTripTolerances().time_offset_s);
+    EXPECT_THAT(b->source, HasSubstr(out.lidar_topic() + " message " + std::to_string(i)));
+  }
+  const DriveStreams& s = in.streams();
+  const DriveStreams& t = out.streams();
+  ASSERT_EQ(s.imu.size(), t.imu.size());
+  for (size_t k = 0; k < s.imu.size(); ++k) {
+    ASSERT_EQ(s.imu[k].stamp, t.imu[k].stamp) << k;
+    ASSERT_EQ(s.imu[k].accel_mps2, t.imu[k].accel_mps2) << k;
+    ASSERT_EQ(s.imu[k].gyro_radps, t.imu[k].gyro_radps) << k;
+  }
+  ASSERT_EQ(t.imu_source.size(), t.imu.size());
+  ASSERT_EQ(s.gnss.size(), t.gnss.size());
+  for (size_t k = 0; k < s.gnss.size(); ++k) {
+    const GnssFix& f = s.gnss[k];
+    const GnssFix& g = t.gnss[k];
+    ASSERT_EQ(f.stamp, g.stamp) << k;
+    ASSERT_EQ(f.latitude_deg, g.latitude_deg) << k;
+    ASSERT_EQ(f.longitude_deg, g.longitude_deg) << k;
+    ASSERT_EQ(f.height_m, g.height_m) << k;
+    ASSERT_NEAR(f.sigma_horizontal_m, g.sigma_horizontal_m, 1e-12) << k;
+    ASSERT_NEAR(f.sigma_vertical_m, g.sigma_vertical_m, 1e-12) << k;
+    ASSERT_EQ(g.type, RosbagFixType(rosbag_internal::NavSatStatusFor(f.type), f.sigma_horizontal_m))
+        << k;
+  }
+  ASSERT_EQ(s.initial_state.has_value(), t.initial_state.has_value());
+  if (s.initial_state) {
+    EXPECT_EQ(s.initial_state->stamp, t.initial_state->stamp);
+    EXPECT_TRUE(s.initial_state->T_world_body.linear().isApprox(
+        t.initial_state->T_world_body.linear(), 1e-9));
+    EXPECT_LE((s.initial_state->v_world_mps - t.initial_state->v_world_mps).norm(), 1e-9);
+  }
+  EXPECT_TRUE(t.T_body_lidar.isApprox(s.T_body_lidar, 0.0));
+}
+
+RosbagDriveReader::Options OptionsFor(const DriveReader& in) {
+  RosbagDriveReader::Options o;
+  o.T_body_lidar = in.streams().T_body_lidar;
+  return o;
+}
+
+// A 3 s simulated drive (30 HDL-64 scans, 100 Hz IMU, RTK GNSS), once per test process.
+class SimulatedRoundTrip : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    auto drive = testing::SimulateDrive("slam_mms_rosbag_roundtrip", /*seed=*/7, 3.0);
+    ASSERT_TRUE(drive.ok()) << drive.status().ToString();
+    sim_ = new testing::SimulatedDrive(std::move(drive).value());
+  }
+  static void TearDownTestSuite() {
+    std::error_code ec;
+    if (sim_ != nullptr) fs::remove_all(sim_->dir, ec);
+    delete sim_;
+    sim_ = nullptr;
+  }
+  void SetUp() override {
+    ASSERT_NE(sim_, nullptr);
+    auto kitti = KittiDriveReader::Open(sim_->drive_dir, KittiRawReader::Options());
+    ASSERT_TRUE(kitti.ok()) << kitti.status().ToString();
+    kitti_ = std::move(kitti).value();
+    dir_ = testing::MakeTempDir("rosbag_rt");
+  }
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(dir_, ec);
+  }
+  static testing::SimulatedDrive* sim_;
+  std::unique_ptr<KittiDriveReader> kitti_;
+  fs::path dir_;
+};
+testing::SimulatedDrive* SimulatedRoundTrip::sim_ = nullptr;
+
+TEST_F(SimulatedRoundTrip, SameDriveAsKittiRaw) {
+  ASSERT_GE(kitti_->NumScans(), 25u);             // 3 s at 10 Hz
+  ASSERT_GE(kitti_->streams().imu.size(), 250u);  // 100 Hz
+  const fs::path bag = dir_ / "sim.bag";
+  ASSERT_TRUE(WriteRosbag(*kitti_, bag, RosbagWriteOptions()).ok());
+  auto reader = RosbagDriveReader::Open(bag, OptionsFor(*kitti_));
+  ASSERT_TRUE(reader.ok()) << reader.status().ToString();
+  EXPECT_EQ((*reader)->lidar_topic(), "/velodyne_points");
+  EXPECT_EQ((*reader)->imu_topic(), "/imu/data");
+  EXPECT_EQ((*reader)->gnss_topic(), "/gps/fix");
+  EXPECT_EQ((*reader)->velocity_topic(), "/gps/vel");
+  EXPECT_TRUE((*reader)->ScanHasTimeField(0));
+  ExpectSameDrive(*kitti_, **reader);
+
+  // The simulator's fix types (GnssSimulator: RTK fixed, nominal 0.015 m x a log-normal factor;
+  // float 0.25 m; SPS 1.5 m; none during outages) come back unchanged: its fixed sigmas stay at
+  // or below 0.05 m and its float ones above, so the GBAS split of RosbagFixType restores them.
+  std::map<GnssFixType, int> census;
+  const auto& in = kitti_->streams().gnss;
+  const auto& out = (*reader)->streams().gnss;
+  for (size_t k = 0; k < in.size(); ++k) {
+    ++census[in[k].type];
+    EXPECT_EQ(in[k].type, out[k].type) << k << " sigma " << in[k].sigma_horizontal_m;
+  }
+  EXPECT_GT(census[GnssFixType::kRtkFixed], 0);
+  for (auto [type, count] : census) {
+    RecordProperty(std::string("fixes_") + GnssFixTypeName(type), count);
+  }
+}
+
+TEST_F(SimulatedRoundTrip, WithoutTimeFieldTimesComeFromTheAzimuth) {
+  const fs::path bag = dir_ / "sim_notime.bag";
+  RosbagWriteOptions w;
+  w.write_point_time = false;
+  w.compression = RosbagWriteOptions::Compression::kLz4;
+  ASSERT_TRUE(WriteRosbag(*kitti_, bag, w).ok());
+  for (auto stamp :
+       {RosbagDriveReader::HeaderStamp::kScanStart, RosbagDriveReader::HeaderStamp::kScanEnd}) {
+    RosbagDriveReader::Options o = OptionsFor(*kitti_);
+    o.header_stamp = stamp;
+    o.first_scan = 2;
+    o.last_scan = 6;
+    auto reader = RosbagDriveReader::Open(bag, o);
+    ASSERT_TRUE(reader.ok()) << reader.status().ToString();
+    const RosbagDriveReader& r = **reader;
+    ASSERT_EQ(r.NumScans(), 5u);
+    EXPECT_FALSE(r.ScanHasTimeField(0));
+    // Median spacing of the header stamps (= the KITTI scan starts) of scans 2..6.
+    std::vector<int64_t> gaps;
+    for (size_t i = 3; i <= 6; ++i) {
+      gaps.push_back(kitti_->ScanStart(i).nanoseconds() - kitti_->ScanStart(i - 1).nanoseconds());
+    }
+    std::sort(gaps.begin(), gaps.end());
+    const int64_t period_ns = gaps[2];
+    for (size_t i = 0; i < r.NumScans(); ++i) {
+      const Timestamp header = kitti_->ScanStart(i + 2);
+      const bool at_start = stamp == RosbagDriveReader::HeaderStamp::kScanStart;
+      EXPECT_EQ(r.ScanStart(i).nanoseconds(), header.nanoseconds() - (at_start ? 0 : period_ns));
+      EXPECT_EQ(r.ScanEnd(i).nanoseconds() - r.ScanStart(i).nanoseconds(), period_ns);
+      auto a = kitti_->ReadScan(i + 2);
+      auto b = r.ReadScan(i);
+      ASSERT_TRUE(a.ok() && b.ok());
+      EXPECT_EQ(b->index, static_cast<int64_t>(i + 2));
+      ASSERT_EQ(a->cloud.size(), b->cloud.size());
+      EXPECT_TRUE(a->cloud.points() == b->cloud.points());
+      EXPECT_TRUE(a->cloud.intensities() == b->cloud.intensities());
+      for (size_t k = 0; k < b->cloud.size(); k += 97) {
+        const Eigen::Vector3f& p = b->cloud.points()[k];
+        EXPECT_NEAR(
+            b->cloud.time_offsets_s()[k],
+            KittiAzimuthFraction(p.x(), p.y(), SpinDirection::kClockwise) * period_ns * 1e-9, 1e-6);
+      }
+    }
+  }
+}
+
+TEST_F(SimulatedRoundTrip, ConcurrentReadScanMatchesSequential) {
+  const fs::path bag = dir_ / "sim.bag";
+  ASSERT_TRUE(WriteRosbag(*kitti_, bag, RosbagWriteOptions()).ok());
+  auto reader = RosbagDriveReader::Open(bag, OptionsFor(*kitti_));
+  ASSERT_TRUE(reader.ok());
+  const RosbagDriveReader& r = **reader;
+  std::vector<size_t> sizes(r.NumScans(), 0);
+  std::vector<std::thread> threads;
+  for (int t = 0; t < 3; ++t) {
+    threads.emplace_back([&, t] {
+      for (size_t i = t; i < r.NumScans(); i += 3) {
+        auto s = r.ReadScan(i);
+        if (s.ok()) sizes[i] = s->cloud.size();
+      }
+    });
+  }
+  for (auto& th : threads) th.join();
+  for (size_t i = 0; i < r.NumScans(); ++i) {
+    auto s = kitti_->ReadScan(i);
+    ASSERT_TRUE(s.ok());
+    EXPECT_EQ(sizes[i], s->cloud.size()) << i;
+  }
+}
+
+TEST(RosbagRoundTrip, RealKittiFrames) {
+  SLAM_MMS_REQUIRE_KITTI_RAW();
+  KittiRawReader::Options ko;
+  ko.last_frame = 9;
+  auto kitti = KittiDriveReader::Open(testing::KittiRawDriveDir(), ko);
+  ASSERT_TRUE(kitti.ok()) << kitti.status().ToString();
+  const fs::path dir = testing::MakeTempDir("rosbag_kitti");
+  const fs::path bag = dir / "kitti.bag";
+  ASSERT_TRUE(WriteRosbag(**kitti, bag, RosbagWriteOptions()).ok());
+  auto reader = RosbagDriveReader::Open(bag, OptionsFor(**kitti));
+  ASSERT_TRUE(reader.ok()) << reader.status().ToString();
+  ExpectSameDrive(**kitti, **reader);
+  // Drive 0013's OXTS reports differential fixes (posmode 4) -> STATUS_SBAS_FIX -> the same type.
+  for (const GnssFix& f : (*reader)->streams().gnss) EXPECT_EQ(f.type, GnssFixType::kDifferential);
+  std::error_code ec;
+  fs::remove_all(dir, ec);
+}
+
+// ---------------------------------------------------------------------------------------------
+// (b) An independent writer: python3-rosbag, kitti2bag's topics and conventions.
+
+struct KittiStyleBag {
+  static constexpr int kPoints = 1000;
+  static constexpr int kScans = 5;
+  static constexpr int kOxts = 10;
+};
+
+TEST(RosbagPythonBag, Kitti2bagStyleTopicsAreFoundAndRead) {
+  const fs::path script = fs::path(__FILE__).parent_path() / "write_kitti2bag_style_bag.py";
+  if (std::system("/usr/bin/python3 -c 'import rosbag, sensor_msgs.msg, geometry_msgs.msg' "
+                  ">/dev/null 2>&1") != 0) {
+    GTEST_SKIP() << "python3-rosbag / python3-sensor-msgs not installed (scripts/install_deps.sh)";
+  }
+  const fs::path dir = testing::MakeTempDir("rosbag_py");
+  const fs::path bag = dir / "kitti2bag_style.bag";
+  const std::string cmd = "/usr/bin/python3 " + script.string() + " " + bag.string();
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+
+  auto reader = RosbagDriveReader::Open(bag, RosbagDriveReader::Options());
+  ASSERT_TRUE(reader.ok()) << reader.status().ToString();
+  const RosbagDriveReader& r = **reader;
+  EXPECT_EQ(r.lidar_topic(), "/kitti/velo/pointcloud");
+  EXPECT_EQ(r.imu_topic(), "/kitti/oxts/imu");
+  EXPECT_EQ(r.gnss_topic(), "/kitti/oxts/gps/fix");
+  EXPECT_EQ(r.velocity_topic(), "/kitti/oxts/gps/vel");
+
+  const int64_t t0 = testing::kBagT0Ns;
+  ASSERT_EQ(r.NumScans(), static_cast<size_t>(KittiStyleBag::kScans));
+  for (int s = 0; s < KittiStyleBag::kScans; ++s) {
+    SCOPED_TRACE("scan " + std::to_string(s));
+    EXPECT_EQ(r.ScanStart(s).nanoseconds(), t0 + 100000000LL * (s + 1));
+    EXPECT_EQ(r.ScanEnd(s).nanoseconds(), t0 + 100000000LL * (s + 2));  // median spacing 0.1 s
+    auto scan = r.ReadScan(s);
+    ASSERT_TRUE(scan.ok()) << scan.status().ToString();
+    EXPECT_EQ(scan->index, s);
+    ASSERT_EQ(scan->cloud.size(), static_cast<size_t>(KittiStyleBag::kPoints));
+    for (int k = 0; k < KittiStyleBag::kPoints; ++k) {
+      const double a = 2.0 * M_PI * k / KittiStyleBag::kPoints;
+      const Eigen::Vector3f p(static_cast<float>((10.0 + s) * std::cos(a)),
+                              static_cast<float>((10.0 + s) * std::sin(a)),
+                              static_cast<float>(0.01 * k - 1.0));
+      ASSERT_EQ(scan->cloud.points()[k], p) << k;
+      ASSERT_EQ(scan->cloud.intensities()[k],
+                static_cast<float>(static_cast<double>(k) / KittiStyleBag::kPoints));
+      ASSERT_NEAR(scan->cloud.time_offsets_s()[k],
+                  0.1 * KittiAzimuthFraction(p.x(), p.y(), SpinDirection::kClockwise), 1e-6);
+    }
+  }
+  const DriveStreams& st = r.streams();
+  ASSERT_EQ(st.imu.size(), static_cast<size_t>(KittiStyleBag::kOxts));
+  for (int m = 0; m < KittiStyleBag::kOxts; ++m) {
+    EXPECT_EQ(st.imu[m].stamp.nanoseconds(), t0 + 100000000LL * m);
+    EXPECT_EQ(st.imu[m].accel_mps2, Eigen::Vector3d(0.1 * m, -0.2, 9.81));
+    EXPECT_EQ(st.imu[m].gyro_radps, Eigen::Vector3d(0.001 * m, 0.002, -0.003 * m));
+  }
+  // Message 5 has a NaN latitude: skipped and counted; STATUS_FIX = kSingle; unknown covariance.
+  ASSERT_EQ(st.gnss.size(), static_cast<size_t>(KittiStyleBag::kOxts - 1));
+  EXPECT_EQ(r.NumSkippedGnssFixes(), 1u);
+  for (size_t k = 0; k < st.gnss.size(); ++k) {
+    const int m = k < 5 ? static_cast<int>(k) : static_cast<int>(k) + 1;
+    EXPECT_EQ(st.gnss[k].latitude_deg, 49.0 + 1e-6 * m);
+    EXPECT_EQ(st.gnss[k].longitude_deg, 8.4 + 2e-6 * m);
+    EXPECT_EQ(st.gnss[k].height_m, 114.0 + 0.1 * m);
+    EXPECT_EQ(st.gnss[k].type, GnssFixType::kSingle);
+    EXPECT_EQ(st.gnss[k].sigma_horizontal_m, 1.0);
+    EXPECT_EQ(st.gnss[k].sigma_vertical_m, 1.5);
+    EXPECT_THAT(st.gnss_source[k], HasSubstr("/kitti/oxts/gps/fix message " + std::to_string(m)));
+  }
+  // Initial attitude from message 0 (roll 0, pitch 0, yaw 0.3), velocity (body frame) rotated.
+  ASSERT_TRUE(st.initial_state.has_value());
+  EXPECT_EQ(st.initial_state->stamp.nanoseconds(), t0);
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  EXPECT_TRUE(st.initial_state->T_world_body.linear().isApprox(R, 1e-12));
+  EXPECT_LE((st.initial_state->v_world_mps - R * Eigen::Vector3d(5.0, 0.2, -0.05)).norm(), 1e-12);
+  EXPECT_THAT(st.initial_state_source, HasSubstr("/kitti/oxts/imu message 0"));
+
+  auto topics = RosbagDriveReader::ListTopics(bag);
+  ASSERT_TRUE(topics.ok());
+  EXPECT_EQ(topics->size(), 5u);
+  std::error_code ec;
+  fs::remove_all(dir, ec);
+}
+
+// ---------------------------------------------------------------------------------------------
+// (c) Malformed bags: every failure is a Status naming the bag, topic and message.
+
+class MalformedBag : public ::testing::Test {
+ protected:
+  void SetUp() override { dir_ = testing::MakeTempDir("rosbag_bad"); }
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(dir_, ec);
+  }
+  // IMU at 100 Hz over [0, 1] s and 10 clouds at 10 Hz on `cloud_topics`.
+  fs::path WriteGood(const std::string& name, const std::vector<std::string>& cloud_topics) {
+    const fs::path bag = dir_ / name;
+    testing::WriteTestBag(bag, [&](rosbag::Bag& b) {
+      for (int k = 0; k <= 100; ++k) {
+        const int64_t ns = testing::kBagT0Ns + k * 10000000LL;
+        b.write("/imu", testing::RosTimeNs(ns), testing::TestImu(ns));
+      }
+      for (const std::string& topic : cloud_topics) {
+        for (int s = 0; s < 10; ++s) {
+          const int64_t ns = testing::kBagT0Ns + s * 100000000LL;
+          b.write(topic, testing::RosTimeNs(ns), testing::SimpleCloud(ns, 500));
+        }
+      }
+    });
+    return bag;
+  }
+  fs::path dir_;
+};
+
+TEST_F(MalformedBag, MissingLidarTopicListsTheTopics) {
+  const fs::path bag = WriteGood("no_lidar.bag", {});
+  auto r = RosbagDriveReader::Open(bag, RosbagDriveReader::Options());
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.status().code(), StatusCode::kInvalidArgument);
+  EXPECT_THAT(r.status().message(), HasSubstr(bag.string()));
+  EXPECT_THAT(r.status().message(), HasSubstr("no sensor_msgs/PointCloud2 topic"));
+  EXPECT_THAT(r.status().message(), HasSubstr("/imu [sensor_msgs/Imu, 101 messages]"));
+
+  RosbagDriveReader::Options o;
+  o.lidar_topic = "/velodyne_points";
+  r = RosbagDriveReader::Open(bag, o);
+  ASSERT_FALSE(r.ok());
+  EXPECT_THAT(r.status().message(), HasSubstr("/velodyne_points (Options::lidar_topic) is not in"));
+  o.lidar_topic = "/imu";
+  r = RosbagDriveReader::Open(bag, o);
+  ASSERT_FALSE(r.ok());
+  EXPECT_THAT(r.status().message(), HasSubstr("is sensor_msgs/Imu, not sensor_msgs/PointCloud2"));
+}
+
+TEST_F(MalformedBag, TwoCloudTopicsAreAmbiguousUntilOneIsChosen) {
+  const fs::path bag = WriteGood("two_lidars.bag", {"/front/points", "/rear/points"});
+  auto r = RosbagDriveReader::Open(bag, RosbagDriveReader::Options());
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.status().code(), StatusCode::kInvalidArgument);
+  EXPECT_THAT(r.status().message(),
+              HasSubstr("2 sensor_msgs/PointCloud2 topics (/front/points, /rear/points)"));
+  EXPECT_THAT(r.status().message(), HasSubstr("Options::lidar_topic"));
+  RosbagDriveReader::Options o;
+  o.lidar_topic = "/rear/points";
+  r = RosbagDriveReader::Open(bag, o);
+  ASSERT_TRUE(r.ok()) << r.status().ToString();
+  EXPECT_EQ((*r)->lidar_topic(), "/rear/points");
+  EXPECT_EQ((*r)->NumScans(), 10u);
+  EXPECT_TRUE((*r)->ReadScan(9).ok());
+  EXPECT_EQ((*r)->ReadScan(10).status().code(), StatusCode::kOutOfRange);
+  EXPECT_FALSE((*r)->streams().initial_state.has_value());  // no orientation in the IMU
+  EXPECT_TRUE((*r)->streams().gnss.empty());
+}
+
+TEST_F(MalformedBag, ImuTimeGoingBackwards) {
+  const fs::path bag = dir_ / "imu_backwards.bag";
+  testing::WriteTestBag(bag, [&](rosbag::Bag& b) {
+    const int64_t stamps_ms[] = {0, 10, 20, 15, 30};
+    for (int k = 0; k < 5; ++k) {
+      const int64_t receipt = testing::kBagT0Ns + k * 10000000LL;  // receipt order is fine
+      b.write("/imu", testing::RosTimeNs(receipt),
+              testing::TestImu(testing::kBagT0Ns + stamps_ms[k] * 1000000LL));
+    }
+    b.write("/points", testing::RosTimeNs(testing::kBagT0Ns),
+            testing::SimpleCloud(testing::kBagT0Ns, 100));
+  });
+  auto r = RosbagDriveReader::Open(bag, RosbagDriveReader::Options());
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.status().code(), StatusCode::kDataLoss);
+  EXPECT_THAT(r.status().message(), HasSubstr(bag.string() + ": /imu message 3"));
+  EXPECT_THAT(r.status().message(), HasSubstr("1317000000.015000000 is not after message 2's "
+                                              "1317000000.020000000"));
+}
+
+TEST_F(MalformedBag, TruncatedCloudDataIsDataLossAtReadScan) {
+  const fs::path bag = dir_ / "short_cloud.bag";
+  testing::WriteTestBag(bag, [&](rosbag::Bag& b) {
+    for (int k = 0; k <= 30; ++k) {
+      const int64_t ns = testing::kBagT0Ns + k * 10000000LL;
+      b.write("/imu", testing::RosTimeNs(ns), testing::TestImu(ns));
+    }
+    for (int s = 0; s < 3; ++s) {
+      const int64_t ns = testing::kBagT0Ns + s * 100000000LL;
+      sensor_msgs::PointCloud2 c = testing::SimpleCloud(ns, 500);
+      if (s == 1) c.data.resize(c.data.size() / 2);
+      b.write("/points", testing::RosTimeNs(ns), c);
+    }
+  });
+  auto r = RosbagDriveReader::Open(bag, RosbagDriveReader::Options());
+  ASSERT_TRUE(r.ok()) << r.status().ToString();
+  ASSERT_EQ((*r)->NumScans(), 3u);
+  EXPECT_TRUE((*r)->ReadScan(0).ok());
+  EXPECT_TRUE((*r)->ReadScan(2).ok());
+  auto bad = (*r)->ReadScan(1);
+  ASSERT_FALSE(bad.ok());
+  EXPECT_EQ(bad.status().code(), StatusCode::kDataLoss);
+  EXPECT_THAT(bad.status().message(), HasSubstr(bag.string() + ": /points message 1"));
+  EXPECT_THAT(bad.status().message(), HasSubstr("field data has 4000 bytes"));
+  EXPECT_THAT(bad.status().message(), HasSubstr("8000 (truncated)"));
+}
+
+TEST_F(MalformedBag, BigEndianCloudFailsOpen) {
+  const fs::path bag = dir_ / "big_endian.bag";
+  testing::WriteTestBag(bag, [&](rosbag::Bag& b) {
+    b.write("/imu", testing::RosTimeNs(testing::kBagT0Ns), testing::TestImu(testing::kBagT0Ns));
+    sensor_msgs::PointCloud2 c = testing::SimpleCloud(testing::kBagT0Ns, 10);
+    c.is_bigendian = true;
+    b.write("/points", testing::RosTimeNs(testing::kBagT0Ns), c);
+  });
+  auto r = RosbagDriveReader::Open(bag, RosbagDriveReader::Options());
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.status().code(), StatusCode::kDataLoss);
+  EXPECT_THAT(r.status().message(), HasSubstr("/points message 0: is_bigendian"));
+}
+
+TEST_F(MalformedBag, TruncatedBagFileIsAStatusNamingTheFile) {
+  const fs::path good = WriteGood("good.bag", {"/points"});
+  std::ifstream in(good, std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_GT(bytes.size(), 1000u);
+  for (double fraction : {0.001, 0.1, 0.5, 0.9, 0.999}) {
+    SCOPED_TRACE(fraction);
+    const fs::path cut = dir_ / "cut.bag";
+    std::ofstream(cut, std::ios::binary)
+        .write(bytes.data(), static_cast<std::streamsize>(bytes.size() * fraction));
+    auto r = RosbagDriveReader::Open(cut, RosbagDriveReader::Options());
+    ASSERT_FALSE(r.ok());
+    EXPECT_EQ(r.status().code(), StatusCode::kDataLoss);
+    EXPECT_THAT(r.status().message(), HasSubstr(cut.string()));
+    EXPECT_FALSE(RosbagDriveReader::ListTopics(cut).ok());
+  }
+  // Not a bag at all, and no file.
+  const fs::path text = dir_ / "notes.bag";
+  std::ofstream(text) << "not a bag\n";
+  EXPECT_EQ(RosbagDriveReader::Open(text, RosbagDriveReader::Options()).status().code(),
+            StatusCode::kDataLoss);
+  EXPECT_EQ(
+      RosbagDriveReader::Open(dir_ / "none.bag", RosbagDriveReader::Options()).status().code(),
+      StatusCode::kNotFound);
+}
+
+TEST(RosbagOptions, ValidateNamesTheField) {
+  RosbagDriveReader::Options o;
+  EXPECT_TRUE(o.Validate().ok());
+  o.first_scan = 5;
+  o.last_scan = 2;
+  EXPECT_THAT(o.Validate().message(), HasSubstr("last_scan = 2"));
+  o = RosbagDriveReader::Options();
+  o.scan_period_s = -1.0;
+  EXPECT_THAT(o.Validate().message(), HasSubstr("scan_period_s"));
+  o = RosbagDriveReader::Options();
+  o.T_body_lidar.linear() *= 2.0;
+  EXPECT_THAT(o.Validate().message(), HasSubstr("T_body_lidar"));
+  RosbagWriteOptions w;
+  EXPECT_TRUE(w.Validate().ok());
+  w.gnss_topic = w.imu_topic;
+  EXPECT_THAT(w.Validate().message(), HasSubstr("given for two streams"));
+}
+
+TEST(RosbagFixTypeConvention, StatusAndSigma) {
+  using sensor_msgs::NavSatStatus;
+  EXPECT_EQ(RosbagFixType(NavSatStatus::STATUS_NO_FIX, 0.01), GnssFixType::kNone);
+  EXPECT_EQ(RosbagFixType(NavSatStatus::STATUS_FIX, 0.01), GnssFixType::kSingle);
+  EXPECT_EQ(RosbagFixType(NavSatStatus::STATUS_SBAS_FIX, 0.01), GnssFixType::kDifferential);
+  EXPECT_EQ(RosbagFixType(NavSatStatus::STATUS_GBAS_FIX, 0.05), GnssFixType::kRtkFixed);
+  EXPECT_EQ(RosbagFixType(NavSatStatus::STATUS_GBAS_FIX, 0.0500001), GnssFixType::kRtkFloat);
+  EXPECT_EQ(RosbagFixType(NavSatStatus::STATUS_GBAS_FIX, 0.2, 0.25), GnssFixType::kRtkFixed);
+  EXPECT_EQ(RosbagFixType(7, 0.01), GnssFixType::kNone);
+  // Sigmas: sqrt((c0 + c4) / 2), sqrt(c8); unknown covariance -> the defaults.
+  sensor_msgs::NavSatFix fix;
+  fix.position_covariance = {0.01, 0, 0, 0, 0.04, 0, 0, 0, 0.09};
+  fix.position_covariance_type = sensor_msgs::NavSatFix::COVARIANCE_TYPE_DIAGONAL_KNOWN;
+  double sh = 0.0, sv = 0.0;
+  rosbag_internal::NavSatFixSigmas(fix, 1.0, 1.5, &sh, &sv);
+  EXPECT_DOUBLE_EQ(sh, std::sqrt(0.025));
+  EXPECT_DOUBLE_EQ(sv, 0.3);
+  fix.position_covariance_type = sensor_msgs::NavSatFix::COVARIANCE_TYPE_UNKNOWN;
+  rosbag_internal::NavSatFixSigmas(fix, 1.0, 1.5, &sh, &sv);
+  EXPECT_EQ(sh, 1.0);
+  EXPECT_EQ(sv, 1.5);
+}
+
+}  // namespace
+}  // namespace slam_mms

@@ -1,0 +1,75 @@
+#pragma once
+// RunDrive: one mapping method over a whole drive from any DriveReader (KITTI raw, a plain drive
+// folder, a ROS 1 bag). It builds a MappingSystem for the mode, starts the POS from the reader's
+// initial state, merges the scans, IMU samples and GNSS fixes (or the external POS) in time order
+// into it, finishes, and returns the trajectory, the map and what happened. This is the loop every
+// app (slam_mms_run, slam_mms_bench_e2e) and the Python package run, so that they give the same
+// trajectories from the same input.
+//
+// Time order: a scan enters once the IMU/GNSS streams have reached its end; at equal stamps IMU,
+// then GNSS, then the scan. An unreadable scan (ReadScan error) is skipped with a warning naming
+// its source, counted and listed; any other error stops the run and is returned in `status` with
+// the estimates computed so far (nothing computed is lost). `stop` (e.g. set by a SIGINT handler)
+// ends the run after the current scan: Finish() still runs on what was fed, `complete` is false.
+//
+// External POS (reader.streams().pos non-empty): the records are converted to world (local ENU at
+// options.origin, else at the first record) and fed with AddInsPose instead of IMU + GNSS.
+//
+// Thread safety: RunDrive may run concurrently with itself on distinct readers (or one reader whose
+// ReadScan is thread-safe); callbacks are called on the calling thread.
+
+#include <atomic>
+#include <cstddef>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "slam_mms/core/point_cloud.hpp"
+#include "slam_mms/core/status.hpp"
+#include "slam_mms/core/trajectory.hpp"
+#include "slam_mms/io/drive_reader.hpp"
+#include "slam_mms/pipeline/mapping_system.hpp"
+
+namespace slam_mms {
+
+/// What RunDrive returns: the estimates (also after an error or a stop) and the run's counts.
+struct DriveRun {
+  MappingMode mode = MappingMode::kFull;
+  Trajectory trajectory;                    ///< T_world_body at each processed scan's start.
+  std::vector<LocalizationResult> results;  ///< Per scan, level 1 (before level 2).
+  PointCloud map;                           ///< MappingSystem::FinalMap().
+  std::optional<GeodeticPoint> origin;      ///< World origin, where known.
+  std::vector<GnssAvailabilityInterval> availability;
+  /// Start of the first scan fed to the system: GNSS outage windows are relative to it.
+  std::optional<Timestamp> first_scan_start;
+  double wall_s = 0.0;              ///< Processing time, Create() to Finish() [s].
+  size_t scans_total = 0;           ///< reader.NumScans().
+  size_t scans_processed = 0;       ///< Poses in the trajectory.
+  size_t scans_unreadable = 0;      ///< ReadScan errors (skipped).
+  int scans_skipped_by_system = 0;  ///< Bad scans MappingSystem skipped (empty, no finite point).
+  std::vector<std::string> skipped_scans;  ///< Source and reason of every skipped scan.
+  bool finished = false;                   ///< Finish() completed.
+  bool complete = false;  ///< Every scan was fed and Finish() completed (no error, no stop).
+  Status status;          ///< The fatal error, if any.
+};
+
+struct DriveRunCallbacks {
+  /// After every scan fed (processed or skipped): (scans fed so far, reader.NumScans()).
+  std::function<void(size_t fed, size_t total)> on_scan;
+  /// Polled before every scan; true ends the run cleanly (see the file comment).
+  const std::atomic<bool>* stop = nullptr;
+};
+
+/// Runs `options.mode` over `reader`. options.T_body_lidar is used as given (set it from
+/// reader.streams().T_body_lidar); an options error is returned in DriveRun::status.
+DriveRun RunDrive(const DriveReader& reader, const MappingSystem::Options& options,
+                  const DriveRunCallbacks& callbacks = {});
+
+/// The external POS records in world (local ENU about `origin`): positions through WGS-84, the
+/// attitudes rotated from each record's local ENU into world, covariances from the sigmas (else
+/// 1 cm / 0.01 deg). Fails on a record outside the WGS-84 range.
+[[nodiscard]] StatusOr<std::vector<InsState>> PosRecordsInWorld(
+    const std::vector<PosRecord>& records, const GeodeticPoint& origin);
+
+}  // namespace slam_mms

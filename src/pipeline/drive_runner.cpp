@@ -1,0 +1,186 @@
+#include "slam_mms/pipeline/drive_runner.hpp"
+
+#include <GeographicLib/LocalCartesian.hpp>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <memory>
+
+#include "slam_mms/core/logging.hpp"
+
+namespace slam_mms {
+namespace {
+
+constexpr double kDegToRad = M_PI / 180.0;
+
+// Rotation of the ENU tangent frame at (lat, lon) into ECEF (columns: east, north, up).
+Eigen::Matrix3d R_ecef_enu(double latitude_deg, double longitude_deg) {
+  const double slat = std::sin(latitude_deg * kDegToRad), clat = std::cos(latitude_deg * kDegToRad);
+  const double slon = std::sin(longitude_deg * kDegToRad),
+               clon = std::cos(longitude_deg * kDegToRad);
+  Eigen::Matrix3d R;
+  R.col(0) << -slon, clon, 0.0;
+  R.col(1) << -slat * clon, -slat * slon, clat;
+  R.col(2) << clat * clon, clat * slon, slat;
+  return R;
+}
+
+// The next record of the three input streams in time order (IMU, then GNSS/POS, then the scan
+// at equal stamps; a scan once the streams reached its end).
+enum class Next { kImu, kGnss, kPos, kScan, kNone };
+
+}  // namespace
+
+StatusOr<std::vector<InsState>> PosRecordsInWorld(const std::vector<PosRecord>& records,
+                                                  const GeodeticPoint& origin) {
+  const GeographicLib::LocalCartesian lc(origin.latitude_deg, origin.longitude_deg,
+                                         origin.height_m);
+  const Eigen::Matrix3d R_world_ecef =
+      R_ecef_enu(origin.latitude_deg, origin.longitude_deg).transpose();
+  std::vector<InsState> states;
+  states.reserve(records.size());
+  for (size_t i = 0; i < records.size(); ++i) {
+    const PosRecord& r = records[i];
+    if (!(std::abs(r.latitude_deg) <= 90.0) || !(std::abs(r.longitude_deg) <= 180.0) ||
+        !std::isfinite(r.height_m)) {
+      return InvalidArgumentError("external POS record " + std::to_string(i) +
+                                  ": position outside the WGS-84 range");
+    }
+    InsState s;
+    s.stamp = r.stamp;
+    Eigen::Vector3d p_world;
+    lc.Forward(r.latitude_deg, r.longitude_deg, r.height_m, p_world.x(), p_world.y(), p_world.z());
+    // R_world_body = R_world_ecef * R_ecef_local * R_local_body.
+    s.T_world_body.linear() =
+        R_world_ecef * R_ecef_enu(r.latitude_deg, r.longitude_deg) * r.R_enu_body;
+    s.T_world_body.translation() = p_world;
+    const Eigen::Vector3d sigma_rot =
+        r.sigma_rpy_rad.value_or(Eigen::Vector3d::Constant(0.01 * kDegToRad));
+    const Eigen::Vector3d sigma_pos = r.sigma_enu_m.value_or(Eigen::Vector3d::Constant(0.01));
+    Vector6d var;
+    var << sigma_rot.cwiseAbs2(), sigma_pos.cwiseAbs2();
+    s.cov_T_world_body = var.asDiagonal();
+    states.push_back(s);
+  }
+  return states;
+}
+
+DriveRun RunDrive(const DriveReader& reader, const MappingSystem::Options& base_options,
+                  const DriveRunCallbacks& callbacks) {
+  const DriveStreams& in = reader.streams();
+  DriveRun run;
+  run.mode = base_options.mode;
+  run.scans_total = reader.NumScans();
+  const auto t0 = std::chrono::steady_clock::now();
+
+  MappingSystem::Options options = base_options;
+  std::vector<InsState> pos;
+  if (!in.pos.empty()) {
+    if (!options.origin) {
+      options.origin = GeodeticPoint{in.pos.front().latitude_deg, in.pos.front().longitude_deg,
+                                     in.pos.front().height_m};
+    }
+    StatusOr<std::vector<InsState>> converted = PosRecordsInWorld(in.pos, *options.origin);
+    if (!converted.ok()) {
+      run.status = converted.status().WithContext(reader.Describe());
+      return run;
+    }
+    pos = std::move(converted).value();
+  }
+  StatusOr<std::unique_ptr<MappingSystem>> created = MappingSystem::Create(options);
+  if (!created.ok()) {
+    run.status = created.status();
+    return run;
+  }
+  std::unique_ptr<MappingSystem> system = std::move(created).value();
+
+  Status status;
+  if (pos.empty() && in.initial_state) {
+    status = system->InitializePos(*in.initial_state).WithContext(in.initial_state_source);
+  }
+  const bool use_pos = !pos.empty();
+  const size_t n_imu = use_pos ? 0 : in.imu.size();
+  const size_t n_gnss = use_pos ? 0 : in.gnss.size();
+  const size_t n_pos = pos.size(), n_scan = run.scans_total;
+  size_t i_imu = 0, i_gnss = 0, i_pos = 0, i_scan = 0;
+  bool stopped = false;
+  while (status.ok() && (i_imu < n_imu || i_gnss < n_gnss || i_pos < n_pos || i_scan < n_scan)) {
+    constexpr int64_t kNever = std::numeric_limits<int64_t>::max();
+    const int64_t t_imu = i_imu < n_imu ? in.imu[i_imu].stamp.nanoseconds() : kNever;
+    const int64_t t_gnss = i_gnss < n_gnss ? in.gnss[i_gnss].stamp.nanoseconds() : kNever;
+    const int64_t t_pos = i_pos < n_pos ? pos[i_pos].stamp.nanoseconds() : kNever;
+    const int64_t t_scan = i_scan < n_scan ? reader.ScanEnd(i_scan).nanoseconds() : kNever;
+    Next next = Next::kScan;
+    if (t_imu <= t_gnss && t_imu <= t_pos && t_imu <= t_scan) {
+      next = Next::kImu;
+    } else if (t_gnss <= t_pos && t_gnss <= t_scan) {
+      next = Next::kGnss;
+    } else if (t_pos <= t_scan) {
+      next = Next::kPos;
+    }
+    switch (next) {
+      case Next::kImu:
+        status = system->AddImu(in.imu[i_imu]);
+        if (!status.ok()) status = status.WithContext(in.imu_source[i_imu]);
+        ++i_imu;
+        break;
+      case Next::kGnss:
+        status = system->AddGnss(in.gnss[i_gnss]);
+        if (!status.ok()) status = status.WithContext(in.gnss_source[i_gnss]);
+        ++i_gnss;
+        break;
+      case Next::kPos:
+        status = system->AddInsPose(pos[i_pos]);
+        if (!status.ok()) status = status.WithContext(in.pos_source[i_pos]);
+        ++i_pos;
+        break;
+      case Next::kScan:
+      case Next::kNone: {
+        if (callbacks.stop != nullptr && callbacks.stop->load()) {
+          stopped = true;
+          break;
+        }
+        StatusOr<Scan> scan = reader.ReadScan(i_scan);
+        if (!scan.ok()) {
+          // One unreadable scan is not fatal: skip it, say which one.
+          SLAM_MMS_LOG(kWarning) << "skipping scan " << reader.ScanSource(i_scan) << ": "
+                                 << scan.status().ToString();
+          run.skipped_scans.push_back(reader.ScanSource(i_scan) + ": " + scan.status().message());
+          ++run.scans_unreadable;
+        } else {
+          if (!run.first_scan_start) run.first_scan_start = scan->stamp_start;
+          const int skipped_before = system->num_skipped_scans();
+          status = system->AddScan(*scan);
+          if (!status.ok()) status = status.WithContext(scan->source);
+          if (system->num_skipped_scans() > skipped_before) {
+            run.skipped_scans.push_back(reader.ScanSource(i_scan) + ": no finite point");
+          }
+        }
+        ++i_scan;
+        if (callbacks.on_scan) callbacks.on_scan(i_scan, n_scan);
+        break;
+      }
+    }
+    if (stopped) break;
+  }
+  if (status.ok()) {
+    status = system->Finish();
+    run.finished = status.ok();
+  }
+  run.complete = run.finished && !stopped;
+  run.status = status;
+  run.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+  // What was computed, also after a fatal error (the current estimates).
+  run.trajectory = system->FinalTrajectory();
+  run.results = system->results();
+  run.map = system->FinalMap();
+  if (StatusOr<GeodeticPoint> origin = system->Origin(); origin.ok()) run.origin = *origin;
+  run.availability = system->GnssAvailability();
+  run.scans_skipped_by_system = system->num_skipped_scans();
+  run.scans_processed = run.trajectory.size();
+  return run;
+}
+
+}  // namespace slam_mms

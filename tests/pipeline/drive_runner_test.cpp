@@ -1,0 +1,218 @@
+// RunDrive (the loop every app and the Python package run) on a short simulated drive: it gives
+// exactly what a host feeding the streams by hand gets, skips and lists unreadable scans, stops
+// cleanly on request, and feeds an external POS.
+#include "slam_mms/pipeline/drive_runner.hpp"
+
+#include <gtest/gtest.h>
+
+#include <GeographicLib/LocalCartesian.hpp>
+#include <atomic>
+#include <filesystem>
+#include <fstream>
+
+#include "slam_mms/io/kitti_drive_reader.hpp"
+#include "slam_mms/pipeline/open_drive.hpp"
+#include "testing/feed_streams.hpp"
+#include "testing/simulated_drive.hpp"
+
+namespace slam_mms {
+namespace {
+
+// A DriveReader that forwards to another and replaces its streams (to add an external POS).
+class StreamsOverride final : public DriveReader {
+ public:
+  StreamsOverride(const DriveReader& base, DriveStreams streams)
+      : base_(base), streams_(std::move(streams)) {}
+  std::string Describe() const override { return base_.Describe(); }
+  size_t NumScans() const override { return base_.NumScans(); }
+  Timestamp ScanStart(size_t i) const override { return base_.ScanStart(i); }
+  Timestamp ScanEnd(size_t i) const override { return base_.ScanEnd(i); }
+  std::string ScanSource(size_t i) const override { return base_.ScanSource(i); }
+  StatusOr<Scan> ReadScan(size_t i) const override { return base_.ReadScan(i); }
+  const DriveStreams& streams() const override { return streams_; }
+  uint64_t TotalDroppedPoints() const override { return base_.TotalDroppedPoints(); }
+
+ private:
+  const DriveReader& base_;
+  DriveStreams streams_;
+};
+
+void ExpectSameTrajectory(const Trajectory& a, const Trajectory& b) {
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t i = 0; i < a.size(); ++i) {
+    ASSERT_EQ(a.poses()[i].stamp, b.poses()[i].stamp) << i;
+    ASSERT_TRUE(a.poses()[i].T_world_body.matrix() == b.poses()[i].T_world_body.matrix())
+        << "pose " << i << " differs";
+  }
+}
+
+class DriveRunnerTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    auto drive = testing::SimulateDrive("slam_mms_drive_runner", /*seed=*/5, kDurationS);
+    ASSERT_TRUE(drive.ok()) << drive.status().ToString();
+    sim_ = new testing::SimulatedDrive(std::move(drive).value());
+  }
+  static void TearDownTestSuite() {
+    std::error_code ec;
+    std::filesystem::remove_all(sim_->dir, ec);
+    delete sim_;
+  }
+  static std::unique_ptr<KittiDriveReader> Open(const std::filesystem::path& dir) {
+    auto r = KittiDriveReader::Open(dir, KittiRawReader::Options());
+    EXPECT_TRUE(r.ok()) << r.status().ToString();
+    return r.ok() ? std::move(r).value() : nullptr;
+  }
+  static MappingSystem::Options OptionsFor(MappingMode mode, const DriveReader& reader) {
+    MappingSystem::Options o;
+    o.mode = mode;
+    o.origin = sim_->origin;
+    o.T_body_lidar = reader.streams().T_body_lidar;
+    return o;
+  }
+  static constexpr double kDurationS = 4.0;
+  static testing::SimulatedDrive* sim_;
+};
+testing::SimulatedDrive* DriveRunnerTest::sim_ = nullptr;
+
+TEST_F(DriveRunnerTest, GivesExactlyWhatAHandFedSystemGives) {
+  auto reader = Open(sim_->drive_dir);
+  ASSERT_NE(reader, nullptr);
+  const MappingSystem::Options options = OptionsFor(MappingMode::kFull, *reader);
+  const DriveRun run = RunDrive(*reader, options);
+  ASSERT_TRUE(run.status.ok()) << run.status.ToString();
+  EXPECT_TRUE(run.finished);
+  EXPECT_TRUE(run.complete);
+  EXPECT_EQ(run.scans_processed, reader->NumScans());
+  EXPECT_TRUE(run.skipped_scans.empty());
+  ASSERT_TRUE(run.first_scan_start.has_value());
+  EXPECT_EQ(*run.first_scan_start, reader->ScanStart(0));
+
+  // By hand: the initial state, then IMU/GNSS up to each scan's end, then the scan.
+  auto system = MappingSystem::Create(options);
+  ASSERT_TRUE(system.ok());
+  const DriveStreams& in = reader->streams();
+  ASSERT_TRUE(in.initial_state.has_value());
+  ASSERT_TRUE((*system)->InitializePos(*in.initial_state).ok());
+  size_t i_imu = 0, i_gnss = 0;
+  for (size_t k = 0; k < reader->NumScans(); ++k) {
+    ASSERT_TRUE(testing::FeedStreamsUpTo(system->get(), in.imu, in.gnss, reader->ScanEnd(k), &i_imu,
+                                         &i_gnss)
+                    .ok());
+    auto scan = reader->ReadScan(k);
+    ASSERT_TRUE(scan.ok());
+    ASSERT_TRUE((*system)->AddScan(*scan).ok());
+  }
+  ASSERT_TRUE(testing::FeedStreamsUpTo(system->get(), in.imu, in.gnss,
+                                       Timestamp::FromNanoseconds(INT64_MAX), &i_imu, &i_gnss)
+                  .ok());
+  ASSERT_TRUE((*system)->Finish().ok());
+  ExpectSameTrajectory(run.trajectory, (*system)->FinalTrajectory());
+  EXPECT_EQ(run.map.size(), (*system)->FinalMap().size());
+}
+
+TEST_F(DriveRunnerTest, UnreadableScanIsSkippedListedAndTheRunCompletes) {
+  // A copy of the drive with scan 7 truncated (a .bin size not a multiple of 16).
+  const std::filesystem::path copy = sim_->dir.string() + "_truncated";
+  std::filesystem::remove_all(copy);
+  std::filesystem::copy(sim_->dir, copy, std::filesystem::copy_options::recursive);
+  const std::filesystem::path drive = copy / sim_->drive_dir.lexically_relative(sim_->dir);
+  const std::filesystem::path bin = drive / "velodyne_points" / "data" / "0000000007.bin";
+  std::filesystem::resize_file(bin, std::filesystem::file_size(bin) - 3);
+  auto reader = Open(drive);
+  ASSERT_NE(reader, nullptr);
+  const DriveRun run = RunDrive(*reader, OptionsFor(MappingMode::kGnssIns, *reader));
+  ASSERT_TRUE(run.status.ok()) << run.status.ToString();
+  EXPECT_TRUE(run.complete);
+  EXPECT_EQ(run.scans_unreadable, 1u);
+  EXPECT_EQ(run.scans_processed, reader->NumScans() - 1);
+  ASSERT_EQ(run.skipped_scans.size(), 1u);
+  EXPECT_NE(run.skipped_scans[0].find("0000000007.bin"), std::string::npos) << run.skipped_scans[0];
+  std::filesystem::remove_all(copy);
+}
+
+TEST_F(DriveRunnerTest, StopEndsAfterTheCurrentScanAndKeepsWhatWasComputed) {
+  auto reader = Open(sim_->drive_dir);
+  ASSERT_NE(reader, nullptr);
+  std::atomic<bool> stop{false};
+  DriveRunCallbacks callbacks;
+  callbacks.stop = &stop;
+  size_t last_fed = 0;
+  callbacks.on_scan = [&](size_t fed, size_t total) {
+    EXPECT_EQ(total, reader->NumScans());
+    last_fed = fed;
+    if (fed == 10) stop = true;
+  };
+  const DriveRun run = RunDrive(*reader, OptionsFor(MappingMode::kFull, *reader), callbacks);
+  ASSERT_TRUE(run.status.ok()) << run.status.ToString();
+  EXPECT_TRUE(run.finished);
+  EXPECT_FALSE(run.complete);
+  EXPECT_EQ(last_fed, 10u);
+  EXPECT_EQ(run.scans_processed, 10u);
+  EXPECT_FALSE(run.map.empty());
+}
+
+TEST_F(DriveRunnerTest, ExternalPosIsFedThroughWgs84) {
+  auto reader = Open(sim_->drive_dir);
+  ASSERT_NE(reader, nullptr);
+  // The true 100 Hz poses and the scan starts as an external POS in WGS-84 + local ENU attitude.
+  std::vector<StampedPose> truth = sim_->poses_100hz.poses();
+  truth.insert(truth.end(), sim_->ground_truth.poses().begin(), sim_->ground_truth.poses().end());
+  std::stable_sort(truth.begin(), truth.end(),
+                   [](const StampedPose& a, const StampedPose& b) { return a.stamp < b.stamp; });
+  const GeographicLib::LocalCartesian lc(sim_->origin.latitude_deg, sim_->origin.longitude_deg,
+                                         sim_->origin.height_m);
+  DriveStreams streams = reader->streams();
+  for (size_t i = 0; i < truth.size(); ++i) {
+    if (i > 0 && truth[i].stamp == truth[i - 1].stamp) continue;
+    PosRecord r;
+    r.stamp = truth[i].stamp;
+    const Eigen::Vector3d& p = truth[i].T_world_body.translation();
+    lc.Reverse(p.x(), p.y(), p.z(), r.latitude_deg, r.longitude_deg, r.height_m);
+    // The local ENU frame at the record is rotated against world (ENU at the origin):
+    // R_enu_body = R_world_local^T * R_world_body, with R_world_local what PosRecordsInWorld makes
+    // of an identity attitude there.
+    auto local = PosRecordsInWorld({r}, sim_->origin);
+    ASSERT_TRUE(local.ok());
+    r.R_enu_body =
+        local->front().T_world_body.linear().transpose() * truth[i].T_world_body.linear();
+    streams.pos.push_back(r);
+    streams.pos_source.push_back("truth " + std::to_string(i));
+  }
+  const StreamsOverride with_pos(*reader, streams);
+  const DriveRun run = RunDrive(with_pos, OptionsFor(MappingMode::kGnssIns, with_pos));
+  ASSERT_TRUE(run.status.ok()) << run.status.ToString();
+  ASSERT_EQ(run.trajectory.size(), sim_->ground_truth.size());
+  for (size_t i = 0; i < run.trajectory.size(); ++i) {
+    const Eigen::Isometry3d& est = run.trajectory.poses()[i].T_world_body;
+    const Eigen::Isometry3d& gt = sim_->ground_truth.poses()[i].T_world_body;
+    EXPECT_LT((est.translation() - gt.translation()).norm(), 1e-6) << "scan " << i;
+    EXPECT_LT(Eigen::AngleAxisd(est.linear().transpose() * gt.linear()).angle(), 1e-8)
+        << "scan " << i;
+  }
+}
+
+TEST(OpenDriveTest, DetectsTheKindAndNamesWhatIsMissing) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                    ("slam_mms_open_drive_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir / "folder");
+  std::ofstream(dir / "folder" / "scans.csv") << "file,stamp_start_ns,stamp_end_ns\n";
+  std::ofstream(dir / "a.bag") << "not a bag";
+  EXPECT_EQ(DetectDriveSourceKind(dir / "folder"), DriveSourceKind::kFolder);
+  EXPECT_EQ(DetectDriveSourceKind(dir / "a.bag"), DriveSourceKind::kRosbag);
+  EXPECT_EQ(DetectDriveSourceKind(dir / "nothing"), DriveSourceKind::kKittiRaw);
+  auto missing = OpenDrive(dir / "nothing", DriveSourceOptions());
+  ASSERT_FALSE(missing.ok());
+  EXPECT_NE(missing.status().message().find("nothing"), std::string::npos);
+  DriveSourceOptions with_yaml;
+  with_yaml.kind = DriveSourceKind::kKittiRaw;
+  with_yaml.extrinsics = dir / "x.yaml";
+  auto kitti_yaml = OpenDrive(dir / "nothing", with_yaml);
+  ASSERT_FALSE(kitti_yaml.ok());
+  EXPECT_EQ(kitti_yaml.status().code(), StatusCode::kInvalidArgument);
+  std::error_code ec;
+  std::filesystem::remove_all(dir, ec);
+}
+
+}  // namespace
+}  // namespace slam_mms

@@ -1,0 +1,345 @@
+// Evaluation bindings: ATE, KITTI relative error, outage errors, map entropy, report.json (the C++
+// writer, so the keys are exactly the schema of eval/report.hpp), map files, and the ground truth
+// of a drive in a run's world frame (slam_mms_run's own loader, compiled in unchanged so that
+// Python and the app evaluate against the same poses).
+
+#include <cmath>
+
+#include "common.hpp"
+#include "slam_mms/eval/map_entropy.hpp"
+#include "slam_mms/eval/outage_error.hpp"
+#include "slam_mms/eval/relative_error.hpp"
+#include "slam_mms/eval/report.hpp"
+#include "slam_mms/eval/trajectory_error.hpp"
+#include "slam_mms/io/drive_reader.hpp"
+#include "slam_mms/io/map_io.hpp"
+#include "slam_mms/pipeline/mapping_system.hpp"
+#include "slam_mms_run/config_file.hpp"
+#include "slam_mms_run/ground_truth.hpp"
+
+namespace slam_mms::python {
+namespace {
+
+using namespace slam_mms::eval;  // NOLINT(google-build-using-namespace)
+
+py::array_t<double> Rows3(const std::vector<PoseError>& e,
+                          const std::function<Eigen::Vector3d(const PoseError&)>& f) {
+  py::array_t<double> a({static_cast<py::ssize_t>(e.size()), py::ssize_t{3}});
+  auto r = a.mutable_unchecked<2>();
+  for (size_t i = 0; i < e.size(); ++i) {
+    const Eigen::Vector3d v = f(e[i]);
+    for (int k = 0; k < 3; ++k) r(static_cast<py::ssize_t>(i), k) = v(k);
+  }
+  return a;
+}
+py::array_t<double> Column(const std::vector<PoseError>& e,
+                           const std::function<double(const PoseError&)>& f) {
+  py::array_t<double> a(static_cast<py::ssize_t>(e.size()));
+  double* p = a.mutable_data();
+  for (size_t i = 0; i < e.size(); ++i) p[i] = f(e[i]);
+  return a;
+}
+
+std::optional<double> FiniteOrNone(double v) {
+  if (!std::isfinite(v)) return std::nullopt;
+  return v;
+}
+
+RelativeErrorOptions RelativeOptions(py::object lengths, int step_frames) {
+  RelativeErrorOptions o;
+  if (py::isinstance<py::str>(lengths)) {
+    const std::string name = lengths.cast<std::string>();
+    if (name == "kitti") {
+      o = RelativeErrorOptions::Kitti();
+    } else if (name == "short") {
+      o = RelativeErrorOptions::ShortDrive();
+    } else {
+      throw py::value_error("segment_lengths_m = '" + name +
+                            "'; must be 'kitti', 'short' or a list of lengths [m]");
+    }
+  } else {
+    o.segment_lengths_m = lengths.cast<std::vector<double>>();
+  }
+  o.step_frames = step_frames;
+  ThrowIfError(o.Validate());
+  return o;
+}
+
+}  // namespace
+
+void RegisterEval(py::module_& m) {
+  py::enum_<Alignment>(m, "Alignment", "NONE: as given (geo-referenced); SE3 / SIM3: Umeyama.")
+      .value("NONE", Alignment::kNone)
+      .value("SE3", Alignment::kSe3)
+      .value("SIM3", Alignment::kSim3);
+
+  py::class_<AteResult>(m, "AteResult", "Absolute trajectory error (read-only).")
+      .def_readonly("alignment", &AteResult::alignment)
+      .def_readonly("num_matched", &AteResult::num_matched)
+      .def_readonly("num_unmatched", &AteResult::num_unmatched)
+      .def_readonly("ate_rmse_m", &AteResult::ate_rmse_m)
+      .def_readonly("ate_rmse_xyz_m", &AteResult::ate_rmse_xyz_m)
+      .def_readonly("ate_mean_m", &AteResult::ate_mean_m)
+      .def_readonly("ate_median_m", &AteResult::ate_median_m)
+      .def_readonly("ate_max_m", &AteResult::ate_max_m)
+      .def_readonly("rot_rmse_deg", &AteResult::rot_rmse_deg)
+      .def_readonly("rot_rmse_rpy_deg", &AteResult::rot_rmse_rpy_deg)
+      .def_readonly("rot_max_deg", &AteResult::rot_max_deg)
+      .def_property_readonly("scale", [](const AteResult& r) { return r.T_gt_est.scale; })
+      .def_property_readonly("R_gt_est", [](const AteResult& r) { return r.T_gt_est.R; })
+      .def_property_readonly("t_gt_est", [](const AteResult& r) { return r.T_gt_est.t; })
+      .def_property_readonly("stamps_ns",
+                             [](const AteResult& r) {
+                               py::array_t<int64_t> a(static_cast<py::ssize_t>(r.errors.size()));
+                               for (size_t i = 0; i < r.errors.size(); ++i) {
+                                 a.mutable_data()[i] = r.errors[i].stamp.nanoseconds();
+                               }
+                               return a;
+                             })
+      .def_property_readonly(
+          "position_errors_m",
+          [](const AteResult& r) {
+            return Rows3(r.errors, [](const PoseError& e) { return e.position_error_world; });
+          },
+          "N x 3 p_est - p_gt [m] per matched pose.")
+      .def_property_readonly("position_error_norm_m",
+                             [](const AteResult& r) {
+                               return Column(r.errors,
+                                             [](const PoseError& e) { return e.position_error_m; });
+                             })
+      .def_property_readonly("rpy_errors_rad",
+                             [](const AteResult& r) {
+                               return Rows3(r.errors,
+                                            [](const PoseError& e) { return e.rpy_error_rad; });
+                             })
+      .def_property_readonly(
+          "rotation_error_rad",
+          [](const AteResult& r) {
+            return Column(r.errors, [](const PoseError& e) { return e.rotation_error_rad; });
+          })
+      .def_property_readonly("p_est_world",
+                             [](const AteResult& r) {
+                               return Rows3(r.errors,
+                                            [](const PoseError& e) { return e.p_est_world; });
+                             })
+      .def_property_readonly("p_gt_world", [](const AteResult& r) {
+        return Rows3(r.errors, [](const PoseError& e) { return e.p_gt_world; });
+      });
+
+  m.def(
+      "compute_ate",
+      [](const Trajectory& estimate, const Trajectory& ground_truth, Alignment alignment,
+         double max_ground_truth_gap_s) {
+        AteOptions o;
+        o.alignment = alignment;
+        o.match.max_ground_truth_gap_s = max_ground_truth_gap_s;
+        return ValueOrThrow(WithoutGil([&] { return ComputeAte(estimate, ground_truth, o); }));
+      },
+      py::arg("estimate"), py::arg("ground_truth"), py::arg("alignment") = Alignment::kNone,
+      py::arg("max_ground_truth_gap_s") = 1.0,
+      "ATE of estimate against ground_truth interpolated at each estimated stamp (no alignment "
+      "by default). Trajectories: Trajectory objects or N x 8 TUM arrays.");
+
+  py::class_<RelativeErrorResult>(m, "RelativeErrorResult", "KITTI devkit relative error.")
+      .def_readonly("lengths_label", &RelativeErrorResult::lengths_label)
+      .def_readonly("num_segments", &RelativeErrorResult::num_segments)
+      .def_property_readonly("t_rel_pct",
+                             [](const RelativeErrorResult& r) { return FiniteOrNone(r.t_rel_pct); })
+      .def_property_readonly(
+          "r_rel_deg_per_100m",
+          [](const RelativeErrorResult& r) { return FiniteOrNone(r.r_rel_deg_per_100m); })
+      .def_readonly("ground_truth_path_length_m", &RelativeErrorResult::ground_truth_path_length_m)
+      .def_property_readonly("per_length", [](const RelativeErrorResult& r) {
+        py::list out;
+        for (const SegmentLengthError& s : r.per_length) {
+          py::dict d;
+          d["length_m"] = s.length_m;
+          d["num_segments"] = s.num_segments;
+          d["t_rel_pct"] = s.t_rel_pct;
+          d["r_rel_deg_per_100m"] = s.r_rel_deg_per_100m;
+          out.append(d);
+        }
+        return out;
+      });
+  m.def(
+      "compute_relative_error",
+      [](const Trajectory& estimate, const Trajectory& ground_truth, py::object lengths,
+         int step_frames) {
+        const RelativeErrorOptions o = RelativeOptions(lengths, step_frames);
+        return ValueOrThrow(
+            WithoutGil([&] { return ComputeRelativeError(estimate, ground_truth, o); }));
+      },
+      py::arg("estimate"), py::arg("ground_truth"), py::arg("segment_lengths_m") = "kitti",
+      py::arg("step_frames") = 10,
+      "KITTI relative error; segment_lengths_m: 'kitti' (100..800 m), 'short' (10..80 m) or a "
+      "list of lengths [m]. t_rel_pct / r_rel_deg_per_100m are None without any segment.");
+
+  py::class_<OutageErrorResult>(m, "OutageErrorResult", "Errors inside GNSS outage windows.")
+      .def_readonly("num_poses", &OutageErrorResult::num_poses)
+      .def_readonly("max_pos_err_m", &OutageErrorResult::max_pos_err_m)
+      .def_readonly("rms_pos_err_m", &OutageErrorResult::rms_pos_err_m)
+      .def_readonly("max_rot_err_deg", &OutageErrorResult::max_rot_err_deg)
+      .def_readonly("rms_rot_err_deg", &OutageErrorResult::rms_rot_err_deg)
+      .def_property_readonly("windows", [](const OutageErrorResult& r) {
+        py::list out;
+        for (const WindowError& w : r.windows) {
+          py::dict d;
+          d["start_s"] = w.window.start_s;
+          d["duration_s"] = w.window.duration_s;
+          d["num_poses"] = w.num_poses;
+          d["max_pos_err_m"] = w.max_pos_err_m;
+          d["rms_pos_err_m"] = w.rms_pos_err_m;
+          d["max_rot_err_deg"] = w.max_rot_err_deg;
+          d["rms_rot_err_deg"] = w.rms_rot_err_deg;
+          out.append(d);
+        }
+        return out;
+      });
+  m.def(
+      "compute_outage_errors",
+      [](const AteResult& ate, const std::vector<std::pair<double, double>>& windows,
+         int64_t reference_ns) {
+        std::vector<OutageWindow> w;
+        for (const auto& [s, d] : windows) w.push_back({s, d});
+        return ValueOrThrow(
+            ComputeOutageErrors(ate.errors, w, Timestamp::FromNanoseconds(reference_ns)));
+      },
+      py::arg("ate"), py::arg("windows"), py::arg("reference_ns"),
+      "Errors of ate's poses inside [(start_s, duration_s), ...] relative to reference_ns.");
+
+  py::class_<MapEntropyResult>(m, "MapEntropyResult", "Mean map entropy (eqs 26-27).")
+      .def_property_readonly(
+          "mean_map_entropy",
+          [](const MapEntropyResult& r) { return FiniteOrNone(r.mean_map_entropy); })
+      .def_property_readonly(
+          "mean_plane_variance_m2",
+          [](const MapEntropyResult& r) { return FiniteOrNone(r.mean_plane_variance_m2); })
+      .def_readonly("num_input_points", &MapEntropyResult::num_input_points)
+      .def_readonly("num_evaluated_points", &MapEntropyResult::num_evaluated_points)
+      .def_readonly("num_valid_points", &MapEntropyResult::num_valid_points)
+      .def_readonly("num_sparse_points", &MapEntropyResult::num_sparse_points)
+      .def_readonly("num_degenerate_points", &MapEntropyResult::num_degenerate_points)
+      .def_readonly("mean_neighbors", &MapEntropyResult::mean_neighbors);
+  m.def(
+      "compute_map_entropy",
+      [](py::object points, double radius_m, double voxel_size_m, int min_neighbors,
+         int num_threads) {
+        const PointCloud cloud = CloudFromArrays(points, py::none(), py::none());
+        MapEntropyOptions o;
+        o.radius_m = radius_m;
+        o.voxel_size_m = voxel_size_m;
+        o.min_neighbors = min_neighbors;
+        o.num_threads = num_threads;
+        return ValueOrThrow(WithoutGil([&] { return ComputeMapEntropy(cloud, o); }));
+      },
+      py::arg("points"), py::arg("radius_m") = 0.5, py::arg("voxel_size_m") = 0.1,
+      py::arg("min_neighbors") = 5, py::arg("num_threads") = 2,
+      "Mean map entropy of points (N x 3 or N x 4); lower is sharper (GIL released).");
+
+  py::class_<MethodReport>(m, "MethodReport",
+                           "One method's numbers in report.json; None is written as null.")
+      .def(py::init<>())
+      .def_readwrite("ate_rmse_m", &MethodReport::ate_rmse_m)
+      .def_readwrite("ate_rmse_xyz_m", &MethodReport::ate_rmse_xyz_m)
+      .def_readwrite("rot_rmse_deg", &MethodReport::rot_rmse_deg)
+      .def_readwrite("rot_rmse_rpy_deg", &MethodReport::rot_rmse_rpy_deg)
+      .def_readwrite("t_rel_pct", &MethodReport::t_rel_pct)
+      .def_readwrite("r_rel_deg_per_100m", &MethodReport::r_rel_deg_per_100m)
+      .def_readwrite("max_pos_err_in_outage_m", &MethodReport::max_pos_err_in_outage_m)
+      .def_readwrite("max_rot_err_in_outage_deg", &MethodReport::max_rot_err_in_outage_deg)
+      .def_readwrite("mme", &MethodReport::mme)
+      .def_readwrite("scans_per_s", &MethodReport::scans_per_s)
+      .def_readwrite("peak_rss_mb", &MethodReport::peak_rss_mb);
+  m.def(
+      "make_method_report",
+      [](const AteResult* ate, const RelativeErrorResult* relative, const OutageErrorResult* outage,
+         const MapEntropyResult* entropy) {
+        return MakeMethodReport(ate, relative, outage, entropy);
+      },
+      py::arg("ate") = nullptr, py::arg("relative") = nullptr, py::arg("outage") = nullptr,
+      py::arg("entropy") = nullptr, "The metric fields of a MethodReport (None leaves null).");
+  m.def(
+      "report_to_json",
+      [](const std::string& drive, int64_t scans, double duration_s,
+         const std::string& ground_truth, const std::vector<std::pair<double, double>>& outages,
+         const std::vector<std::pair<std::string, MethodReport>>& methods,
+         std::optional<double> ground_truth_map_mme) {
+        EvalReport r;
+        r.input.drive = drive;
+        r.input.scans = scans;
+        r.input.duration_s = duration_s;
+        r.input.ground_truth = ground_truth;
+        for (const auto& [s, d] : outages) r.gnss_outages.push_back({s, d});
+        r.methods = methods;
+        r.ground_truth_map_mme = ground_truth_map_mme;
+        return ValueOrThrow(ReportToJson(r));
+      },
+      py::arg("drive"), py::arg("scans"), py::arg("duration_s"), py::arg("ground_truth"),
+      py::arg("gnss_outages"), py::arg("methods"), py::arg("ground_truth_map_mme") = py::none(),
+      "report.json text by the C++ writer (the exact schema of eval/report.hpp).");
+  m.def("peak_rss_mb", &PeakRssMb, "Peak resident set size of this process [MB] (Linux).");
+
+  // ---- map files ----
+  m.def(
+      "read_ply",
+      [](const std::filesystem::path& f) {
+        const MapCloud map = ValueOrThrow(WithoutGil([&] { return ReadPly(f); }));
+        return CloudToXyzi(map.cloud);
+      },
+      py::arg("path"), "N x 4 float32 [x y z intensity].");
+  m.def(
+      "write_map",
+      [](py::object points, const std::filesystem::path& f, std::optional<GeodeticPoint> origin) {
+        MapCloud map;
+        map.cloud = CloudFromArrays(points, py::none(), py::none());
+        const std::string ext = f.extension().string();
+        Status s;
+        if (ext == ".ply") {
+          s = WithoutGil([&] { return WritePly(map, f); });
+        } else if (ext == ".pcd") {
+          s = WithoutGil([&] { return WritePcd(map, f); });
+        } else if (ext == ".las") {
+          if (!origin) throw py::value_error("write_map: a .las file needs the origin");
+          const GeoOrigin o{origin->latitude_deg, origin->longitude_deg, origin->height_m};
+          s = WithoutGil([&] { return WriteLas(map, o, f); });
+        } else {
+          throw py::value_error("write_map: " + f.string() +
+                                ": extension must be .ply, .pcd, .las");
+        }
+        ThrowIfError(s);
+      },
+      py::arg("points"), py::arg("path"), py::arg("origin") = py::none(),
+      "Writes N x 3 / N x 4 points as PLY, PCD or geo-referenced LAS 1.4 (by extension).");
+
+  // ---- slam_mms_run's ground truth and config file (app code, compiled in unchanged) ----
+  m.def(
+      "has_simulator_ground_truth",
+      [](const std::filesystem::path& d) { return app::HasSimulatorGroundTruth(d); },
+      py::arg("drive_dir"));
+  m.def(
+      "load_ground_truth",
+      [](const std::filesystem::path& gt_dir, const DriveReader& reader,
+         const GeodeticPoint& origin) {
+        app::GroundTruth gt =
+            ValueOrThrow(WithoutGil([&] { return app::LoadGroundTruth(gt_dir, reader, origin); }));
+        py::dict d;
+        d["kind"] = gt.kind;
+        d["trajectory"] = std::move(gt.T_world_body);
+        d["scene_map"] = gt.scene_map;
+        d["source"] = gt.source;
+        return d;
+      },
+      py::arg("gt_dir"), py::arg("reader"), py::arg("origin"),
+      "slam_mms_run's ground truth (gt_dir/ground_truth/ of the simulator, else the OXTS records "
+      "of a KITTI reader; FileNotFoundError otherwise) carried into the ENU frame at origin "
+      "through WGS-84: {'kind', 'trajectory', 'scene_map', 'source'}.");
+  m.def(
+      "apply_config_file",
+      [](const std::filesystem::path& f, MappingSystem::Options& options) {
+        ThrowIfError(app::ApplyConfigFile(f, &options));
+      },
+      py::arg("path"), py::arg("options"),
+      "Applies a slam_mms_run --config file to options in place (ValueError naming the key).");
+}
+
+}  // namespace slam_mms::python

@@ -1,0 +1,422 @@
+// MappingSystem and RunDrive bindings. MappingSystem is not thread-safe: each Python object guards
+// its system with a mutex, taken after the GIL is released (so a result callback that needs the
+// GIL can never deadlock against a thread waiting for the mutex).
+
+#include "slam_mms/pipeline/mapping_system.hpp"
+
+#include <atomic>
+
+#include "common.hpp"
+#include "slam_mms/pipeline/drive_runner.hpp"
+
+namespace slam_mms::python {
+namespace {
+
+class PyMappingSystem {
+ public:
+  explicit PyMappingSystem(const MappingSystem::Options& options) {
+    StatusOr<std::unique_ptr<MappingSystem>> created =
+        WithoutGil([&] { return MappingSystem::Create(options); });
+    system_ = ValueOrThrow(std::move(created));
+  }
+  ~PyMappingSystem() {
+    py::gil_scoped_release release;  // the system's threads may log while it shuts down
+    std::lock_guard<std::mutex> lock(mu_);
+    system_.reset();
+  }
+
+  // Runs f(system) with the GIL released under the mutex; raises a kept callback error, then the
+  // Status error.
+  template <typename F>
+  auto Locked(F&& f) {
+    auto result = WithoutGil([&] {
+      std::lock_guard<std::mutex> lock(mu_);
+      return f(*system_);
+    });
+    pending_.RaiseIfAny();
+    return result;
+  }
+  void Call(const std::function<Status(MappingSystem&)>& f) { ThrowIfError(Locked(f)); }
+
+  void SetCallback(py::object callback) {
+    Locked([&](MappingSystem& s) {
+      if (callback.is_none()) {
+        s.SetResultCallback({});
+      } else {
+        s.SetResultCallback([this](const LocalizationResult& r) {
+          py::gil_scoped_acquire acquire;
+          if (pending_.has()) return;  // the first error stops the callbacks
+          try {
+            callback_(r);
+          } catch (py::error_already_set& e) {
+            pending_.Keep(e);
+          }
+        });
+      }
+      return 0;
+    });
+    callback_ = std::move(callback);
+  }
+
+ private:
+  std::unique_ptr<MappingSystem> system_;
+  std::mutex mu_;
+  py::object callback_;
+  PendingError pending_;
+};
+
+py::array_t<double> Vec3Rows(const std::vector<Eigen::Vector3d>& v) {
+  py::array_t<double> a({static_cast<py::ssize_t>(v.size()), py::ssize_t{3}});
+  auto r = a.mutable_unchecked<2>();
+  for (size_t i = 0; i < v.size(); ++i) {
+    for (int k = 0; k < 3; ++k) r(static_cast<py::ssize_t>(i), k) = v[i](k);
+  }
+  return a;
+}
+
+py::list AvailabilityList(const std::vector<GnssAvailabilityInterval>& intervals) {
+  py::list out;
+  for (const auto& i : intervals) {
+    out.append(py::make_tuple(i.start.nanoseconds(), i.end.nanoseconds(), i.availability));
+  }
+  return out;
+}
+
+py::dict StatsDict(const SubmapManager::Stats& s) {
+  py::dict d;
+  d["solves"] = s.solves;
+  d["loops_tested"] = s.loops_tested;
+  d["loops_accepted"] = s.loops_accepted;
+  d["map_to_map_accepted"] = s.map_to_map_accepted;
+  d["gnss_factors"] = s.gnss_factors;
+  d["last_solve_ms"] = s.last_solve_ms;
+  return d;
+}
+
+std::optional<GeodeticPoint> OriginOrNone(const StatusOr<GeodeticPoint>& origin) {
+  if (!origin.ok()) return std::nullopt;
+  return *origin;
+}
+
+}  // namespace
+
+void RegisterMappingSystem(py::module_& m) {
+  py::enum_<MotionFactorType>(m, "MotionFactorType")
+      .value("NONE", MotionFactorType::kNone)
+      .value("ODOMETRY", MotionFactorType::kOdometry)
+      .value("PREINTEGRATION", MotionFactorType::kPreintegration)
+      .value("CONSTANT_VELOCITY", MotionFactorType::kConstantVelocity)
+      .value("POS", MotionFactorType::kPos);
+  py::enum_<IcpTermination>(m, "IcpTermination")
+      .value("CONVERGED", IcpTermination::kConverged)
+      .value("MAX_ITERATIONS", IcpTermination::kMaxIterations)
+      .value("TOO_FEW_CORRESPONDENCES", IcpTermination::kTooFewCorrespondences)
+      .value("DEGENERATE", IcpTermination::kDegenerate);
+
+  using LR = LocalizationResult;
+  py::class_<LR>(m, "LocalizationResult", "What level 1 reported for one scan (read-only).")
+      .def_readonly("scan_index", &LR::scan_index)
+      .def_property_readonly("stamp_ns", [](const LR& r) { return r.stamp.nanoseconds(); })
+      .def_readonly("submap_id", &LR::submap_id)
+      .def_readonly("new_submap", &LR::new_submap)
+      .def_property_readonly("T_world_body",
+                             [](const LR& r) { return IsometryToArray(r.T_world_body); })
+      .def_readonly("cov_T_world_body", &LR::cov_T_world_body)
+      .def_readonly("motion_factor", &LR::motion_factor)
+      .def_readonly("registered", &LR::registered)
+      .def_readonly("registration_used", &LR::registration_used)
+      .def_readonly("registration_downweighted", &LR::registration_downweighted)
+      .def_readonly("termination", &LR::termination)
+      .def_readonly("num_inliers", &LR::num_inliers)
+      .def_readonly("inlier_ratio", &LR::inlier_ratio)
+      .def_readonly("rms_residual_m", &LR::rms_residual_m)
+      .def_readonly("icp_iterations", &LR::icp_iterations)
+      .def_readonly("degenerate", &LR::degenerate)
+      .def_readonly("degeneracy_axis_information", &LR::degeneracy_axis_information)
+      .def_readonly("consistency_mahalanobis_sq", &LR::consistency_mahalanobis_sq)
+      .def_readonly("num_surfels", &LR::num_surfels)
+      .def_readonly("num_model_surfels", &LR::num_model_surfels)
+      .def_property_readonly("timings_ms",
+                             [](const LR& r) {
+                               py::dict d;
+                               const auto values = r.timings.Values();
+                               for (int i = 0; i < StageTimings::kNumStages; ++i) {
+                                 d[StageTimings::Names()[i]] = values[i];
+                               }
+                               d["total"] = r.timings.total_ms;
+                               return d;
+                             })
+      .def("__repr__", [](const LR& r) {
+        return "LocalizationResult(scan_index=" + std::to_string(r.scan_index) +
+               ", submap_id=" + std::to_string(r.submap_id) +
+               ", motion_factor=" + MotionFactorTypeName(r.motion_factor) +
+               ", registration_used=" + (r.registration_used ? "True" : "False") + ")";
+      });
+
+  py::class_<PyMappingSystem>(
+      m, "MappingSystem",
+      "The SDK facade: feed IMU, GNSS and scans in time order, finish(), read the trajectory "
+      "and the map. Not thread-safe (calls are serialized); the GIL is released while it "
+      "processes.")
+      .def(py::init<const MappingSystem::Options&>(), py::arg("options"),
+           "Validates the options (ValueError naming the field) and builds the system.")
+      .def(
+          "add_imu",
+          [](PyMappingSystem& self, int64_t stamp_ns, const Eigen::Vector3d& accel,
+             const Eigen::Vector3d& gyro) {
+            ImuSample s;
+            s.stamp = Timestamp::FromNanoseconds(stamp_ns);
+            s.accel_mps2 = accel;
+            s.gyro_radps = gyro;
+            self.Call([&](MappingSystem& sys) { return sys.AddImu(s); });
+          },
+          py::arg("stamp_ns"), py::arg("accel_mps2"), py::arg("gyro_radps"),
+          "One IMU sample (body frame): specific force [m/s^2], angular rate [rad/s].")
+      .def(
+          "add_imu",
+          [](PyMappingSystem& self, const ImuSample& s) {
+            self.Call([&](MappingSystem& sys) { return sys.AddImu(s); });
+          },
+          py::arg("sample"))
+      .def(
+          "add_imu_array",
+          [](PyMappingSystem& self, py::array_t<int64_t, py::array::forcecast> stamps_ns,
+             py::array_t<double, py::array::forcecast> samples) {
+            if (stamps_ns.ndim() != 1 || samples.ndim() != 2 || samples.shape(1) != 6 ||
+                samples.shape(0) != stamps_ns.shape(0)) {
+              throw py::value_error(
+                  "add_imu_array: expected stamps_ns (N,) and samples (N, 6) [ax ay az gx gy gz]");
+            }
+            std::vector<ImuSample> v(static_cast<size_t>(stamps_ns.shape(0)));
+            auto t = stamps_ns.unchecked<1>();
+            auto s = samples.unchecked<2>();
+            for (size_t i = 0; i < v.size(); ++i) {
+              const auto k = static_cast<py::ssize_t>(i);
+              v[i].stamp = Timestamp::FromNanoseconds(t(k));
+              v[i].accel_mps2 = Eigen::Vector3d(s(k, 0), s(k, 1), s(k, 2));
+              v[i].gyro_radps = Eigen::Vector3d(s(k, 3), s(k, 4), s(k, 5));
+            }
+            self.Call([&](MappingSystem& sys) {
+              for (size_t i = 0; i < v.size(); ++i) {
+                Status st = sys.AddImu(v[i]);
+                if (!st.ok()) return st.WithContext("IMU sample " + std::to_string(i));
+              }
+              return OkStatus();
+            });
+          },
+          py::arg("stamps_ns"), py::arg("samples"),
+          "Many IMU samples: stamps_ns (N,) int64, samples (N, 6) [ax ay az gx gy gz].")
+      .def(
+          "add_gnss",
+          [](PyMappingSystem& self, const GnssFix& f) {
+            self.Call([&](MappingSystem& sys) { return sys.AddGnss(f); });
+          },
+          py::arg("fix"))
+      .def(
+          "add_gnss",
+          [](PyMappingSystem& self, int64_t stamp_ns, double lat, double lon, double h, double sh,
+             double sv, GnssFixType type, int sats) {
+            GnssFix f;
+            f.stamp = Timestamp::FromNanoseconds(stamp_ns);
+            f.latitude_deg = lat;
+            f.longitude_deg = lon;
+            f.height_m = h;
+            f.sigma_horizontal_m = sh;
+            f.sigma_vertical_m = sv;
+            f.type = type;
+            f.num_satellites = sats;
+            self.Call([&](MappingSystem& sys) { return sys.AddGnss(f); });
+          },
+          py::arg("stamp_ns"), py::arg("latitude_deg"), py::arg("longitude_deg"),
+          py::arg("height_m"), py::arg("sigma_horizontal_m") = 1.0,
+          py::arg("sigma_vertical_m") = 1.5, py::arg("type") = GnssFixType::kSingle,
+          py::arg("num_satellites") = 0, "One GNSS fix of the antenna (WGS-84).")
+      .def(
+          "add_scan",
+          [](PyMappingSystem& self, const Scan& scan) {
+            self.Call([&](MappingSystem& sys) { return sys.AddScan(scan); });
+          },
+          py::arg("scan"), "A Scan (e.g. from a reader).")
+      .def(
+          "add_scan",
+          [](PyMappingSystem& self, py::object points, int64_t stamp_start_ns, int64_t stamp_end_ns,
+             py::object times, py::object intensities, int64_t index, std::string source) {
+            if (stamp_end_ns < stamp_start_ns) {
+              throw py::value_error(
+                  "stamp_end_ns = " + std::to_string(stamp_end_ns) +
+                  " is before stamp_start_ns = " + std::to_string(stamp_start_ns));
+            }
+            Scan scan;
+            scan.cloud = CloudFromArrays(points, intensities, times);
+            scan.stamp_start = Timestamp::FromNanoseconds(stamp_start_ns);
+            scan.stamp_end = Timestamp::FromNanoseconds(stamp_end_ns);
+            scan.stamp_trigger = scan.stamp_start;
+            scan.index = index;
+            scan.source = std::move(source);
+            self.Call([&](MappingSystem& sys) { return sys.AddScan(scan); });
+          },
+          py::arg("points"), py::arg("stamp_start_ns"), py::arg("stamp_end_ns"),
+          py::arg("times") = py::none(), py::arg("intensities") = py::none(), py::arg("index") = -1,
+          py::arg("source") = "",
+          "A raw scan: points (N, 3) or (N, 4) float32/float64 in the lidar frame, optional "
+          "per-point time offsets from stamp_start [s] (N,) and intensities (N,).")
+      .def(
+          "initialize_pos",
+          [](PyMappingSystem& self, const InsState& s) {
+            self.Call([&](MappingSystem& sys) { return sys.InitializePos(s); });
+          },
+          py::arg("state"), "Initial attitude and velocity of the POS at state.stamp_ns.")
+      .def(
+          "add_ins_pose",
+          [](PyMappingSystem& self, const InsState& s) {
+            self.Call([&](MappingSystem& sys) { return sys.AddInsPose(s); });
+          },
+          py::arg("state"), "An external POS pose instead of IMU + GNSS.")
+      .def(
+          "finish",
+          [](PyMappingSystem& self) { self.Call([](MappingSystem& sys) { return sys.Finish(); }); },
+          "Processes the queued scans and runs the final level-2 refinement (GIL released).")
+      .def("set_result_callback", &PyMappingSystem::SetCallback, py::arg("callback"),
+           "callback(LocalizationResult) after every processed scan (None removes it). An "
+           "exception in it stops further callbacks and is raised by the adding call.")
+      .def(
+          "final_trajectory",
+          [](PyMappingSystem& self) {
+            const Trajectory t =
+                self.Locked([](MappingSystem& sys) { return sys.FinalTrajectory(); });
+            return py::make_tuple(TrajectoryTum(t), TrajectoryCovariances(t));
+          },
+          "(N x 8 TUM rows [t_s x y z qx qy qz qw], N x 6 x 6 covariances [rot, trans]).")
+      .def(
+          "final_stamps_ns",
+          [](PyMappingSystem& self) {
+            return TrajectoryStampsNs(
+                self.Locked([](MappingSystem& sys) { return sys.FinalTrajectory(); }));
+          },
+          "The exact stamps of final_trajectory() [ns].")
+      .def(
+          "final_trajectory_object",
+          [](PyMappingSystem& self) {
+            return self.Locked([](MappingSystem& sys) { return sys.FinalTrajectory(); });
+          },
+          "final_trajectory() as a Trajectory (exact stamps, for the eval functions).")
+      .def(
+          "final_map",
+          [](PyMappingSystem& self) {
+            return CloudToXyzi(self.Locked([](MappingSystem& sys) { return sys.FinalMap(); }));
+          },
+          "N x 4 float32 [x y z intensity] in world.")
+      .def(
+          "surfels",
+          [](PyMappingSystem& self) {
+            const std::vector<Surfel> s =
+                self.Locked([](MappingSystem& sys) { return sys.SurfelMapSnapshot(); });
+            py::array_t<float> a({static_cast<py::ssize_t>(s.size()), py::ssize_t{8}});
+            auto r = a.mutable_unchecked<2>();
+            for (size_t i = 0; i < s.size(); ++i) {
+              const auto k = static_cast<py::ssize_t>(i);
+              for (int j = 0; j < 3; ++j) r(k, j) = s[i].position(j);
+              for (int j = 0; j < 3; ++j) r(k, 3 + j) = s[i].normal(j);
+              r(k, 6) = s[i].radius;
+              r(k, 7) = s[i].confidence;
+            }
+            return a;
+          },
+          "N x 8 float32 [x y z nx ny nz radius confidence] (world).")
+      .def_property_readonly(
+          "results",
+          [](PyMappingSystem& self) {
+            return self.Locked([](MappingSystem& sys) { return sys.results(); });
+          },
+          "Per-scan level-1 results so far (list of LocalizationResult).")
+      .def_property_readonly(
+          "origin",
+          [](PyMappingSystem& self) {
+            return OriginOrNone(self.Locked([](MappingSystem& sys) { return sys.Origin(); }));
+          },
+          "WGS-84 origin of world (GeodeticPoint), None before it is known.")
+      .def(
+          "gnss_availability",
+          [](PyMappingSystem& self) {
+            return AvailabilityList(
+                self.Locked([](MappingSystem& sys) { return sys.GnssAvailability(); }));
+          },
+          "List of (start_ns, end_ns, GnssAvailability).")
+      .def_property_readonly(
+          "num_skipped_scans",
+          [](PyMappingSystem& self) {
+            return self.Locked([](MappingSystem& sys) { return sys.num_skipped_scans(); });
+          })
+      .def_property_readonly(
+          "num_pos_jumps",
+          [](PyMappingSystem& self) {
+            return self.Locked([](MappingSystem& sys) { return sys.num_pos_jumps(); });
+          })
+      .def_property_readonly(
+          "level2_stats",
+          [](PyMappingSystem& self) {
+            return StatsDict(self.Locked([](MappingSystem& sys) { return sys.level2_stats(); }));
+          })
+      .def_property_readonly("options", [](PyMappingSystem& self) {
+        return self.Locked([](MappingSystem& sys) { return sys.options(); });
+      });
+
+  // ---- RunDrive ----
+  py::class_<DriveRun>(m, "DriveRun",
+                       "What RunDrive returned: the estimates (also after an error or a stop) "
+                       "and the run's counts.")
+      .def_readonly("mode", &DriveRun::mode)
+      .def_readonly("trajectory", &DriveRun::trajectory, "Trajectory (exact stamps).")
+      .def_readonly("results", &DriveRun::results)
+      .def_property_readonly("map_points", [](const DriveRun& r) { return CloudToXyzi(r.map); })
+      .def_readonly("origin", &DriveRun::origin)
+      .def_property_readonly("availability",
+                             [](const DriveRun& r) { return AvailabilityList(r.availability); })
+      .def_property_readonly("first_scan_start_ns",
+                             [](const DriveRun& r) -> std::optional<int64_t> {
+                               if (!r.first_scan_start) return std::nullopt;
+                               return r.first_scan_start->nanoseconds();
+                             })
+      .def_readonly("wall_s", &DriveRun::wall_s)
+      .def_readonly("scans_total", &DriveRun::scans_total)
+      .def_readonly("scans_processed", &DriveRun::scans_processed)
+      .def_readonly("scans_unreadable", &DriveRun::scans_unreadable)
+      .def_readonly("scans_skipped_by_system", &DriveRun::scans_skipped_by_system)
+      .def_readonly("skipped_scans", &DriveRun::skipped_scans)
+      .def_readonly("finished", &DriveRun::finished)
+      .def_readonly("complete", &DriveRun::complete)
+      .def_property_readonly("ok", [](const DriveRun& r) { return r.status.ok(); })
+      .def_property_readonly("status_message",
+                             [](const DriveRun& r) { return r.status.ToString(); })
+      .def(
+          "raise_if_error", [](const DriveRun& r) { ThrowIfError(r.status); },
+          "Raises the run's fatal error (ValueError for bad options, ...), if any.");
+
+  m.def(
+      "_run_drive",
+      [](const DriveReader& reader, const MappingSystem::Options& options, py::object progress) {
+        PendingError pending;
+        std::atomic<bool> stop{false};
+        DriveRunCallbacks callbacks;
+        callbacks.stop = &stop;
+        callbacks.on_scan = [&](size_t fed, size_t total) {
+          py::gil_scoped_acquire acquire;
+          if (pending.has()) return;
+          try {
+            if (PyErr_CheckSignals() != 0) throw py::error_already_set();  // Ctrl-C
+            if (!progress.is_none()) progress(fed, total);
+          } catch (py::error_already_set& e) {
+            pending.Keep(e);
+            stop = true;  // RunDrive finishes what it was fed, then returns
+          }
+        };
+        DriveRun run = WithoutGil([&] { return RunDrive(reader, options, callbacks); });
+        pending.RaiseIfAny();
+        return run;
+      },
+      py::arg("reader"), py::arg("options"), py::arg("progress") = py::none(),
+      "The C++ RunDrive (GIL released). progress(fed, total) after every scan; an exception in "
+      "it (or Ctrl-C) stops the run after the current scan and is raised.");
+}
+
+}  // namespace slam_mms::python

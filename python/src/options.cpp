@@ -1,0 +1,326 @@
+// Options bindings: every field of MappingSystem::Options and of the Options it nests, with the C++
+// defaults (a default-constructed Python object is a default-constructed C++ struct). Nested
+// options are attributes holding objects that may be modified in place
+// (`options.localizer.icp.max_iterations = 10`). Each class has `validate()`, which raises
+// ValueError with the C++ message naming the field and its rule, and `_fields` (the field names,
+// used by the Python package for repr() and to_dict()).
+
+#include "common.hpp"
+#include "slam_mms/backend/sliding_window_graph.hpp"
+#include "slam_mms/ins/gnss_prior.hpp"
+#include "slam_mms/ins/imu_preintegration.hpp"
+#include "slam_mms/ins/ins_filter.hpp"
+#include "slam_mms/pipeline/localizer.hpp"
+#include "slam_mms/pipeline/mapping_system.hpp"
+#include "slam_mms/pipeline/scan_deskewer.hpp"
+#include "slam_mms/pipeline/submap_manager.hpp"
+#include "slam_mms/registration/point_icp.hpp"
+#include "slam_mms/registration/projective_icp.hpp"
+#include "slam_mms/render_egl/surfel_renderer_factory.hpp"
+#include "slam_mms/surfel/range_projection.hpp"
+#include "slam_mms/surfel/surfel_map.hpp"
+#include "slam_mms/surfel/surfel_renderer.hpp"
+
+namespace slam_mms::python {
+namespace {
+
+// A py::class_ for an Options struct: default constructor, keyword constructor through
+// setattr, validate(), copy, and the list of field names.
+template <typename T>
+class OptionsClass {
+ public:
+  OptionsClass(py::handle scope, const char* name, const char* doc) : cls_(scope, name, doc) {
+    cls_.def(py::init<>());
+    cls_.def("__copy__", [](const T& o) { return T(o); });
+    cls_.def(
+        "__deepcopy__", [](const T& o, py::dict) { return T(o); }, py::arg("memo"));
+    cls_.def(
+        "copy", [](const T& o) { return T(o); }, "A deep copy.");
+  }
+  template <typename D>
+  OptionsClass& Field(const char* name, D T::*member, const char* doc) {
+    cls_.def_readwrite(name, member, doc);
+    fields_.append(name);
+    return *this;
+  }
+  template <typename G, typename S>
+  OptionsClass& Property(const char* name, G&& get, S&& set, const char* doc) {
+    cls_.def_property(name, std::forward<G>(get), std::forward<S>(set), doc);
+    fields_.append(name);
+    return *this;
+  }
+  OptionsClass& Validated() {
+    cls_.def(
+        "validate", [](const T& o) { ThrowIfError(o.Validate()); },
+        "Raises ValueError naming the first bad field and its rule.");
+    return *this;
+  }
+  py::class_<T>& Done() {
+    cls_.attr("_fields") = py::tuple(fields_);
+    return cls_;
+  }
+
+ private:
+  py::class_<T> cls_;
+  py::list fields_;
+};
+
+}  // namespace
+
+void RegisterOptions(py::module_& m) {
+  py::enum_<MappingMode>(m, "MappingMode",
+                         "FULL: the SLAM-integrated system; GNSS_INS: scans at the POS poses; "
+                         "LIDAR_ONLY: the SuMa-like baseline.")
+      .value("FULL", MappingMode::kFull)
+      .value("GNSS_INS", MappingMode::kGnssIns)
+      .value("LIDAR_ONLY", MappingMode::kLidarOnly);
+  m.def(
+      "parse_mapping_mode",
+      [](const std::string& name) {
+        MappingMode mode = MappingMode::kFull;
+        if (!ParseMappingMode(name, &mode)) {
+          throw py::value_error("mode = '" + name + "'; must be full, gnss_ins or lidar_only");
+        }
+        return mode;
+      },
+      py::arg("name"));
+  m.def("mapping_mode_name", [](MappingMode mode) { return std::string(MappingModeName(mode)); });
+  py::enum_<SurfelRendererBackend>(m, "SurfelRendererBackend")
+      .value("AUTO", SurfelRendererBackend::kAuto)
+      .value("CPU", SurfelRendererBackend::kCpu)
+      .value("EGL", SurfelRendererBackend::kEgl);
+  py::enum_<SlidingWindowGraph::ExitMode>(m, "WindowExitMode")
+      .value("MARGINALIZE", SlidingWindowGraph::ExitMode::kMarginalize)
+      .value("FIX", SlidingWindowGraph::ExitMode::kFix);
+  py::enum_<SlidingWindowGraph::InconsistencyAction>(m, "InconsistencyAction")
+      .value("REJECT", SlidingWindowGraph::InconsistencyAction::kReject)
+      .value("DOWN_WEIGHT", SlidingWindowGraph::InconsistencyAction::kDownWeight);
+
+  using GP = GnssPrior::Options;
+  OptionsClass<GP>(m, "GnssPriorOptions", "GnssPrior::Options: GNSS decisions and lever arm.")
+      .Field("t_body_antenna", &GP::t_body_antenna, "Lever arm in body [m] (3,).")
+      .Field("sigma_floor_horizontal_m", &GP::sigma_floor_horizontal_m, "[m]")
+      .Field("sigma_floor_vertical_m", &GP::sigma_floor_vertical_m, "[m]")
+      .Field("max_sigma_horizontal_m", &GP::max_sigma_horizontal_m,
+             "Fixes reporting more: rejected [m]")
+      .Field("min_fix_type", &GP::min_fix_type, "Below: rejected.")
+      .Field("full_weight_fix_type", &GP::full_weight_fix_type, "Below: down-weighted.")
+      .Field("downweight_variance_factor", &GP::downweight_variance_factor, ">= 1")
+      .Field("innovation_downweight_chi2", &GP::innovation_downweight_chi2, "3 dof")
+      .Field("innovation_reject_chi2", &GP::innovation_reject_chi2, "3 dof")
+      .Field("max_rejection_streak_s", &GP::max_rejection_streak_s, "[s]")
+      .Field("max_speed_mps", &GP::max_speed_mps, "[m/s]")
+      .Field("outage_timeout_s", &GP::outage_timeout_s, "[s]")
+      .Validated()
+      .Done();
+
+  using IO = InsFilter::Options;
+  OptionsClass<IO>(m, "InsOptions", "InsFilter::Options: the POS (error-state EKF).")
+      .Field("gyro_noise_density", &IO::gyro_noise_density, "[rad/s/sqrt(Hz)]")
+      .Field("accel_noise_density", &IO::accel_noise_density, "[m/s^2/sqrt(Hz)]")
+      .Field("gyro_bias_random_walk", &IO::gyro_bias_random_walk, "[rad/s^2/sqrt(Hz)]")
+      .Field("accel_bias_random_walk", &IO::accel_bias_random_walk, "[m/s^3/sqrt(Hz)]")
+      .Field("gravity_mps2", &IO::gravity_mps2, "<= 0: Somigliana at the origin [m/s^2]")
+      .Field("init_sigma_position_m", &IO::init_sigma_position_m, "[m]")
+      .Field("init_sigma_velocity_mps", &IO::init_sigma_velocity_mps, "[m/s]")
+      .Field("init_sigma_roll_pitch_rad", &IO::init_sigma_roll_pitch_rad, "[rad]")
+      .Field("init_sigma_yaw_rad", &IO::init_sigma_yaw_rad, "[rad]")
+      .Field("init_sigma_accel_bias_mps2", &IO::init_sigma_accel_bias_mps2, "[m/s^2]")
+      .Field("init_sigma_gyro_bias_radps", &IO::init_sigma_gyro_bias_radps, "[rad/s]")
+      .Field("max_imu_gap_s", &IO::max_imu_gap_s, "[s]")
+      .Field("max_fix_latency_s", &IO::max_fix_latency_s, "[s]")
+      .Field("max_extrapolation_s", &IO::max_extrapolation_s, "[s]")
+      .Field("history_s", &IO::history_s, "[s]")
+      .Field("gnss", &IO::gnss, "GnssPriorOptions (lever arm, floors, gates, outage timeout).")
+      .Validated()
+      .Done();
+
+  using RP = RangeProjectionOptions;
+  OptionsClass<RP>(m, "RangeProjectionOptions", "Spherical range-image geometry (HDL-64E).")
+      .Field("rows", &RP::rows, "Elevation bins")
+      .Field("cols", &RP::cols, "Azimuth bins")
+      .Field("fov_up_deg", &RP::fov_up_deg, "[deg]")
+      .Field("fov_down_deg", &RP::fov_down_deg, "[deg]")
+      .Field("min_range_m", &RP::min_range_m, "[m]")
+      .Field("max_range_m", &RP::max_range_m, "[m]")
+      .Field("normal_max_range_jump_m", &RP::normal_max_range_jump_m, "[m]")
+      .Field("normal_max_range_jump_ratio", &RP::normal_max_range_jump_ratio, "")
+      .Field("normal_col_step", &RP::normal_col_step, "")
+      .Validated()
+      .Done();
+
+  using RO = SurfelRendererOptions;
+  OptionsClass<RO>(m, "SurfelRendererOptions", "Model image size and surfel facing test.")
+      .Field("projection", &RO::projection, "RangeProjectionOptions")
+      .Field("min_facing_cos", &RO::min_facing_cos, "")
+      .Field("num_threads", &RO::num_threads, "CPU renderer threads")
+      .Validated()
+      .Done();
+
+  using SM = SurfelMapOptions;
+  OptionsClass<SM>(m, "SurfelMapOptions", "SuMa-style surfel map parameters.")
+      .Field("renderer", &SM::renderer, "SurfelRendererOptions")
+      .Field("max_distance_m", &SM::max_distance_m, "[m]")
+      .Field("max_angle_deg", &SM::max_angle_deg, "[deg]")
+      .Field("radius_factor", &SM::radius_factor, "")
+      .Field("min_radius_m", &SM::min_radius_m, "[m]")
+      .Field("max_radius_m", &SM::max_radius_m, "[m]")
+      .Field("min_radius_cos", &SM::min_radius_cos, "")
+      .Field("min_creation_cos", &SM::min_creation_cos, "")
+      .Field("p_stable", &SM::p_stable, "")
+      .Field("sigma_angle", &SM::sigma_angle, "")
+      .Field("sigma_distance", &SM::sigma_distance, "[m]")
+      .Field("confidence_threshold", &SM::confidence_threshold, "")
+      .Field("unstable_age_frames", &SM::unstable_age_frames, "")
+      .Field("max_confidence", &SM::max_confidence, "")
+      .Field("max_update_age_frames", &SM::max_update_age_frames, "")
+      .Field("max_weight", &SM::max_weight, "")
+      .Field("active_radius_m", &SM::active_radius_m, "[m]")
+      .Field("index_cell_size_m", &SM::index_cell_size_m, "[m]")
+      .Field("integrate_current_submap_only", &SM::integrate_current_submap_only, "")
+      .Validated()
+      .Done();
+
+  using PI = ProjectiveIcp::Options;
+  OptionsClass<PI>(m, "ProjectiveIcpOptions", "Frame-to-model projective ICP (level 1).")
+      .Field("max_distance", &PI::max_distance, "[m]")
+      .Field("max_angle_deg", &PI::max_angle_deg, "[deg]")
+      .Field("huber_delta", &PI::huber_delta, "[m]; <= 0: no robust loss")
+      .Field("max_iterations", &PI::max_iterations, "")
+      .Field("min_correspondences", &PI::min_correspondences, "")
+      .Field("rotation_eps", &PI::rotation_eps, "[rad]")
+      .Field("translation_eps", &PI::translation_eps, "[m]")
+      .Field("degeneracy_threshold", &PI::degeneracy_threshold, "")
+      .Field("freeze_degenerate_directions", &PI::freeze_degenerate_directions, "")
+      .Field("pixel_stride", &PI::pixel_stride, "")
+      .Field("num_threads", &PI::num_threads, "")
+      .Validated()
+      .Done();
+
+  using PT = PointIcp::Options;
+  OptionsClass<PT>(m, "PointIcpOptions", "KD-tree point-to-plane ICP (map-to-map, loops).")
+      .Field("max_correspondence_distance", &PT::max_correspondence_distance, "[m]")
+      .Field("num_normal_neighbors", &PT::num_normal_neighbors, ">= 3")
+      .Field("max_surface_variation", &PT::max_surface_variation, "")
+      .Field("huber_delta", &PT::huber_delta, "[m]")
+      .Field("max_iterations", &PT::max_iterations, "")
+      .Field("min_correspondences", &PT::min_correspondences, "")
+      .Field("rotation_eps", &PT::rotation_eps, "[rad]")
+      .Field("translation_eps", &PT::translation_eps, "[m]")
+      .Field("degeneracy_threshold", &PT::degeneracy_threshold, "")
+      .Field("freeze_degenerate_directions", &PT::freeze_degenerate_directions, "")
+      .Field("source_voxel_size", &PT::source_voxel_size, "[m]; 0 keeps all")
+      .Field("num_threads", &PT::num_threads, "")
+      .Validated()
+      .Done();
+
+  using SW = SlidingWindowGraph::Options;
+  OptionsClass<SW>(m, "SlidingWindowOptions", "Level-1 sliding-window graph.")
+      .Field("window_size", &SW::window_size, "> 0")
+      .Field("exit_mode", &SW::exit_mode, "WindowExitMode")
+      .Field("max_iterations", &SW::max_iterations, "")
+      .Field("max_solve_time_s", &SW::max_solve_time_s, "[s]")
+      .Field("num_threads", &SW::num_threads, "")
+      .Field("function_tolerance", &SW::function_tolerance, "")
+      .Field("consistency_gate_chi2", &SW::consistency_gate_chi2, "6 dof")
+      .Field("inconsistency_action", &SW::inconsistency_action, "InconsistencyAction")
+      .Field("marginalization_eigen_threshold", &SW::marginalization_eigen_threshold, "")
+      .Validated()
+      .Done();
+
+  using DS = ScanDeskewer::Options;
+  OptionsClass<DS>(m, "DeskewOptions", "ScanDeskewer::Options.")
+      .Field("num_threads", &DS::num_threads, ">= 1")
+      .Field("num_knots", &DS::num_knots, "0 = exact per point")
+      .Validated()
+      .Done();
+
+  using IP = ImuPreintegration::Options;
+  OptionsClass<IP>(m, "ImuPreintegrationOptions", "IMU preintegration noise (F_Prein).")
+      .Field("gyro_noise_density", &IP::gyro_noise_density, "[rad/s/sqrt(Hz)]")
+      .Field("accel_noise_density", &IP::accel_noise_density, "[m/s^2/sqrt(Hz)]")
+      .Field("gyro_bias_random_walk", &IP::gyro_bias_random_walk, "[rad/s^2/sqrt(Hz)]")
+      .Field("accel_bias_random_walk", &IP::accel_bias_random_walk, "[m/s^3/sqrt(Hz)]")
+      .Field("max_sample_dt_s", &IP::max_sample_dt_s, "[s]")
+      .Validated()
+      .Done();
+
+  using LO = Localizer::Options;
+  OptionsClass<LO>(m, "LocalizerOptions", "Localizer::Options: level 1.")
+      .Field("mode", &LO::mode, "Overridden by MappingSystem's mode.")
+      .Field("submap_duration_s", &LO::submap_duration_s, "WT [s]")
+      .Field("surfels", &LO::surfels, "SurfelMapOptions")
+      .Field("icp", &LO::icp, "ProjectiveIcpOptions")
+      .Field("window", &LO::window, "SlidingWindowOptions")
+      .Field("deskew", &LO::deskew, "DeskewOptions")
+      .Field("imu", &LO::imu, "ImuPreintegrationOptions")
+      .Field("renderer", &LO::renderer, "SurfelRendererBackend")
+      .Field("model_radius_m", &LO::model_radius_m, "[m]")
+      .Field("min_model_confidence", &LO::min_model_confidence, "")
+      .Field("previous_submap_model_s", &LO::previous_submap_model_s, "[s]")
+      .Field("odom_sigma_rot_rad", &LO::odom_sigma_rot_rad, "[rad]")
+      .Field("odom_sigma_trans_m", &LO::odom_sigma_trans_m, "[m]")
+      .Field("cv_sigma_rot_rad", &LO::cv_sigma_rot_rad, "[rad]")
+      .Field("cv_sigma_trans_m", &LO::cv_sigma_trans_m, "[m]")
+      .Field("reg_cov_scale", &LO::reg_cov_scale, "")
+      .Field("reg_sigma_floor_rot_rad", &LO::reg_sigma_floor_rot_rad, "[rad]")
+      .Field("reg_sigma_floor_trans_m", &LO::reg_sigma_floor_trans_m, "[m]")
+      .Field("min_inlier_ratio", &LO::min_inlier_ratio, "")
+      .Field("map_voxel_m", &LO::map_voxel_m, "[m]")
+      .Field("map_max_range_m", &LO::map_max_range_m, "[m]")
+      .Field("registration_voxel_m", &LO::registration_voxel_m, "[m]")
+      .Field("per_submap_surfels", &LO::per_submap_surfels, "")
+      .Field("archive_surfels", &LO::archive_surfels, "")
+      .Field("spill_dir", &LO::spill_dir, "Finished submaps' clouds go here; '' = memory.")
+      .Field("num_threads", &LO::num_threads, "")
+      .Validated()
+      .Done();
+
+  using SO = SubmapManager::Options;
+  OptionsClass<SO>(m, "Level2Options", "SubmapManager::Options: level 2 and loop closure.")
+      .Field("enabled", &SO::enabled, "")
+      .Field("use_map_to_map", &SO::use_map_to_map, "")
+      .Field("use_gnss", &SO::use_gnss, "")
+      .Field("use_loops", &SO::use_loops, "")
+      .Field("loop_distance_m", &SO::loop_distance_m, "D_thr [m]")
+      .Field("loop_min_submap_gap", &SO::loop_min_submap_gap, "")
+      .Field("loop_min_inlier_ratio", &SO::loop_min_inlier_ratio, "")
+      .Field("loop_max_rms_m", &SO::loop_max_rms_m, "[m]")
+      .Field("loop_gate_chi2", &SO::loop_gate_chi2, "")
+      .Field("long_outage_s", &SO::long_outage_s, "[s]")
+      .Field("reckon_sigma_rot_rad", &SO::reckon_sigma_rot_rad, "[rad]")
+      .Field("reckon_sigma_trans_m", &SO::reckon_sigma_trans_m, "[m]")
+      .Field("gnss_sigma_scale", &SO::gnss_sigma_scale, "")
+      .Field("gnss_correlation_s", &SO::gnss_correlation_s, "[s]")
+      .Field("attitude_prior_sigma_rad", &SO::attitude_prior_sigma_rad, "[rad]")
+      .Field("max_iterations", &SO::max_iterations, "")
+      .Field("num_threads", &SO::num_threads, "")
+      .Field("icp", &SO::icp, "PointIcpOptions")
+      .Validated()
+      .Done();
+
+  using MO = MappingSystem::Options;
+  OptionsClass<MO>(m, "Options",
+                   "MappingSystem::Options with the C++ defaults. Nested: ins (InsOptions), "
+                   "localizer (LocalizerOptions), level2 (Level2Options).")
+      .Field("mode", &MO::mode, "MappingMode")
+      .Property(
+          "T_body_lidar", [](const MO& o) { return IsometryToArray(o.T_body_lidar); },
+          [](MO& o, py::object T) { o.T_body_lidar = ArrayToIsometry(T, "T_body_lidar"); },
+          "4 x 4 (KITTI: inverse of calib_imu_to_velo).")
+      .Field("origin", &MO::origin, "GeodeticPoint or None (= the first valid GNSS fix).")
+      .Field("gnss_outages", &MO::gnss_outages,
+             "List of (start_s, duration_s) relative to the first scan; assign a new list.")
+      .Field("ins", &MO::ins, "InsOptions")
+      .Field("localizer", &MO::localizer, "LocalizerOptions")
+      .Field("level2", &MO::level2, "Level2Options")
+      .Field("map_max_range_m", &MO::map_max_range_m, "[m]")
+      .Field("map_voxel_m", &MO::map_voxel_m, "[m]")
+      .Field("max_pos_jump_m", &MO::max_pos_jump_m, "[m]")
+      .Field("max_pos_jump_rad", &MO::max_pos_jump_rad, "[rad]")
+      .Field("num_threads", &MO::num_threads, "")
+      .Validated()
+      .Done();
+}
+
+}  // namespace slam_mms::python

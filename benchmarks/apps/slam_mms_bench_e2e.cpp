@@ -5,12 +5,14 @@
 //
 //   slam_mms_bench_e2e [--duration-s S] [--seed N] [--sim-dir DIR]     simulated default drive
 //   slam_mms_bench_e2e --kitti-raw DRIVE_DIR [--frames A:B]             a KITTI raw drive
+//   slam_mms_bench_e2e --folder DIR | --rosbag FILE.bag [--extrinsics FILE.yaml] [--frames A:B]
+//                                                    a plain drive folder or a ROS 1 bag
 //   common: [--mode full|gnss_ins|lidar_only] [--out FILE.json] [--rss-samples N]
 //
 // The simulated drive is written to --sim-dir (kept, and reused when it already holds the same
 // seed and duration) or to a temporary folder removed at exit. Prints a table to stdout and, with
 // --out, the same numbers as JSON. Exit status: 0 ok, 1 run failed or processed no scan, 2 bad
-// command line, 77 the --kitti-raw folder does not exist (lets a smoke test skip).
+// command line, 77 the --kitti-raw/--folder/--rosbag input does not exist (lets a smoke test skip).
 
 #include <unistd.h>
 
@@ -26,9 +28,10 @@
 #include <vector>
 
 #include "slam_mms/core/logging.hpp"
-#include "slam_mms/io/kitti_raw_reader.hpp"
-#include "slam_mms/io/oxts_record.hpp"
+#include "slam_mms/io/drive_reader.hpp"
+#include "slam_mms/pipeline/drive_runner.hpp"
 #include "slam_mms/pipeline/mapping_system.hpp"
+#include "slam_mms/pipeline/open_drive.hpp"
 #include "slam_mms/sim/drive_simulator.hpp"
 
 namespace fs = std::filesystem;
@@ -50,7 +53,9 @@ struct Args {
   uint64_t seed = 1;
   std::string scenario = "default";
   std::string mode = "full";
-  fs::path kitti_raw;
+  fs::path input;  // --kitti-raw, --folder or --rosbag; empty: simulate
+  slam_mms::DriveSourceKind kind = slam_mms::DriveSourceKind::kKittiRaw;
+  fs::path extrinsics;
   int64_t first_frame = 0;
   int64_t last_frame = -1;
   fs::path out;
@@ -63,6 +68,8 @@ constexpr const char* kUsage =
     "usage: slam_mms_bench_e2e [--duration-s S] [--seed N] [--scenario default|long]\n"
     "                          [--sim-dir DIR]\n"
     "       slam_mms_bench_e2e --kitti-raw DRIVE_DIR [--frames A:B]\n"
+    "       slam_mms_bench_e2e --folder DIR | --rosbag FILE.bag [--extrinsics FILE.yaml]\n"
+    "                          [--frames A:B]\n"
     "  common: [--mode full|gnss_ins|lidar_only] [--out FILE.json] [--rss-samples N]\n"
     "          [--spill-dir DIR|none]   finished submaps' clouds (default: the temp folder)\n";
 
@@ -104,8 +111,17 @@ bool ParseArgs(int argc, char** argv, Args* a, std::string* error) {
         return false;
       }
       a->mode = v;
-    } else if (k == "--kitti-raw") {
-      a->kitti_raw = v;
+    } else if (k == "--kitti-raw" || k == "--folder" || k == "--rosbag") {
+      if (!a->input.empty()) {
+        *error = "--kitti-raw, --folder and --rosbag exclude each other";
+        return false;
+      }
+      a->input = v;
+      a->kind = k == "--folder"   ? slam_mms::DriveSourceKind::kFolder
+                : k == "--rosbag" ? slam_mms::DriveSourceKind::kRosbag
+                                  : slam_mms::DriveSourceKind::kKittiRaw;
+    } else if (k == "--extrinsics") {
+      a->extrinsics = v;
     } else if (k == "--frames") {
       long long f0 = 0, f1 = 0;
       char tail = 0;
@@ -325,12 +341,20 @@ bool WriteJson(const Report& r, const fs::path& path) {
 
 // Feeds the drive in time order (a scan once IMU and GNSS reached its end, as a sensor delivers
 // it), timing every call.
-Status RunDrive(const slam_mms::KittiRawReader& reader, MappingMode mode, int rss_samples,
-                const fs::path& spill_dir, Report* r) {
+Status FeedDrive(const slam_mms::DriveReader& reader, MappingMode mode, int rss_samples,
+                 const fs::path& spill_dir, Report* r) {
+  const slam_mms::DriveStreams& in = reader.streams();
   MappingSystem::Options options;
   options.mode = mode;
   options.localizer.spill_dir = spill_dir;
-  options.T_body_lidar = reader.T_body_lidar();
+  options.T_body_lidar = in.T_body_lidar;
+  if (in.t_body_antenna_m) options.ins.gnss.t_body_antenna = *in.t_body_antenna_m;
+  std::vector<slam_mms::InsState> pos;
+  if (!in.pos.empty()) {
+    options.origin = slam_mms::GeodeticPoint{in.pos.front().latitude_deg,
+                                             in.pos.front().longitude_deg, in.pos.front().height_m};
+    SLAM_MMS_ASSIGN_OR_RETURN(pos, slam_mms::PosRecordsInWorld(in.pos, *options.origin));
+  }
   SLAM_MMS_ASSIGN_OR_RETURN(auto system, MappingSystem::Create(options));
 
   std::vector<slam_mms::LocalizationResult> results;
@@ -346,22 +370,16 @@ Status RunDrive(const slam_mms::KittiRawReader& reader, MappingMode mode, int rs
   });
   r->rss.push_back({0, 0.0, ProcStatusMb("VmRSS"), ProcStatusMb("VmHWM")});
 
-  // Initial POS attitude and velocity from the earliest OXTS record (as slam_mms_run does).
-  const slam_mms::StampedOxts* first = nullptr;
-  if (!reader.OxtsRecords().empty()) first = &reader.OxtsRecords().front();
-  if (!reader.ImuOxtsRecords().empty() &&
-      (first == nullptr || reader.ImuOxtsRecords().front().stamp < first->stamp)) {
-    first = &reader.ImuOxtsRecords().front();
+  // Initial POS attitude and velocity from the reader (as slam_mms_run does).
+  if (pos.empty() && in.initial_state) {
+    SLAM_MMS_RETURN_IF_ERROR(system->InitializePos(*in.initial_state));
   }
-  if (first != nullptr) {
-    slam_mms::InsState s;
-    s.stamp = first->stamp;
-    s.T_world_body.linear() = slam_mms::OxtsAttitude(first->record);
-    s.v_world_mps = Eigen::Vector3d(first->record.ve, first->record.vn, first->record.vu);
-    SLAM_MMS_RETURN_IF_ERROR(system->InitializePos(s));
-  }
-  const std::vector<slam_mms::ImuSample> imu = reader.ImuSamples();
-  const std::vector<slam_mms::GnssFix> gnss = reader.GnssFixes();
+  // With an external POS the IMU/GNSS streams are not fed (MappingSystem::AddInsPose).
+  static const std::vector<slam_mms::ImuSample> kNoImu;
+  static const std::vector<slam_mms::GnssFix> kNoGnss;
+  const std::vector<slam_mms::ImuSample>& imu = pos.empty() ? in.imu : kNoImu;
+  const std::vector<slam_mms::GnssFix>& gnss = pos.empty() ? in.gnss : kNoGnss;
+  size_t i_pos = 0;
   size_t i_imu = 0, i_gnss = 0;
   double read_ms = 0.0, feed_ms = 0.0;
   for (size_t k = 0; k < n_scans; ++k) {
@@ -372,6 +390,9 @@ Status RunDrive(const slam_mms::KittiRawReader& reader, MappingMode mode, int rs
     }
     while (i_gnss < gnss.size() && gnss[i_gnss].stamp <= deliver) {
       SLAM_MMS_RETURN_IF_ERROR(system->AddGnss(gnss[i_gnss++]));
+    }
+    while (i_pos < pos.size() && pos[i_pos].stamp <= deliver) {
+      SLAM_MMS_RETURN_IF_ERROR(system->AddInsPose(pos[i_pos++]));
     }
     feed_ms += MsSince(t0);
     t0 = Clock::now();
@@ -389,6 +410,7 @@ Status RunDrive(const slam_mms::KittiRawReader& reader, MappingMode mode, int rs
   auto t0 = Clock::now();
   while (i_imu < imu.size()) SLAM_MMS_RETURN_IF_ERROR(system->AddImu(imu[i_imu++]));
   while (i_gnss < gnss.size()) SLAM_MMS_RETURN_IF_ERROR(system->AddGnss(gnss[i_gnss++]));
+  while (i_pos < pos.size()) SLAM_MMS_RETURN_IF_ERROR(system->AddInsPose(pos[i_pos++]));
   SLAM_MMS_RETURN_IF_ERROR(system->Finish());
   const double finish_ms = MsSince(t0);
   r->wall_s = MsSince(t_start) / 1000.0;
@@ -439,7 +461,7 @@ int main(int argc, char** argv) {
 
   Report report;
   report.mode = args.mode;
-  fs::path drive = args.kitti_raw;
+  fs::path drive = args.input;
   fs::path temp_dir;
   if (drive.empty()) {
     fs::path dir = args.sim_dir;
@@ -475,20 +497,24 @@ int main(int argc, char** argv) {
         ", frames " + std::to_string(args.first_frame) + ":" + std::to_string(args.last_frame);
   }
 
-  slam_mms::KittiRawReader::Options ro;
+  slam_mms::DriveSourceOptions ro;
+  ro.kind = args.kind;
   ro.first_frame = args.first_frame;
   ro.last_frame = args.last_frame;
-  StatusOr<slam_mms::KittiRawReader> reader = slam_mms::KittiRawReader::Open(drive, ro);
+  ro.extrinsics = args.extrinsics;
+  StatusOr<std::unique_ptr<slam_mms::DriveReader>> reader = slam_mms::OpenDrive(drive, ro);
   int rc = 0;
   if (!reader.ok()) {
     std::fprintf(stderr, "slam_mms_bench_e2e: %s\n", reader.status().ToString().c_str());
     rc = 1;
   } else {
-    report.scans_total = reader->NumScans();
+    const slam_mms::DriveReader& drive_reader = **reader;
+    report.scans_total = drive_reader.NumScans();
     if (report.scans_total > 0) {
-      report.drive_s = reader->ScanEnd(report.scans_total - 1).SecondsSince(reader->ScanStart(0));
+      report.drive_s =
+          drive_reader.ScanEnd(report.scans_total - 1).SecondsSince(drive_reader.ScanStart(0));
     }
-    const Status s = RunDrive(*reader, mode, args.rss_samples, args.spill_dir, &report);
+    const Status s = FeedDrive(drive_reader, mode, args.rss_samples, args.spill_dir, &report);
     if (!s.ok()) {
       std::fprintf(stderr, "slam_mms_bench_e2e: run failed: %s\n", s.ToString().c_str());
       rc = 1;

@@ -22,7 +22,7 @@
 #include "slam_mms/core/logging.hpp"
 #include "slam_mms/eval/map_entropy.hpp"
 #include "slam_mms/eval/report.hpp"
-#include "slam_mms/io/kitti_raw_reader.hpp"
+#include "slam_mms/io/kitti_drive_reader.hpp"
 #include "slam_mms/io/map_io.hpp"
 #include "slam_mms/io/trajectory_io.hpp"
 #include "slam_mms/pipeline/mapping_system.hpp"
@@ -30,6 +30,7 @@
 #include "slam_mms_run/cli.hpp"
 #include "slam_mms_run/config_file.hpp"
 #include "slam_mms_run/ground_truth.hpp"
+#include "slam_mms_run/input.hpp"
 #include "slam_mms_run/outputs.hpp"
 #include "slam_mms_run/progress.hpp"
 #include "slam_mms_run/run_mode.hpp"
@@ -116,43 +117,54 @@ int main(int argc, char** argv) {
   }
 
   // The drive.
-  fs::path drive_dir = args.kitti_raw;
+  fs::path drive_dir = InputPath(args);
   if (drive_dir.empty()) {
     StatusOr<fs::path> simulated = SimulateDefaultDrive(args, tty);
     if (!simulated.ok()) return Fail(simulated.status(), kExitError);
     drive_dir = *simulated;
   }
-  KittiRawReader::Options ro;
-  ro.first_frame = args.first_frame;
-  ro.last_frame = args.last_frame;
-  StatusOr<KittiRawReader> opened = KittiRawReader::Open(drive_dir, ro);
+  StatusOr<std::unique_ptr<DriveReader>> opened = OpenRunInput(args, drive_dir);
   if (!opened.ok()) return Fail(opened.status(), kExitError);
-  const KittiRawReader& reader = *opened;
+  const DriveReader& reader = **opened;
   if (reader.NumScans() == 0) {
-    return Fail(OutOfRangeError(drive_dir.string() + ": no scan in the frame range"), kExitError);
+    return Fail(OutOfRangeError(reader.Describe() + ": no scan in the frame range"), kExitError);
   }
-  options.T_body_lidar = reader.T_body_lidar();
+  options.T_body_lidar = reader.streams().T_body_lidar;
+  if (reader.streams().t_body_antenna_m) {
+    options.ins.gnss.t_body_antenna = *reader.streams().t_body_antenna_m;
+  }
   options.gnss_outages = args.gnss_outages;
   const Status valid = options.Validate();
   if (!valid.ok()) return Fail(valid, kExitUsage);
 
+  // Ground truth: <gt_dir>/ground_truth/ (simulated drives, also converted to a folder or bag),
+  // else the OXTS poses of a KITTI raw drive.
+  const fs::path gt_dir = GroundTruthDir(args, drive_dir);
+  const bool sim_gt = HasSimulatorGroundTruth(gt_dir);
+  const bool kitti_input = dynamic_cast<const KittiDriveReader*>(&reader) != nullptr;
+  const std::string gt_kind = sim_gt ? "simulator" : kitti_input ? "oxts" : "none";
   const Timestamp first_scan = reader.ScanStart(0);
   const double duration_s = reader.ScanEnd(reader.NumScans() - 1).SecondsSince(first_scan);
-  std::printf("[input] %s: %zu scans, %.1f s, IMU %s, ground truth: %s\n", drive_dir.c_str(),
-              reader.NumScans(), duration_s, reader.HasImu100Hz() ? "100 Hz" : "10 Hz (OXTS)",
-              HasSimulatorGroundTruth(drive_dir) ? "simulator" : "oxts");
+  const DriveStreams& streams = reader.streams();
+  std::printf(
+      "[input] %s: %zu scans, %.1f s, IMU %zu samples, GNSS %zu fixes%s, ground truth: %s\n",
+      reader.Describe().c_str(), reader.NumScans(), duration_s, streams.imu.size(),
+      streams.gnss.size(),
+      streams.pos.empty()
+          ? ""
+          : (", external POS " + std::to_string(streams.pos.size()) + " records").c_str(),
+      gt_kind.c_str());
   for (const auto& [start, duration] : args.gnss_outages) {
     std::printf("[input] GNSS outage %.1f s .. %.1f s after the first scan\n", start,
                 start + duration);
   }
   std::fflush(stdout);
-  const DriveInput input = MakeDriveInput(reader);
 
   // The methods, each with its own MappingSystem; files written as soon as a method ends.
   std::vector<ModeRun> runs;
   Status fatal;
   for (const MappingMode mode : args.modes) {
-    ModeRun run = RunMode(mode, options, input, tty);
+    ModeRun run = RunMode(mode, options, reader, tty);
     const Status written = WriteMethodFiles(run, args.out_dir);
     if (!run.status.ok()) fatal = run.status;
     if (fatal.ok() && !written.ok()) fatal = written;
@@ -166,7 +178,6 @@ int main(int argc, char** argv) {
     if (r.origin && !any_origin) any_origin = r.origin;
   }
   std::vector<std::pair<GeodeticPoint, GroundTruth>> gts;
-  std::string gt_kind = HasSimulatorGroundTruth(drive_dir) ? "simulator" : "oxts";
   std::vector<const GroundTruth*> gt_of_run(runs.size(), nullptr);
   for (size_t i = 0; i < runs.size(); ++i) {
     std::optional<GeodeticPoint> origin = runs[i].origin ? runs[i].origin : any_origin;
@@ -177,8 +188,9 @@ int main(int argc, char** argv) {
     bool found = false;
     for (const auto& [o, gt] : gts) found = found || SameOrigin(o, *origin);
     if (!found) {
-      StatusOr<GroundTruth> gt = LoadGroundTruth(drive_dir, reader, *origin);
+      StatusOr<GroundTruth> gt = LoadGroundTruth(gt_dir, reader, *origin);
       if (!gt.ok()) {
+        if (gt.status().code() == StatusCode::kNotFound && gt_kind == "none") break;
         SLAM_MMS_LOG(kError) << "ground truth: " << gt.status().ToString();
         if (fatal.ok()) fatal = gt.status();
         continue;
@@ -191,7 +203,9 @@ int main(int argc, char** argv) {
                                    : "ground_truth_" + std::to_string(gts.size()) + ".tum";
       const Status written =
           WriteTrajectoryTum(gts.back().second.T_world_body, args.out_dir / name);
-      if (!written.ok()) SLAM_MMS_LOG(kWarning) << written.ToString();
+      if (!written.ok()) {
+        SLAM_MMS_LOG(kWarning) << written.ToString();
+      }
     }
   }
   for (size_t i = 0; i < runs.size(); ++i) {

@@ -62,6 +62,9 @@ simulated one; writes trajectories, maps, report.json and plots.
 Usage:
   slam_mms_run --kitti-raw DRIVE_DIR --out DIR [--mode full|gnss_ins|lidar_only|all]
                [--frames A:B] [--gnss-outage START_S:DURATION_S ...] [--config FILE]
+  slam_mms_run --folder DIR --out DIR [...]         a plain drive folder (PCD/PLY/bin + CSV/NMEA)
+  slam_mms_run --rosbag FILE.bag --out DIR [--lidar-topic T] [--imu-topic T] [--gnss-topic T]
+               [--extrinsics FILE.yaml] [...]       a ROS 1 bag
   slam_mms_run --out DIR [...]     no data: simulates the embedded default drive into DIR/sim,
                                    then runs on it (simulator ground truth)
 
@@ -69,6 +72,16 @@ Options:
   --kitti-raw DRIVE_DIR   KITTI raw drive folder (.../2011_09_26_drive_0013_sync); calibration
                           from the folder or its parent. Ground truth: DRIVE_DIR/ground_truth/
                           (simulated drives) when present, else the OXTS poses.
+  --folder DIR            a plain drive folder: scans/ (PCD, PLY or KITTI .bin), scans.csv,
+                          imu.csv, gnss.csv or gnss.nmea, extrinsics.yaml, optional
+                          initial_state.csv and pos.csv (docs/drive_folder.md). Frames are scan
+                          numbers in scans.csv order. Ground truth: DIR/ground_truth/ if present.
+  --rosbag FILE.bag       a ROS 1 bag: sensor_msgs/PointCloud2, Imu, NavSatFix (docs/rosbag.md).
+                          Ground truth: ground_truth/ beside the bag if present.
+  --lidar-topic, --imu-topic, --gnss-topic T
+                          bag topics (default: the one topic of each message type in the bag).
+  --extrinsics FILE.yaml  T_body_lidar and t_body_antenna_m (the folder's extrinsics.yaml format);
+                          for bags, and to override a folder's own.
   --out DIR               output folder (created).
   --mode M                full | gnss_ins | lidar_only | all (default all = the three in turn).
   --frames A:B            only frames A..B (inclusive file numbers); A: = from A to the end.
@@ -112,6 +125,21 @@ StatusOr<RunArgs> ParseRunArgs(int argc, const char* const* argv) {
     } else if (flag == "--kitti-raw") {
       SLAM_MMS_RETURN_IF_ERROR(value(&v));
       args.kitti_raw = v;
+    } else if (flag == "--folder") {
+      SLAM_MMS_RETURN_IF_ERROR(value(&v));
+      args.folder = v;
+    } else if (flag == "--rosbag") {
+      SLAM_MMS_RETURN_IF_ERROR(value(&v));
+      args.rosbag = v;
+    } else if (flag == "--lidar-topic") {
+      SLAM_MMS_RETURN_IF_ERROR(value(&args.lidar_topic));
+    } else if (flag == "--imu-topic") {
+      SLAM_MMS_RETURN_IF_ERROR(value(&args.imu_topic));
+    } else if (flag == "--gnss-topic") {
+      SLAM_MMS_RETURN_IF_ERROR(value(&args.gnss_topic));
+    } else if (flag == "--extrinsics") {
+      SLAM_MMS_RETURN_IF_ERROR(value(&v));
+      args.extrinsics = v;
     } else if (flag == "--out") {
       SLAM_MMS_RETURN_IF_ERROR(value(&v));
       args.out_dir = v;
@@ -171,6 +199,14 @@ StatusOr<RunArgs> ParseRunArgs(int argc, const char* const* argv) {
   }
   if (args.help || args.list_config_keys) return args;
   if (args.out_dir.empty()) return InvalidArgumentError("--out DIR is required (see --help)");
+  const int inputs = !args.kitti_raw.empty() + !args.folder.empty() + !args.rosbag.empty();
+  if (inputs > 1) {
+    return InvalidArgumentError("--kitti-raw, --folder and --rosbag exclude each other");
+  }
+  if (args.rosbag.empty() &&
+      !(args.lidar_topic.empty() && args.imu_topic.empty() && args.gnss_topic.empty())) {
+    return InvalidArgumentError("--lidar-topic/--imu-topic/--gnss-topic go with --rosbag");
+  }
   if (!mode_given) {
     args.modes = {MappingMode::kFull, MappingMode::kGnssIns, MappingMode::kLidarOnly};
   }

@@ -18,7 +18,12 @@
 namespace slam_mms::app {
 
 struct RunArgs {
-  std::filesystem::path kitti_raw;  ///< Empty: simulate the default drive.
+  std::filesystem::path kitti_raw;  ///< --kitti-raw DRIVE_DIR.
+  std::filesystem::path folder;     ///< --folder DIR (plain drive folder, docs/drive_folder.md).
+  std::filesystem::path rosbag;     ///< --rosbag FILE.bag (ROS 1, docs/rosbag.md).
+  /// Bag topics (empty: the one topic of each message type) and --extrinsics FILE.yaml.
+  std::string lidar_topic, imu_topic, gnss_topic;
+  std::filesystem::path extrinsics;  ///< Empty: none (bags: identity, logged).
   std::filesystem::path out_dir;
   std::vector<MappingMode> modes;  ///< In run order (all = full, gnss_ins, lidar_only).
   int64_t first_frame = 0;         ///< --frames A:B, inclusive file numbers.

@@ -8,6 +8,7 @@
 #include <sstream>
 #include <vector>
 
+#include "slam_mms/io/kitti_drive_reader.hpp"
 #include "slam_mms/io/oxts_record.hpp"
 #include "slam_mms/io/trajectory_io.hpp"
 
@@ -155,11 +156,14 @@ StatusOr<GroundTruth> LoadOxts(const KittiRawReader& reader, const GeodeticPoint
 
 }  // namespace
 
-StatusOr<GroundTruth> LoadGroundTruth(const std::filesystem::path& drive_dir,
-                                      const KittiRawReader& reader,
-                                      const GeodeticPoint& run_origin) {
-  if (HasSimulatorGroundTruth(drive_dir)) return LoadSimulator(drive_dir, run_origin);
-  return LoadOxts(reader, run_origin);
+StatusOr<GroundTruth> LoadGroundTruth(const std::filesystem::path& gt_dir,
+                                      const DriveReader& reader, const GeodeticPoint& run_origin) {
+  if (HasSimulatorGroundTruth(gt_dir)) return LoadSimulator(gt_dir, run_origin);
+  if (const auto* kitti = dynamic_cast<const KittiDriveReader*>(&reader)) {
+    return LoadOxts(kitti->kitti(), run_origin);
+  }
+  return NotFoundError(reader.Describe() + ": no ground truth (no " +
+                       (gt_dir / "ground_truth").string() + " folder)");
 }
 
 }  // namespace slam_mms::app

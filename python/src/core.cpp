@@ -200,7 +200,8 @@ PointCloud CloudFromArrays(const py::handle& points, const py::handle& intensiti
   } else {
     p32 = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(p);
   }
-  py::array_t<float> i32, t32;
+  // (A default-constructed py::array_t is an empty array, not a null handle: use optional.)
+  std::optional<py::array_t<float>> i32, t32;
   if (!intensities.is_none()) i32 = Column(intensities, "intensities", n);
   if (!times.is_none()) t32 = Column(times, "times", n);
 
@@ -212,12 +213,12 @@ PointCloud CloudFromArrays(const py::handle& points, const py::handle& intensiti
     view.intensity = p32.data() + 3;
     view.intensity_stride_bytes = static_cast<size_t>(p32.strides(0));
   } else if (i32) {
-    view.intensity = i32.data();
-    view.intensity_stride_bytes = static_cast<size_t>(i32.strides(0));
+    view.intensity = i32->data();
+    view.intensity_stride_bytes = static_cast<size_t>(i32->strides(0));
   }
   if (t32) {
-    view.dt_from_scan_start_s = t32.data();
-    view.time_stride_bytes = static_cast<size_t>(t32.strides(0));
+    view.dt_from_scan_start_s = t32->data();
+    view.time_stride_bytes = static_cast<size_t>(t32->strides(0));
   }
   return PointCloud::FromView(view);
 }

@@ -325,7 +325,7 @@ void RegisterEval(py::module_& m) {
         py::dict d;
         d["kind"] = gt.kind;
         d["trajectory"] = std::move(gt.T_world_body);
-        d["scene_map"] = gt.scene_map;
+        d["scene_map"] = gt.scene_map.empty() ? py::none() : py::cast(gt.scene_map);
         d["source"] = gt.source;
         return d;
       },

@@ -52,7 +52,7 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("--gnss-outage", type=_outage, action="append", default=[],
                    metavar="START_S:DURATION_S")
     r.add_argument("--config", type=pathlib.Path)
-    r.add_argument("--extrinsics", type=pathlib.Path, default="")
+    r.add_argument("--extrinsics", type=pathlib.Path)
     r.add_argument("--sim-duration", type=float, default=30.0)
     r.add_argument("--sim-seed", type=int, default=1)
     r.add_argument("--log-level", choices=sorted(_LEVELS), default="warning")
@@ -98,7 +98,7 @@ def _run(args) -> int:
         try:
             result = run_drive(path, mode=name, frames=args.frames,
                                gnss_outages=args.gnss_outage, options=options, check=False,
-                               kind=kind, extrinsics=args.extrinsics)
+                               kind=kind, extrinsics=args.extrinsics or "")
         except (ValueError, FileNotFoundError, IndexError, _C.Error) as e:
             print(f"python -m slam_mms: error: {e}", file=sys.stderr)
             return 2 if isinstance(e, ValueError) else 1

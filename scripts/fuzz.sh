@@ -16,7 +16,7 @@ FUZZ_SECONDS=${FUZZ_SECONDS:-60}
 FUZZ_WORK=${FUZZ_WORK:-$BUILD_DIR/fuzz-work}
 JOBS=${JOBS:-2}
 TARGETS=("$@")
-if [[ ${#TARGETS[@]} -eq 0 ]]; then TARGETS=(kitti_scan oxts timestamps calib trajectory); fi
+if [[ ${#TARGETS[@]} -eq 0 ]]; then TARGETS=(kitti_scan oxts timestamps calib trajectory pcd csv nmea); fi
 
 SLAM_MMS_WITH_CLANG=1 scripts/install_deps.sh
 CC=clang CXX=clang++ cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=RelWithDebInfo \

@@ -23,8 +23,10 @@ bool ParseDate(const std::string& s, int64_t* days) {
   for (const size_t k : {0, 1, 2, 3, 5, 6, 8, 9}) {
     if (s[k] < '0' || s[k] > '9') return false;
   }
-  return io_internal::CivilToDays(std::stoll(s.substr(0, 4)), std::stoll(s.substr(5, 2)),
-                                  std::stoll(s.substr(8, 2)), days);
+  const int64_t year = std::stoll(s.substr(0, 4));
+  return year >= 1970 && year <= 2200 &&
+         io_internal::CivilToDays(year, std::stoll(s.substr(5, 2)), std::stoll(s.substr(8, 2)),
+                                  days);
 }
 
 bool Exists(const fs::path& p) {
@@ -78,7 +80,7 @@ Status FolderDriveReader::Options::Validate() const {
   int64_t days = 0;
   if (!nmea_utc_date.empty() && !ParseDate(nmea_utc_date, &days)) {
     return InvalidArgumentError("FolderDriveReader::Options::nmea_utc_date = '" + nmea_utc_date +
-                                "'; must be a date YYYY-MM-DD or empty");
+                                "'; must be a date YYYY-MM-DD (1970..2200) or empty");
   }
   return OkStatus();
 }

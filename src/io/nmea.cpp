@@ -181,7 +181,8 @@ bool SentenceDate(const Sentence& s, int64_t* days, int64_t* tod_ns) {
     m = std::atoi(s.fields[3].c_str());
     y = std::atoi(s.fields[4].c_str());
   }
-  return CivilToDays(y, m, d, days);
+  // int64 nanoseconds since 1970 end in 2262.
+  return y >= 1970 && y <= 2200 && CivilToDays(y, m, d, days);
 }
 
 std::string TimeText(int64_t tod_ns) {
@@ -466,7 +467,7 @@ std::string FormatNmeaEpoch(const GnssFix& fix, int time_decimals) {
   std::snprintf(buf, sizeof(buf), "GNGGA,%s,%s,%c,%s,%c,%d,%02d,,%.4f,M,0.0,M,,", t.c_str(),
                 FormatAngle(fix.latitude_deg, 2).c_str(), fix.latitude_deg < 0 ? 'S' : 'N',
                 FormatAngle(fix.longitude_deg, 3).c_str(), fix.longitude_deg < 0 ? 'W' : 'E',
-                TypeToQuality(fix.type), std::max(0, std::min(99, fix.num_satellites)),
+                TypeToQuality(fix.type), std::max(0, std::min(999, fix.num_satellites)),
                 fix.height_m);
   out += NmeaSentence(buf);
   std::snprintf(buf, sizeof(buf), "GNGST,%s,,,,,%.4f,%.4f,%.4f", t.c_str(), fix.sigma_horizontal_m,

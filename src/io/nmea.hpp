@@ -14,10 +14,11 @@
 //   sqrt((sigma_lat^2 + sigma_lon^2) / 2); sigma_vertical = sigma_alt. A GGA without a GST gets
 //   the sigmas of NmeaDefaultSigmas (counted).
 // - RMC (ddmmyy, years 80-99 -> 19xx) and ZDA (dd, mm, yyyy): the UTC date. A GGA takes the date
-//   of the latest date sentence, carried over midnight when the time of day wraps (a drop of more
-//   than 12 h); a GGA before any date sentence takes the date of the first date sentence if that
-//   one belongs to the same epoch (time of day within 1 s: receivers send GGA before RMC), else
-//   the date of NmeaOptions::utc_date_days, else it is an error naming the line.
+//   of the latest date sentence (years 1970..2200, else the sentence is bad), carried over midnight
+//   when the time of day wraps (a drop of more than 12 h); a GGA before any date sentence takes the
+//   date of the first date sentence if that one belongs to the same epoch (time of day within 1 s:
+//   receivers send GGA before RMC), else the date of NmeaOptions::utc_date_days, else it is an
+//   error naming the line.
 // Fix stamps must strictly increase (an error names both lines).
 //
 // Writing (FormatNmeaEpoch): ZDA, GGA, GST per fix. Precision: time of day with `time_decimals`

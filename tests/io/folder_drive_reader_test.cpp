@@ -409,6 +409,15 @@ TEST(FolderNmeaTest, EpochsDatesGstAndChecksums) {
   ASSERT_TRUE(nmea.ok()) << nmea.status().ToString();
   EXPECT_EQ(nmea->fixes.at(0).stamp.ToKittiString(), "2011-02-01 00:00:00.000000000");
 
+  // Fuzz regression: a year past int64 nanoseconds (2262) overflowed the stamp; now a bad
+  // sentence, and the GGA after it has no date.
+  nmea = io_internal::ParseNmeaGnss(
+      NmeaSentence("GPZDA,101500.10,13,09,4040,00,00") +
+          NmeaSentence("GPGGA,101500.10,4806.0,N,01130.0,E,5,12,0.9,472.260,M,48.0,M,,"),
+      "y.nmea", {});
+  EXPECT_THAT(nmea.status().message(), HasSubstr("y.nmea:2: GGA at 10:15:00.100000000 comes "
+                                                 "before any date"));
+
   // A date from the options for a log without RMC/ZDA.
   io_internal::NmeaOptions with_date;
   ASSERT_TRUE(io_internal::CivilToDays(2020, 5, 17, &with_date.utc_date_days.emplace()));

@@ -10,7 +10,7 @@
 # 5. checks: VENV/bin/python -c "import slam_mms; print(slam_mms.__version__)".
 set -euo pipefail
 cd "$(dirname "$0")/.."
-VENV=${1:-.venv}
+VENV=$(realpath -m "${1:-.venv}")
 BUILD_DIR=${BUILD_DIR:-build}
 JOBS=${JOBS:-2}
 PYTHON=${PYTHON:-/usr/bin/python3}
@@ -30,7 +30,6 @@ if [[ ! -x "$VENV/bin/python" ]]; then
 fi
 SLAM_MMS_PYTHON_MODULE="$(realpath "$MODULE")" PIP_NO_INDEX=1 \
   "$VENV/bin/python" -m pip install --no-build-isolation --no-deps --no-index --upgrade ./python
-# Run the check outside the source tree so the installed package (not python/) is imported.
-(cd / && "$(realpath -m "$OLDPWD/$VENV")/bin/python" -c "import slam_mms; print(slam_mms.__version__)") 2>/dev/null \
-  || (cd / && "$VENV/bin/python" -c "import slam_mms; print(slam_mms.__version__)")
+# Checked outside the source tree, so that the installed package (not python/) is imported.
+(cd / && "$VENV/bin/python" -c "import slam_mms; print(slam_mms.__version__)")
 echo "[install_python] installed into $VENV: source $VENV/bin/activate"

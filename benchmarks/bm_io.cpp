@@ -7,6 +7,9 @@
 #include <filesystem>
 #include <random>
 
+#include "slam_mms/io/drive_folder_writer.hpp"
+#include "slam_mms/io/folder_drive_reader.hpp"
+#include "slam_mms/io/kitti_drive_reader.hpp"
 #include "slam_mms/io/kitti_raw_reader.hpp"
 #include "slam_mms/io/map_io.hpp"
 
@@ -71,6 +74,47 @@ BENCHMARK(BM_ReadKittiBin)
     ->Args({0, 0})
     ->Args({1, 1})
     ->Unit(benchmark::kMillisecond);
+
+// Reads the real drive's 50 scans, written once as a drive folder of binary PCD files
+// (WriteDriveFolder), through FolderDriveReader::ReadScan with per-point time from the azimuth:
+// the folder read speed of docs/drive_folder.md (scans/s = items_per_second / points).
+void BM_ReadFolderPcdScan(benchmark::State& state) {
+  const fs::path drive = KittiDriveDir();
+  if (drive.empty()) {
+    state.SkipWithError("real KITTI data not found (set SLAM_MMS_SHARED_DATA)");
+    return;
+  }
+  const fs::path dir =
+      fs::temp_directory_path() / ("slam_mms_bm_folder_" + std::to_string(getpid()));
+  auto kitti = slam_mms::KittiDriveReader::Open(drive, slam_mms::KittiRawReader::Options());
+  slam_mms::FolderWriteOptions write;
+  write.overwrite = true;
+  if (!kitti.ok() || !slam_mms::WriteDriveFolder(**kitti, dir, write).ok()) {
+    state.SkipWithError("cannot write the drive folder");
+    return;
+  }
+  auto folder = slam_mms::FolderDriveReader::Open(dir, slam_mms::FolderDriveReader::Options());
+  if (!folder.ok()) {
+    state.SkipWithError(folder.status().ToString().c_str());
+    return;
+  }
+  size_t i = 0, points = 0;
+  for (auto _ : state) {
+    auto scan = (*folder)->ReadScan(i++ % (*folder)->NumScans());
+    if (!scan.ok()) {
+      state.SkipWithError(scan.status().ToString().c_str());
+      break;
+    }
+    points += scan->cloud.size();
+    benchmark::DoNotOptimize(scan->cloud.points().data());
+  }
+  state.SetItemsProcessed(static_cast<int64_t>(points));
+  state.counters["scans_per_s"] =
+      benchmark::Counter(static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+  std::error_code ec;
+  fs::remove_all(dir, ec);
+}
+BENCHMARK(BM_ReadFolderPcdScan)->Unit(benchmark::kMillisecond)->Iterations(50);
 
 slam_mms::MapCloud BenchMap(size_t n) {
   std::mt19937_64 rng(1);

@@ -325,6 +325,19 @@ Status DecodePointColumns(std::string_view bytes, const PointFileLayout& layout,
     values->resize(n * m);
     float* out = values->data();
     const char* data = bytes.data() + start;
+    // Fast path: the records are exactly the wanted float32 columns in order (x y z intensity [t]
+    // as PCL and WriteDriveFolder write them): one copy.
+    bool packed = le == kHostIsLittleEndian && rec == 4 * m;
+    for (size_t k = 0; k < m && packed; ++k) {
+      const int c = wanted[k];
+      packed = c >= 0 && layout.columns[static_cast<size_t>(c)].type.kind == 'F' &&
+               layout.columns[static_cast<size_t>(c)].type.size == 4 &&
+               layout.columns[static_cast<size_t>(c)].offset == 4 * k;
+    }
+    if (packed) {
+      if (n > 0) std::memcpy(out, data, n * rec);
+      return OkStatus();
+    }
     for (size_t i = 0; i < n; ++i) {
       const char* record = data + i * rec;
       for (size_t k = 0; k < m; ++k) {

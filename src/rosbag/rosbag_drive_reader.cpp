@@ -136,6 +136,10 @@ Status RosbagDriveReader::Options::Validate() const {
     return InvalidArgumentError("RosbagDriveReader::Options::scan_period_s = " +
                                 std::to_string(scan_period_s) + "; must be >= 0 (0 = auto)");
   }
+  if (!(stream_time_margin_s >= 0.0) || !std::isfinite(stream_time_margin_s)) {
+    return InvalidArgumentError("RosbagDriveReader::Options::stream_time_margin_s = " +
+                                std::to_string(stream_time_margin_s) + "; must be >= 0");
+  }
   for (auto [name, v] :
        {std::pair<const char*, double>{"unknown_covariance_sigma_horizontal_m",
                                        unknown_covariance_sigma_horizontal_m},
@@ -168,6 +172,24 @@ struct RosbagDriveReader::Impl {
     double start_from_header_s = 0.0;
     std::string error;  ///< Non-empty: what ReadScan returns as kDataLoss.
   };
+  // An IMU orientation (initial attitude candidate) and a velocity message, kept until the scan
+  // range is known.
+  struct Attitude {
+    int64_t ns;
+    Eigen::Quaterniond q_enu_body;
+    std::string source;
+  };
+  struct Velocity {
+    int64_t ns;
+    Eigen::Vector3d v;
+    bool enu;
+    std::string source;
+  };
+  // One stream's message count and last stamp, for the order check.
+  struct StreamState {
+    uint64_t n = 0;
+    int64_t prev_ns = 0;
+  };
 
   fs::path path;
   std::string name;  ///< path as a string, for messages.
@@ -180,203 +202,196 @@ struct RosbagDriveReader::Impl {
   std::atomic<uint64_t> dropped{0};
   uint64_t skipped_gnss = 0;
 
+  std::vector<Attitude> attitudes;
+  std::vector<Velocity> velocities;
+  StreamState imu_state, gnss_state, velocity_state;
+  int64_t lidar_n = -1;
+  int64_t prev_receipt_ns = -1;
+  uint32_t ordinal = 0;
+  size_t num_bad_clouds = 0;
+
   std::string Source(const std::string& topic, uint64_t n) const {
     return name + ": " + topic + " message " + std::to_string(n);
   }
 
-  Status ReadImu();
-  Status ReadVelocity();
-  Status ReadGnss();
-  Status IndexScans();
+  Status ReadStreamsAndIndex();
+  Status OnImu(const rosbag::MessageInstance& m);
+  Status OnGnss(const rosbag::MessageInstance& m);
+  Status OnVelocity(const rosbag::MessageInstance& m);
+  Status OnCloud(const rosbag::MessageInstance& m);
+  void SetScanTimesWithoutTimeField();
+  void KeepStreamsNearScans();
+  void ChooseInitialState();
 };
 
-Status RosbagDriveReader::Impl::ReadImu() {
-  rosbag::View view(bag, rosbag::TopicQuery(imu_topic));
-  uint64_t n = 0;
-  int64_t prev_ns = 0;
-  bool have_attitude = false;
+// One View over the four topics in receipt-time order: the bag is read once (chunks hold the
+// messages of every topic).
+Status RosbagDriveReader::Impl::ReadStreamsAndIndex() {
+  std::vector<std::string> topics = {lidar_topic, imu_topic};
+  if (!gnss_topic.empty()) topics.push_back(gnss_topic);
+  if (!velocity_topic.empty()) topics.push_back(velocity_topic);
+  rosbag::View view(bag, rosbag::TopicQuery(topics));
   for (const rosbag::MessageInstance& m : view) {
-    const std::string source = Source(imu_topic, n);
-    SLAM_MMS_ASSIGN_OR_RETURN(const auto msg, Instantiate<sensor_msgs::Imu>(m, source));
-    const int64_t ns = static_cast<int64_t>(msg->header.stamp.toNSec());
-    SLAM_MMS_RETURN_IF_ERROR(CheckIncreasing(prev_ns, ns, static_cast<int64_t>(n) - 1, source));
-    ImuSample s;
-    s.stamp = Timestamp::FromNanoseconds(ns);
-    s.accel_mps2 = Eigen::Vector3d(msg->linear_acceleration.x, msg->linear_acceleration.y,
-                                   msg->linear_acceleration.z);
-    s.gyro_radps =
-        Eigen::Vector3d(msg->angular_velocity.x, msg->angular_velocity.y, msg->angular_velocity.z);
-    if (!s.accel_mps2.allFinite() || !s.gyro_radps.allFinite()) {
-      return DataLossError(source + ": non-finite linear_acceleration or angular_velocity");
+    const std::string& topic = m.getTopic();
+    if (topic == lidar_topic) {
+      SLAM_MMS_RETURN_IF_ERROR(OnCloud(m));
+    } else if (topic == imu_topic) {
+      SLAM_MMS_RETURN_IF_ERROR(OnImu(m));
+    } else if (topic == gnss_topic) {
+      SLAM_MMS_RETURN_IF_ERROR(OnGnss(m));
+    } else {
+      SLAM_MMS_RETURN_IF_ERROR(OnVelocity(m));
     }
-    if (!have_attitude && msg->orientation_covariance[0] >= 0.0) {
-      const Eigen::Quaterniond q(msg->orientation.w, msg->orientation.x, msg->orientation.y,
-                                 msg->orientation.z);
-      if (q.coeffs().allFinite() && std::abs(q.norm() - 1.0) < 1e-3) {
-        InsState state;
-        state.stamp = s.stamp;
-        state.T_world_body.linear() = q.normalized().toRotationMatrix();
-        streams.initial_state = state;
-        streams.initial_state_source = source;
-        have_attitude = true;
-      }
-    }
-    streams.imu.push_back(s);
-    streams.imu_source.push_back(source);
-    prev_ns = ns;
-    ++n;
   }
   if (streams.imu.empty()) {
     return InvalidArgumentError(name + ": IMU topic " + imu_topic + " has no messages");
-  }
-  if (!have_attitude) {
-    SLAM_MMS_LOG(kInfo) << name << ": no IMU message on " << imu_topic
-                        << " carries an orientation: the filter aligns itself";
-  }
-  return OkStatus();
-}
-
-Status RosbagDriveReader::Impl::ReadVelocity() {
-  if (velocity_topic.empty()) return OkStatus();
-  rosbag::View view(bag, rosbag::TopicQuery(velocity_topic));
-  uint64_t n = 0;
-  int64_t prev_ns = 0;
-  // The message nearest to the attitude's stamp (no attitude: nothing to attach it to).
-  std::optional<Eigen::Vector3d> best_v;
-  std::string best_source;
-  int64_t best_gap_ns = 0;
-  const int64_t attitude_ns =
-      streams.initial_state ? streams.initial_state->stamp.nanoseconds() : 0;
-  for (const rosbag::MessageInstance& m : view) {
-    const std::string source = Source(velocity_topic, n);
-    SLAM_MMS_ASSIGN_OR_RETURN(const auto msg, Instantiate<geometry_msgs::TwistStamped>(m, source));
-    const int64_t ns = static_cast<int64_t>(msg->header.stamp.toNSec());
-    SLAM_MMS_RETURN_IF_ERROR(CheckIncreasing(prev_ns, ns, static_cast<int64_t>(n) - 1, source));
-    prev_ns = ns;
-    ++n;
-    if (!streams.initial_state) continue;
-    const Eigen::Vector3d v(msg->twist.linear.x, msg->twist.linear.y, msg->twist.linear.z);
-    if (!v.allFinite()) continue;
-    const int64_t gap = std::abs(ns - attitude_ns);
-    if (best_v && gap >= best_gap_ns) continue;
-    const Eigen::Matrix3d& R_enu_body = streams.initial_state->T_world_body.linear();
-    best_v =
-        rosbag_internal::IsEnuFrameId(msg->header.frame_id) ? v : Eigen::Vector3d(R_enu_body * v);
-    best_source = source + " (frame_id '" + msg->header.frame_id + "')";
-    best_gap_ns = gap;
-  }
-  if (best_v) {
-    streams.initial_state->v_world_mps = *best_v;
-    streams.initial_state_source += "; velocity " + best_source;
-    if (best_gap_ns > 100000000) {
-      SLAM_MMS_LOG(kWarning) << name << ": the initial velocity (" << best_source << ") is "
-                             << best_gap_ns * 1e-9 << " s from the initial attitude";
-    }
-  } else if (n > 0 && !streams.initial_state) {
-    SLAM_MMS_LOG(kInfo) << name << ": " << velocity_topic
-                        << " ignored: no IMU orientation to start from";
-  }
-  return OkStatus();
-}
-
-Status RosbagDriveReader::Impl::ReadGnss() {
-  if (gnss_topic.empty()) {
-    SLAM_MMS_LOG(kInfo) << name << ": no " << kNavSatFix << " topic: no GNSS";
-    return OkStatus();
-  }
-  rosbag::View view(bag, rosbag::TopicQuery(gnss_topic));
-  uint64_t n = 0;
-  int64_t prev_ns = 0;
-  for (const rosbag::MessageInstance& m : view) {
-    const std::string source = Source(gnss_topic, n);
-    SLAM_MMS_ASSIGN_OR_RETURN(const auto msg, Instantiate<sensor_msgs::NavSatFix>(m, source));
-    const int64_t ns = static_cast<int64_t>(msg->header.stamp.toNSec());
-    SLAM_MMS_RETURN_IF_ERROR(CheckIncreasing(prev_ns, ns, static_cast<int64_t>(n) - 1, source));
-    prev_ns = ns;
-    ++n;
-    if (!std::isfinite(msg->latitude) || !std::isfinite(msg->longitude) ||
-        !std::isfinite(msg->altitude)) {
-      ++skipped_gnss;
-      continue;
-    }
-    GnssFix fix;
-    fix.stamp = Timestamp::FromNanoseconds(ns);
-    fix.latitude_deg = msg->latitude;
-    fix.longitude_deg = msg->longitude;
-    fix.height_m = msg->altitude;
-    rosbag_internal::NavSatFixSigmas(*msg, options.unknown_covariance_sigma_horizontal_m,
-                                     options.unknown_covariance_sigma_vertical_m,
-                                     &fix.sigma_horizontal_m, &fix.sigma_vertical_m);
-    fix.type = RosbagFixType(msg->status.status, fix.sigma_horizontal_m,
-                             options.rtk_fixed_max_sigma_horizontal_m);
-    fix.num_satellites = 0;
-    streams.gnss.push_back(fix);
-    streams.gnss_source.push_back(source);
-  }
-  if (skipped_gnss > 0) {
-    SLAM_MMS_LOG(kWarning) << name << ": " << gnss_topic << ": skipped " << skipped_gnss << " of "
-                           << n << " fixes with a NaN latitude/longitude/altitude";
-  }
-  return OkStatus();
-}
-
-Status RosbagDriveReader::Impl::IndexScans() {
-  rosbag::View view(bag, rosbag::TopicQuery(lidar_topic));
-  int64_t n = -1;
-  int64_t prev_receipt_ns = -1;
-  uint32_t ordinal = 0;
-  int64_t prev_header_ns = 0;
-  size_t num_bad = 0;
-  for (const rosbag::MessageInstance& m : view) {
-    ++n;
-    const auto receipt_ns = static_cast<int64_t>(m.getTime().toNSec());
-    ordinal = receipt_ns == prev_receipt_ns ? ordinal + 1 : 0;
-    prev_receipt_ns = receipt_ns;
-    if (n < options.first_scan) continue;
-    if (options.last_scan >= 0 && n > options.last_scan) break;
-    const std::string source = Source(lidar_topic, static_cast<uint64_t>(n));
-    // One cloud at a time: read, take its stamps, drop it.
-    SLAM_MMS_ASSIGN_OR_RETURN(const auto msg, Instantiate<sensor_msgs::PointCloud2>(m, source));
-    ScanEntry e;
-    e.receipt_ns = receipt_ns;
-    e.ordinal = ordinal;
-    e.message_number = n;
-    e.header_ns = static_cast<int64_t>(msg->header.stamp.toNSec());
-    SLAM_MMS_RETURN_IF_ERROR(CheckIncreasing(
-        prev_header_ns, e.header_ns, scans.empty() ? -1 : scans.back().message_number, source));
-    prev_header_ns = e.header_ns;
-    SLAM_MMS_ASSIGN_OR_RETURN(const rosbag_internal::CloudLayout layout,
-                              rosbag_internal::ParseCloudLayout(*msg, source));
-    e.has_time_field = layout.time.present();
-    Status size_ok = rosbag_internal::CheckCloudSize(*msg, source);
-    if (size_ok.ok() && e.has_time_field) {
-      auto range = rosbag_internal::ComputeCloudTimeRange(*msg, layout, options.time_field, source);
-      if (range.ok()) {
-        const double min0 = std::min(0.0, range->min_s);
-        const auto start_offset_ns = static_cast<int64_t>(std::llround(min0 * 1e9));
-        e.start = Timestamp::FromNanoseconds(e.header_ns + start_offset_ns);
-        e.end = Timestamp::FromNanoseconds(
-            std::max(e.start.nanoseconds(),
-                     e.header_ns + static_cast<int64_t>(std::llround(range->max_s * 1e9))));
-        e.start_from_header_s = static_cast<double>(start_offset_ns) * 1e-9;
-      } else {
-        size_ok = range.status();
-      }
-    }
-    if (!size_ok.ok()) {
-      e.error = size_ok.message();
-      ++num_bad;
-      SLAM_MMS_LOG(kWarning) << e.error << " (ReadScan will return kDataLoss)";
-    }
-    scans.push_back(std::move(e));
   }
   if (scans.empty()) {
     return InvalidArgumentError(name + ": no scans on " + lidar_topic +
                                 " in the range first_scan " + std::to_string(options.first_scan) +
                                 " .. last_scan " + std::to_string(options.last_scan) +
-                                " (the topic has " + std::to_string(n + 1) + " messages)");
+                                " (the topic has " + std::to_string(lidar_n + 1) + " messages)");
   }
-  // Clouds without a time field (or unreadable ones): the scan period.
+  SetScanTimesWithoutTimeField();
+  if (num_bad_clouds > 0) {
+    SLAM_MMS_LOG(kWarning) << name << ": " << num_bad_clouds << " of " << scans.size()
+                           << " clouds on " << lidar_topic << " are malformed";
+  }
+  if (skipped_gnss > 0) {
+    SLAM_MMS_LOG(kWarning) << name << ": " << gnss_topic << ": skipped " << skipped_gnss << " of "
+                           << gnss_state.n << " fixes with a NaN latitude/longitude/altitude";
+  }
+  if (gnss_topic.empty()) {
+    SLAM_MMS_LOG(kInfo) << name << ": no " << kNavSatFix << " topic: no GNSS";
+  }
+  KeepStreamsNearScans();
+  ChooseInitialState();
+  return OkStatus();
+}
+
+Status RosbagDriveReader::Impl::OnImu(const rosbag::MessageInstance& m) {
+  const std::string source = Source(imu_topic, imu_state.n);
+  SLAM_MMS_ASSIGN_OR_RETURN(const auto msg, Instantiate<sensor_msgs::Imu>(m, source));
+  const auto ns = static_cast<int64_t>(msg->header.stamp.toNSec());
+  SLAM_MMS_RETURN_IF_ERROR(
+      CheckIncreasing(imu_state.prev_ns, ns, static_cast<int64_t>(imu_state.n) - 1, source));
+  imu_state.prev_ns = ns;
+  ++imu_state.n;
+  ImuSample s;
+  s.stamp = Timestamp::FromNanoseconds(ns);
+  s.accel_mps2 = Eigen::Vector3d(msg->linear_acceleration.x, msg->linear_acceleration.y,
+                                 msg->linear_acceleration.z);
+  s.gyro_radps =
+      Eigen::Vector3d(msg->angular_velocity.x, msg->angular_velocity.y, msg->angular_velocity.z);
+  if (!s.accel_mps2.allFinite() || !s.gyro_radps.allFinite()) {
+    return DataLossError(source + ": non-finite linear_acceleration or angular_velocity");
+  }
+  if (msg->orientation_covariance[0] >= 0.0) {
+    const Eigen::Quaterniond q(msg->orientation.w, msg->orientation.x, msg->orientation.y,
+                               msg->orientation.z);
+    if (q.coeffs().allFinite() && std::abs(q.norm() - 1.0) < 1e-3) {
+      attitudes.push_back({ns, q.normalized(), source});
+    }
+  }
+  streams.imu.push_back(s);
+  streams.imu_source.push_back(source);
+  return OkStatus();
+}
+
+Status RosbagDriveReader::Impl::OnVelocity(const rosbag::MessageInstance& m) {
+  const std::string source = Source(velocity_topic, velocity_state.n);
+  SLAM_MMS_ASSIGN_OR_RETURN(const auto msg, Instantiate<geometry_msgs::TwistStamped>(m, source));
+  const auto ns = static_cast<int64_t>(msg->header.stamp.toNSec());
+  SLAM_MMS_RETURN_IF_ERROR(CheckIncreasing(velocity_state.prev_ns, ns,
+                                           static_cast<int64_t>(velocity_state.n) - 1, source));
+  velocity_state.prev_ns = ns;
+  ++velocity_state.n;
+  const Eigen::Vector3d v(msg->twist.linear.x, msg->twist.linear.y, msg->twist.linear.z);
+  if (v.allFinite()) {
+    velocities.push_back({ns, v, rosbag_internal::IsEnuFrameId(msg->header.frame_id),
+                          source + " (frame_id '" + msg->header.frame_id + "')"});
+  }
+  return OkStatus();
+}
+
+Status RosbagDriveReader::Impl::OnGnss(const rosbag::MessageInstance& m) {
+  const std::string source = Source(gnss_topic, gnss_state.n);
+  SLAM_MMS_ASSIGN_OR_RETURN(const auto msg, Instantiate<sensor_msgs::NavSatFix>(m, source));
+  const auto ns = static_cast<int64_t>(msg->header.stamp.toNSec());
+  SLAM_MMS_RETURN_IF_ERROR(
+      CheckIncreasing(gnss_state.prev_ns, ns, static_cast<int64_t>(gnss_state.n) - 1, source));
+  gnss_state.prev_ns = ns;
+  ++gnss_state.n;
+  if (!std::isfinite(msg->latitude) || !std::isfinite(msg->longitude) ||
+      !std::isfinite(msg->altitude)) {
+    ++skipped_gnss;
+    return OkStatus();
+  }
+  GnssFix fix;
+  fix.stamp = Timestamp::FromNanoseconds(ns);
+  fix.latitude_deg = msg->latitude;
+  fix.longitude_deg = msg->longitude;
+  fix.height_m = msg->altitude;
+  rosbag_internal::NavSatFixSigmas(*msg, options.unknown_covariance_sigma_horizontal_m,
+                                   options.unknown_covariance_sigma_vertical_m,
+                                   &fix.sigma_horizontal_m, &fix.sigma_vertical_m);
+  fix.type = RosbagFixType(msg->status.status, fix.sigma_horizontal_m,
+                           options.rtk_fixed_max_sigma_horizontal_m);
+  fix.num_satellites = 0;
+  streams.gnss.push_back(fix);
+  streams.gnss_source.push_back(source);
+  return OkStatus();
+}
+
+Status RosbagDriveReader::Impl::OnCloud(const rosbag::MessageInstance& m) {
+  const int64_t n = ++lidar_n;
+  const auto receipt_ns = static_cast<int64_t>(m.getTime().toNSec());
+  ordinal = receipt_ns == prev_receipt_ns ? ordinal + 1 : 0;
+  prev_receipt_ns = receipt_ns;
+  if (n < options.first_scan || (options.last_scan >= 0 && n > options.last_scan)) {
+    return OkStatus();  // not deserialised
+  }
+  const std::string source = Source(lidar_topic, static_cast<uint64_t>(n));
+  // One cloud at a time: read, take its stamps, drop it.
+  SLAM_MMS_ASSIGN_OR_RETURN(const auto msg, Instantiate<sensor_msgs::PointCloud2>(m, source));
+  ScanEntry e;
+  e.receipt_ns = receipt_ns;
+  e.ordinal = ordinal;
+  e.message_number = n;
+  e.header_ns = static_cast<int64_t>(msg->header.stamp.toNSec());
+  SLAM_MMS_RETURN_IF_ERROR(CheckIncreasing(scans.empty() ? 0 : scans.back().header_ns, e.header_ns,
+                                           scans.empty() ? -1 : scans.back().message_number,
+                                           source));
+  SLAM_MMS_ASSIGN_OR_RETURN(const rosbag_internal::CloudLayout layout,
+                            rosbag_internal::ParseCloudLayout(*msg, source));
+  e.has_time_field = layout.time.present();
+  Status size_ok = rosbag_internal::CheckCloudSize(*msg, source);
+  if (size_ok.ok() && e.has_time_field) {
+    auto range = rosbag_internal::ComputeCloudTimeRange(*msg, layout, options.time_field, source);
+    if (range.ok()) {
+      const double min0 = std::min(0.0, range->min_s);
+      const auto start_offset_ns = static_cast<int64_t>(std::llround(min0 * 1e9));
+      e.start = Timestamp::FromNanoseconds(e.header_ns + start_offset_ns);
+      e.end = Timestamp::FromNanoseconds(
+          std::max(e.start.nanoseconds(),
+                   e.header_ns + static_cast<int64_t>(std::llround(range->max_s * 1e9))));
+      e.start_from_header_s = static_cast<double>(start_offset_ns) * 1e-9;
+    } else {
+      size_ok = range.status();
+    }
+  }
+  if (!size_ok.ok()) {
+    e.error = size_ok.message();
+    ++num_bad_clouds;
+    SLAM_MMS_LOG(kWarning) << e.error << " (ReadScan will return kDataLoss)";
+  }
+  scans.push_back(std::move(e));
+  return OkStatus();
+}
+
+// Clouds without a time field (or unreadable ones): [header, header + period] or
+// [header - period, header].
+void RosbagDriveReader::Impl::SetScanTimesWithoutTimeField() {
   double period_s = options.scan_period_s;
   if (period_s <= 0.0) {
     std::vector<double> gaps;
@@ -399,11 +414,79 @@ Status RosbagDriveReader::Impl::IndexScans() {
       e.end = Timestamp::FromNanoseconds(e.header_ns);
     }
   }
-  if (num_bad > 0) {
-    SLAM_MMS_LOG(kWarning) << name << ": " << num_bad << " of " << scans.size() << " clouds on "
-                           << lidar_topic << " are malformed";
+}
+
+// With a scan range: the streams within [first start - margin, last end + margin], as
+// KittiRawReader does.
+void RosbagDriveReader::Impl::KeepStreamsNearScans() {
+  if (options.first_scan == 0 && options.last_scan < 0) return;
+  Timestamp lo = scans.front().start, hi = scans.front().end;
+  for (const ScanEntry& e : scans) {
+    lo = std::min(lo, e.start);
+    hi = std::max(hi, e.end);
   }
-  return OkStatus();
+  lo = lo.PlusSeconds(-options.stream_time_margin_s);
+  hi = hi.PlusSeconds(options.stream_time_margin_s);
+  const auto keep = [&](auto* records, std::vector<std::string>* sources) {
+    size_t k = 0;
+    for (size_t i = 0; i < records->size(); ++i) {
+      const Timestamp t = (*records)[i].stamp;
+      if (t < lo || t > hi) continue;
+      (*records)[k] = (*records)[i];
+      (*sources)[k] = std::move((*sources)[i]);
+      ++k;
+    }
+    records->resize(k);
+    sources->resize(k);
+  };
+  keep(&streams.imu, &streams.imu_source);
+  keep(&streams.gnss, &streams.gnss_source);
+  if (streams.imu.empty()) {
+    SLAM_MMS_LOG(kWarning) << name << ": no IMU sample within " << options.stream_time_margin_s
+                           << " s of the selected scans";
+  }
+}
+
+// The attitude: the last orientation at or before the first scan's start, else the first after
+// it; the velocity: the message nearest to that attitude.
+void RosbagDriveReader::Impl::ChooseInitialState() {
+  if (attitudes.empty()) {
+    SLAM_MMS_LOG(kInfo) << name << ": no IMU message on " << imu_topic
+                        << " carries an orientation: the filter aligns itself";
+    if (!velocities.empty()) {
+      SLAM_MMS_LOG(kInfo) << name << ": " << velocity_topic
+                          << " ignored: no IMU orientation to start from";
+    }
+    return;
+  }
+  const int64_t first_scan_ns = scans.front().start.nanoseconds();
+  const Attitude* a = &attitudes.front();
+  for (const Attitude& c : attitudes) {
+    if (c.ns > first_scan_ns) break;
+    a = &c;
+  }
+  InsState state;
+  state.stamp = Timestamp::FromNanoseconds(a->ns);
+  state.T_world_body.linear() = a->q_enu_body.toRotationMatrix();
+  streams.initial_state_source = a->source;
+  const Velocity* best = nullptr;
+  for (const Velocity& v : velocities) {
+    if (best == nullptr || std::abs(v.ns - a->ns) < std::abs(best->ns - a->ns)) best = &v;
+  }
+  if (best != nullptr) {
+    state.v_world_mps =
+        best->enu ? best->v : Eigen::Vector3d(state.T_world_body.linear() * best->v);
+    streams.initial_state_source += "; velocity " + best->source;
+    if (std::abs(best->ns - a->ns) > 100000000) {
+      SLAM_MMS_LOG(kWarning) << name << ": the initial velocity (" << best->source << ") is "
+                             << std::abs(best->ns - a->ns) * 1e-9 << " s from the initial attitude";
+    }
+  }
+  streams.initial_state = state;
+  attitudes.clear();
+  attitudes.shrink_to_fit();
+  velocities.clear();
+  velocities.shrink_to_fit();
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -431,10 +514,7 @@ StatusOr<std::unique_ptr<RosbagDriveReader>> RosbagDriveReader::Open(const fs::p
     SLAM_MMS_ASSIGN_OR_RETURN(impl->velocity_topic,
                               ChooseTopic(topics, options.velocity_topic, kTwistStamped,
                                           "velocity_topic", false, impl->name));
-    SLAM_MMS_RETURN_IF_ERROR(impl->ReadImu());
-    SLAM_MMS_RETURN_IF_ERROR(impl->ReadVelocity());
-    SLAM_MMS_RETURN_IF_ERROR(impl->ReadGnss());
-    SLAM_MMS_RETURN_IF_ERROR(impl->IndexScans());
+    SLAM_MMS_RETURN_IF_ERROR(impl->ReadStreamsAndIndex());
   } catch (const rosbag::BagUnindexedException& e) {
     return DataLossError(impl->name +
                          ": unindexed ROS bag (`rosbag reindex` repairs it): " + e.what());
@@ -504,12 +584,18 @@ StatusOr<Scan> RosbagDriveReader::ReadScan(size_t i) const {
     ros::Time t;
     t.fromNSec(static_cast<uint64_t>(e.receipt_ns));
     rosbag::View view(impl_->bag, rosbag::TopicQuery(impl_->lidar_topic), t, t);
-    uint32_t k = 0;
+    // Message `ordinal` among those at t, as in Open's pass; should the order of equal receipt
+    // times differ (several connections on the topic), the one with the indexed header stamp.
+    std::vector<rosbag::MessageInstance> at_t;
     for (const rosbag::MessageInstance& m : view) {
-      if (m.getTime() != t) continue;
-      if (k++ != e.ordinal) continue;
-      msg = m.instantiate<sensor_msgs::PointCloud2>();
-      break;
+      if (m.getTime() == t) at_t.push_back(m);
+    }
+    const auto matches = [&](const boost::shared_ptr<sensor_msgs::PointCloud2>& c) {
+      return c && static_cast<int64_t>(c->header.stamp.toNSec()) == e.header_ns;
+    };
+    if (e.ordinal < at_t.size()) msg = at_t[e.ordinal].instantiate<sensor_msgs::PointCloud2>();
+    for (size_t k = 0; k < at_t.size() && !matches(msg); ++k) {
+      if (k != e.ordinal) msg = at_t[k].instantiate<sensor_msgs::PointCloud2>();
     }
   } catch (const std::exception& ex) {
     return DataLossError(source + ": reading the message failed: " + ex.what());

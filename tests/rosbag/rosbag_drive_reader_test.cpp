@@ -316,13 +316,42 @@ TEST(RosbagPythonBag, Kitti2bagStyleTopicsAreFoundAndRead) {
     EXPECT_EQ(st.gnss[k].sigma_vertical_m, 1.5);
     EXPECT_THAT(st.gnss_source[k], HasSubstr("/kitti/oxts/gps/fix message " + std::to_string(m)));
   }
-  // Initial attitude from message 0 (roll 0, pitch 0, yaw 0.3), velocity (body frame) rotated.
+  // Every IMU message has an orientation: the initial state is message 1's, the last at or before
+  // the first scan (T0 + 0.1 s): roll 0.01, pitch -0.02, yaw 0.35; its velocity, message 1 (body
+  // frame), rotated to ENU.
+  const auto rpy = [](int m) {
+    return Eigen::Matrix3d(Eigen::AngleAxisd(0.3 + 0.05 * m, Eigen::Vector3d::UnitZ()) *
+                           Eigen::AngleAxisd(-0.02 * m, Eigen::Vector3d::UnitY()) *
+                           Eigen::AngleAxisd(0.01 * m, Eigen::Vector3d::UnitX()));
+  };
   ASSERT_TRUE(st.initial_state.has_value());
-  EXPECT_EQ(st.initial_state->stamp.nanoseconds(), t0);
-  const Eigen::Matrix3d R = Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  EXPECT_TRUE(st.initial_state->T_world_body.linear().isApprox(R, 1e-12));
-  EXPECT_LE((st.initial_state->v_world_mps - R * Eigen::Vector3d(5.0, 0.2, -0.05)).norm(), 1e-12);
-  EXPECT_THAT(st.initial_state_source, HasSubstr("/kitti/oxts/imu message 0"));
+  EXPECT_EQ(st.initial_state->stamp.nanoseconds(), t0 + 100000000LL);
+  EXPECT_TRUE(st.initial_state->T_world_body.linear().isApprox(rpy(1), 1e-12));
+  EXPECT_LE((st.initial_state->v_world_mps - rpy(1) * Eigen::Vector3d(5.1, 0.2, -0.05)).norm(),
+            1e-12);
+  EXPECT_THAT(st.initial_state_source, HasSubstr("/kitti/oxts/imu message 1;"));
+  EXPECT_THAT(st.initial_state_source, HasSubstr("/kitti/oxts/gps/vel message 1 (frame_id "
+                                                 "'imu_link')"));
+
+  // A scan range keeps the streams within stream_time_margin_s of it, and the attitude of its
+  // first scan.
+  RosbagDriveReader::Options o;
+  o.first_scan = 2;
+  o.last_scan = 3;
+  o.stream_time_margin_s = 0.15;
+  auto range = RosbagDriveReader::Open(bag, o);
+  ASSERT_TRUE(range.ok()) << range.status().ToString();
+  const DriveStreams& rs = (*range)->streams();
+  ASSERT_EQ((*range)->NumScans(), 2u);
+  EXPECT_EQ((*range)->ScanStart(0).nanoseconds(), t0 + 300000000LL);
+  ASSERT_EQ(rs.imu.size(), 5u);  // 0.2 .. 0.6 s within [0.15, 0.65]
+  EXPECT_EQ(rs.imu.front().stamp.nanoseconds(), t0 + 200000000LL);
+  EXPECT_THAT(rs.imu_source.front(), HasSubstr("/kitti/oxts/imu message 2"));
+  ASSERT_EQ(rs.gnss.size(), 4u);  // messages 2, 3, 4, 6 (5 is NaN)
+  EXPECT_THAT(rs.gnss_source.back(), HasSubstr("/kitti/oxts/gps/fix message 6"));
+  ASSERT_TRUE(rs.initial_state.has_value());
+  EXPECT_EQ(rs.initial_state->stamp.nanoseconds(), t0 + 300000000LL);
+  EXPECT_TRUE(rs.initial_state->T_world_body.linear().isApprox(rpy(3), 1e-12));
 
   auto topics = RosbagDriveReader::ListTopics(bag);
   ASSERT_TRUE(topics.ok());

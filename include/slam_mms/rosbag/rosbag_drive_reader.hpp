@@ -23,8 +23,9 @@
 // number and field; logged by Open) so the caller may skip it.
 //
 // IMU: body frame, linear_acceleration = specific force [m/s^2], angular_velocity [rad/s]. The
-// orientation of the first message with orientation_covariance[0] >= 0 and a unit quaternion is
-// the initial attitude R_enu_body (ENU, as kitti2bag and robot_localization write it).
+// initial attitude R_enu_body (ENU, as kitti2bag and robot_localization write it) is the
+// orientation of the last message at or before the first scan's start (else the first after it)
+// among those with orientation_covariance[0] >= 0 and a unit quaternion.
 // Velocity: the TwistStamped nearest in time to that attitude; header.frame_id "enu", "world",
 // "map" or "odom" is ENU, anything else is the body frame (kitti2bag's /kitti/oxts/gps/vel) and is
 // rotated by the attitude. Without an attitude there is no initial state.
@@ -42,8 +43,9 @@
 // Sources are "<bag>: <topic> message <n>" (n 0-based).
 //
 // Ownership: owns the open bag, the index of the scans (about 100 bytes each, no points) and the
-// IMU/GNSS streams, read into memory by Open in one pass; Open reads each cloud once (one at a
-// time, constant memory) for its stamps. ReadScan reads one message from the bag. Thread safety:
+// IMU/GNSS streams, read into memory by Open in one pass over the four topics (the bag file is
+// read once); Open deserialises each cloud of the range once (one at a time, constant memory) for
+// its stamps. ReadScan reads one message from the bag. Thread safety:
 // const methods may be called concurrently; ReadScan serialises its bag access through a mutex
 // (rosbag::Bag is not thread-safe) and decodes outside it. Not copyable; movable only as the
 // unique_ptr Open returns. No exception leaves this class: rosbag, boost and ROS serialization
@@ -96,6 +98,10 @@ class RosbagDriveReader final : public DriveReader {
     /// Scan range: message numbers on the lidar topic (0-based), inclusive; -1 = the last one.
     int64_t first_scan = 0;
     int64_t last_scan = -1;
+    /// With a scan range (first_scan > 0 or last_scan >= 0), the IMU and GNSS records kept are
+    /// those within [first scan start - margin, last scan end + margin] [s] (as KittiRawReader);
+    /// without one, the whole bag's.
+    double stream_time_margin_s = 1.0;
     /// Clouds without a time field: spin for the azimuth time, and whether to compute it (false:
     /// all offsets 0).
     SpinDirection spin = SpinDirection::kClockwise;

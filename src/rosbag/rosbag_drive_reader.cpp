@@ -12,7 +12,6 @@
 #include <cmath>
 #include <map>
 #include <mutex>
-#include <set>
 
 #include "rosbag/point_cloud2_codec.hpp"
 #include "rosbag/ros_conversions.hpp"
@@ -32,9 +31,11 @@ constexpr double kDefaultScanPeriod_s = 0.1;
 
 std::string TopicList(const std::vector<RosbagTopic>& topics) {
   if (topics.empty()) return "the bag has no topics";
-  std::string s = "the bag has:";
-  for (const RosbagTopic& t : topics) {
-    s += " " + t.name + " [" + t.datatype + ", " + std::to_string(t.num_messages) + " messages]";
+  std::string s = "the bag has: ";
+  for (size_t k = 0; k < topics.size(); ++k) {
+    const RosbagTopic& t = topics[k];
+    s += (k > 0 ? ", " : "") + t.name + " [" + t.datatype + ", " + std::to_string(t.num_messages) +
+         " messages]";
   }
   return s;
 }

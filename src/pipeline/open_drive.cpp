@@ -1,8 +1,39 @@
 #include "slam_mms/pipeline/open_drive.hpp"
 
+#include "slam_mms/core/logging.hpp"
+#include "slam_mms/io/extrinsics_yaml.hpp"
+#include "slam_mms/io/folder_drive_reader.hpp"
 #include "slam_mms/io/kitti_drive_reader.hpp"
+#if defined(SLAM_MMS_HAVE_ROSBAG)
+#include "slam_mms/rosbag/rosbag_drive_reader.hpp"
+#endif
 
 namespace slam_mms {
+namespace {
+
+// A reader whose calibration is replaced (--extrinsics over a folder's own extrinsics.yaml).
+class ExtrinsicsOverride final : public DriveReader {
+ public:
+  ExtrinsicsOverride(std::unique_ptr<DriveReader> base, const DriveExtrinsics& extrinsics)
+      : base_(std::move(base)), streams_(base_->streams()) {
+    streams_.T_body_lidar = extrinsics.T_body_lidar;
+    streams_.t_body_antenna_m = extrinsics.t_body_antenna_m;
+  }
+  std::string Describe() const override { return base_->Describe(); }
+  size_t NumScans() const override { return base_->NumScans(); }
+  Timestamp ScanStart(size_t i) const override { return base_->ScanStart(i); }
+  Timestamp ScanEnd(size_t i) const override { return base_->ScanEnd(i); }
+  std::string ScanSource(size_t i) const override { return base_->ScanSource(i); }
+  StatusOr<Scan> ReadScan(size_t i) const override { return base_->ReadScan(i); }
+  const DriveStreams& streams() const override { return streams_; }
+  uint64_t TotalDroppedPoints() const override { return base_->TotalDroppedPoints(); }
+
+ private:
+  std::unique_ptr<DriveReader> base_;
+  DriveStreams streams_;
+};
+
+}  // namespace
 
 const char* DriveSourceKindName(DriveSourceKind kind) {
   switch (kind) {
@@ -42,11 +73,49 @@ StatusOr<std::unique_ptr<DriveReader>> OpenDrive(const std::filesystem::path& pa
                                 KittiDriveReader::Open(path, ro));
       return std::unique_ptr<DriveReader>(std::move(reader));
     }
-    case DriveSourceKind::kFolder:
-    case DriveSourceKind::kRosbag: break;
+    case DriveSourceKind::kFolder: {
+      FolderDriveReader::Options fo;
+      fo.first_frame = options.first_frame;
+      fo.last_frame = options.last_frame;
+      fo.allow_missing_extrinsics = !options.extrinsics.empty();
+      SLAM_MMS_ASSIGN_OR_RETURN(std::unique_ptr<FolderDriveReader> folder,
+                                FolderDriveReader::Open(path, fo));
+      if (options.extrinsics.empty()) return std::unique_ptr<DriveReader>(std::move(folder));
+      SLAM_MMS_ASSIGN_OR_RETURN(const DriveExtrinsics extrinsics,
+                                ReadExtrinsicsYaml(options.extrinsics));
+      return std::unique_ptr<DriveReader>(
+          std::make_unique<ExtrinsicsOverride>(std::move(folder), extrinsics));
+    }
+    case DriveSourceKind::kRosbag: {
+#if defined(SLAM_MMS_HAVE_ROSBAG)
+      RosbagDriveReader::Options bo;
+      bo.lidar_topic = options.lidar_topic;
+      bo.imu_topic = options.imu_topic;
+      bo.gnss_topic = options.gnss_topic;
+      bo.first_scan = options.first_frame;
+      bo.last_scan = options.last_frame;
+      if (!options.extrinsics.empty()) {
+        SLAM_MMS_ASSIGN_OR_RETURN(const DriveExtrinsics extrinsics,
+                                  ReadExtrinsicsYaml(options.extrinsics));
+        bo.T_body_lidar = extrinsics.T_body_lidar;
+        bo.t_body_antenna_m = extrinsics.t_body_antenna_m;
+      } else {
+        SLAM_MMS_LOG(kWarning) << path.string()
+                               << ": no extrinsics given (--extrinsics FILE.yaml): T_body_lidar = "
+                                  "identity";
+      }
+      SLAM_MMS_ASSIGN_OR_RETURN(std::unique_ptr<RosbagDriveReader> bag,
+                                RosbagDriveReader::Open(path, bo));
+      return std::unique_ptr<DriveReader>(std::move(bag));
+#else
+      break;
+#endif
+    }
   }
   return Status(StatusCode::kUnimplemented,
-                path.string() + ": " + DriveSourceKindName(kind) + " input not built in");
+                path.string() +
+                    ": ROS 1 bags are not built into this slam_mms (configure with "
+                    "SLAM_MMS_WITH_ROSBAG=ON and librosbag-storage-dev installed)");
 }
 
 }  // namespace slam_mms

@@ -412,14 +412,14 @@ std::string NmeaSentence(std::string_view body) {
 
 namespace {
 
-// |deg| as "ddmm.mmmmmmm" (degree_digits 2) or "dddmm.mmmmmmm", rounded to 1e-7 minutes.
+// |deg| as "ddmm.mmmmmmmmm" (degree_digits 2) or "dddmm.mmmmmmmmm", rounded to 1e-9 minutes.
 std::string FormatAngle(double deg, int degree_digits) {
-  constexpr long long kUnitsPerMinute = 10000000LL;
+  constexpr long long kUnitsPerMinute = 1000000000LL;  // 9 decimals of a minute (1.9 um)
   const long long total = std::llround(std::abs(deg) * 60.0 * kUnitsPerMinute);
   const long long d = total / (60 * kUnitsPerMinute);
   const long long rest = total % (60 * kUnitsPerMinute);
   char buf[40];
-  std::snprintf(buf, sizeof(buf), "%0*lld%02lld.%07lld", degree_digits, d, rest / kUnitsPerMinute,
+  std::snprintf(buf, sizeof(buf), "%0*lld%02lld.%09lld", degree_digits, d, rest / kUnitsPerMinute,
                 rest % kUnitsPerMinute);
   return buf;
 }
@@ -464,13 +464,13 @@ std::string FormatNmeaEpoch(const GnssFix& fix, int time_decimals) {
   std::snprintf(buf, sizeof(buf), "GNZDA,%s,%02lld,%02lld,%04lld,00,00", t.c_str(),
                 static_cast<long long>(d), static_cast<long long>(m), static_cast<long long>(y));
   out += NmeaSentence(buf);
-  std::snprintf(buf, sizeof(buf), "GNGGA,%s,%s,%c,%s,%c,%d,%02d,,%.4f,M,0.0,M,,", t.c_str(),
+  std::snprintf(buf, sizeof(buf), "GNGGA,%s,%s,%c,%s,%c,%d,%02d,,%.6f,M,0.0,M,,", t.c_str(),
                 FormatAngle(fix.latitude_deg, 2).c_str(), fix.latitude_deg < 0 ? 'S' : 'N',
                 FormatAngle(fix.longitude_deg, 3).c_str(), fix.longitude_deg < 0 ? 'W' : 'E',
                 TypeToQuality(fix.type), std::max(0, std::min(999, fix.num_satellites)),
                 fix.height_m);
   out += NmeaSentence(buf);
-  std::snprintf(buf, sizeof(buf), "GNGST,%s,,,,,%.4f,%.4f,%.4f", t.c_str(), fix.sigma_horizontal_m,
+  std::snprintf(buf, sizeof(buf), "GNGST,%s,,,,,%.6f,%.6f,%.6f", t.c_str(), fix.sigma_horizontal_m,
                 fix.sigma_horizontal_m, fix.sigma_vertical_m);
   out += NmeaSentence(buf);
   return out;

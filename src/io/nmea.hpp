@@ -22,9 +22,10 @@
 // Fix stamps must strictly increase (an error names both lines).
 //
 // Writing (FormatNmeaEpoch): ZDA, GGA, GST per fix. Precision: time of day with `time_decimals`
-// digits (3: 0.5 ms; 9: exact), latitude/longitude minutes with 7 decimals (<= 0.1 mm), height and
-// sigmas with 4 decimals (0.05 mm), the ellipsoidal height in the altitude field with geoid
-// separation 0, no HDOP. Round trips exactly: fix type, satellites, and (time_decimals 9) stamps.
+// digits (3: 0.5 ms; 9: exact), latitude/longitude minutes with 9 decimals (<= 1 um), height and
+// sigmas with 6 decimals (<= 0.5 um; receivers write fewer, the reader takes any), the ellipsoidal
+// height in the altitude field with geoid separation 0, no HDOP. Round trips exactly: fix type,
+// satellites, and (time_decimals 9) stamps.
 //
 // Thread safety: pure functions; safe from any thread.
 

@@ -11,8 +11,8 @@
 // gnss.csv fixes (stamps, lat/lon/height, sigmas, fix type, satellites), T_body_lidar and the
 // antenna lever arm (%.17g). Attitudes go through degrees (initial_state.csv, pos.csv): within
 // ~1e-15 rad. Lost: stamp_trigger (the reader uses the scan midpoint), sources. gnss.nmea loses
-// precision (see FolderWriteOptions::nmea_time_decimals): positions <= 0.1 mm (1e-7 minutes),
-// heights and sigmas <= 0.05 mm (4 decimals), stamps to the written decimals; an unequal
+// precision (see FolderWriteOptions::nmea_time_decimals): positions <= 1 um (1e-9 minutes),
+// heights and sigmas <= 0.5 um (6 decimals), stamps to the written decimals; an unequal
 // east/north sigma pair becomes one horizontal sigma (GST lat/lon sigma both = sigma_horizontal).
 //
 // Points are written as the reader returns them: open a KITTI drive without

@@ -52,9 +52,10 @@ bool IsReportMethodName(const std::string& name) {
 }
 
 StatusOr<std::string> ReportToJson(const EvalReport& report) {
-  if (report.input.ground_truth != "simulator" && report.input.ground_truth != "oxts") {
+  if (report.input.ground_truth != "simulator" && report.input.ground_truth != "oxts" &&
+      report.input.ground_truth != "none") {
     return InvalidArgumentError("EvalReport::input.ground_truth = \"" + report.input.ground_truth +
-                                "\"; must be \"simulator\" or \"oxts\"");
+                                "\"; must be \"simulator\", \"oxts\" or \"none\"");
   }
   std::set<std::string> seen;
   for (const auto& [name, m] : report.methods) {

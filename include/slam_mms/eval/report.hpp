@@ -3,7 +3,7 @@
 // schema in issue 8 (other tools parse them); every metric not computed is written as null.
 //
 //   {"input": {"drive": str, "scans": int, "duration_s": float, "ground_truth":
-//   "simulator"|"oxts"},
+//   "simulator"|"oxts"|"none"},
 //    "gnss_outages": [[start_s, duration_s], ...],
 //    "methods": {"full"|"gnss_ins"|"lidar_only": {
 //        "ate_rmse_m": f, "ate_rmse_xyz_m": [f,f,f], "rot_rmse_deg": f, "rot_rmse_rpy_deg":
@@ -34,7 +34,8 @@ struct ReportInput {
   std::string drive;                       ///< Drive folder or name.
   int64_t scans = 0;                       ///< Scans processed.
   double duration_s = 0.0;                 ///< Drive duration covered [s].
-  std::string ground_truth = "simulator";  ///< "simulator" or "oxts".
+  /// "simulator", "oxts" or "none" (a folder or bag without ground truth: metrics are null).
+  std::string ground_truth = "simulator";
 };
 
 /// One method's numbers; nullopt is written as null.

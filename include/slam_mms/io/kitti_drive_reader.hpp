@@ -49,9 +49,10 @@ namespace slam_mms {
 /// sigma_horizontal, fix type as NCOM navstat/posmode), stamped at the fix's time; a scan without
 /// such a fix gets a record with navstat 0 (no fix) at its trigger time. GNSS at another rate than
 /// the scans therefore loses fixes, and the records' attitude and velocity are only those of the
-/// initial state (first record) or of an external POS (interpolated at the record), else zero:
-/// KITTI raw has no field for "unknown". A lever arm is not representable (logged).
-/// Returns the number of GNSS fixes that found no scan in `fixes_dropped` (may be null).
+/// initial state (the first record of oxts/ and of oxts_100hz/) or of an external POS (interpolated
+/// at the record), else zero: KITTI raw has no field for "unknown". A lever arm is not
+/// representable (logged). Returns the number of GNSS fixes that found no scan in `fixes_dropped`
+/// (may be null).
 [[nodiscard]] Status WriteKittiRawDrive(const DriveReader& reader,
                                         const std::filesystem::path& drive_dir,
                                         size_t* fixes_dropped = nullptr);

@@ -12,6 +12,11 @@
 namespace slam_mms::io_internal {
 
 StatusOr<std::string> ReadFileBytes(const std::filesystem::path& file) {
+  // An ifstream opens a folder on Linux and reports an absurd size: say what it is instead.
+  std::error_code ec;
+  if (std::filesystem::is_directory(file, ec)) {
+    return InvalidArgumentError(file.string() + " is a folder, not a file");
+  }
   std::ifstream in(file, std::ios::binary);
   if (!in) return NotFoundError("cannot open " + file.string());
   std::string bytes;

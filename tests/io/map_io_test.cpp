@@ -314,5 +314,16 @@ TEST_F(MapIoTest, LasErrors) {
   EXPECT_EQ(ReadLas(tmp_ / "n.las").status().code(), StatusCode::kDataLoss);
 }
 
+TEST_F(MapIoTest, AFolderGivenAsAFileIsAnErrorNotAnException) {
+  // An ifstream opens a folder and reports a size of 2^63: this threw std::length_error before.
+  for (const auto& read : {ReadPly, ReadPcd}) {
+    const StatusOr<MapCloud> r = read(tmp_);
+    ASSERT_FALSE(r.ok());
+    EXPECT_EQ(r.status().code(), StatusCode::kInvalidArgument);
+    EXPECT_THAT(r.status().message(), HasSubstr("is a folder"));
+  }
+  EXPECT_THAT(ReadLas(tmp_).status().message(), HasSubstr("is a folder"));
+}
+
 }  // namespace
 }  // namespace slam_mms

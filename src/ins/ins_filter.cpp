@@ -114,6 +114,10 @@ struct InsFilter::Impl {
   Matrix15d P = Matrix15d::Zero();
   std::optional<ImuSample> last_imu;
   std::deque<HistoryEntry> history;
+  // Smoother record (options.record_steps): the transition since the last recorded step.
+  std::vector<InsFilterStep> steps;
+  Matrix15d F_since_step = Matrix15d::Identity();
+  bool propagated_since_step = false;
 
   Eigen::Vector3d g() const {
     double gm = options.gravity_mps2;
@@ -141,6 +145,7 @@ struct InsFilter::Impl {
 
   void Record() {
     HistoryEntry e{x, PoseCovariance(P, x.q.toRotationMatrix())};
+    if (options.record_steps) RecordStep(e);
     if (!history.empty() && history.back().x.stamp == x.stamp) {
       history.back() = e;
     } else {
@@ -150,6 +155,29 @@ struct InsFilter::Impl {
            history.back().x.stamp.SecondsSince(history.front().x.stamp) > options.history_s) {
       history.pop_front();
     }
+  }
+
+  // A propagation starts a new step; an update (no propagation since) rewrites the last step's
+  // a-posteriori part. Initialisation clears the record first (history.empty()).
+  void RecordStep(const HistoryEntry& e) {
+    if (history.empty()) steps.clear();
+    if (steps.empty() || propagated_since_step) {
+      InsFilterStep st;
+      st.stamp = x.stamp;
+      st.prior = ToInsState(e);
+      st.posterior = st.prior;
+      st.P_prior = P;
+      st.P_posterior = P;
+      st.F = steps.empty() ? Matrix15d::Identity() : F_since_step;
+      steps.push_back(st);
+    } else {
+      InsFilterStep& st = steps.back();
+      st.posterior = ToInsState(e);
+      st.P_posterior = P;
+      st.updated = true;
+    }
+    F_since_step.setIdentity();
+    propagated_since_step = false;
   }
 
   // Nominal + covariance propagation over dt with bias-corrected mean measurements.
@@ -185,6 +213,10 @@ struct InsFilter::Impl {
     Q.block<3, 3>(kBg, kBg).diagonal().setConstant(std::pow(options.gyro_bias_random_walk, 2) * dt);
     P = F * P * F.transpose() + Q;
     P = 0.5 * (P + P.transpose());
+    if (options.record_steps) {
+      F_since_step = F * F_since_step;
+      propagated_since_step = true;
+    }
 
     x.p += x.v * dt + 0.5 * acc_world * dt2;
     x.v += acc_world * dt;
@@ -508,6 +540,8 @@ StatusOr<InsState> InsFilter::StateAt(Timestamp t) const {
   s.gyro_bias_radps = (1.0 - alpha) * a.x.bg + alpha * b.x.bg;
   return s;
 }
+
+const std::vector<InsFilterStep>& InsFilter::Steps() const { return impl_->steps; }
 
 std::vector<InsState> InsFilter::States() const {
   std::vector<InsState> out;

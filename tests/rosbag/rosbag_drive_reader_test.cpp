@@ -7,9 +7,11 @@
 #include <gtest/gtest.h>
 #include <sensor_msgs/NavSatStatus.h>
 
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <map>
+#include <sstream>
 #include <thread>
 
 #include "rosbag/bag_test_util.hpp"
@@ -95,6 +97,30 @@ RosbagDriveReader::Options OptionsFor(const DriveReader& in) {
   RosbagDriveReader::Options o;
   o.T_body_lidar = in.streams().T_body_lidar;
   return o;
+}
+
+constexpr const char* kNoPythonRosbag =
+    "python3-rosbag / python3-sensor-msgs / python3-geometry-msgs not installed "
+    "(scripts/install_deps.sh)";
+
+bool PythonRosbagAvailable() {
+  return std::system(
+             "/usr/bin/python3 -c 'import rosbag, sensor_msgs.msg, geometry_msgs.msg' "
+             ">/dev/null 2>&1") == 0;
+}
+
+// Runs `cmd` and files each output line under its first word; false when it fails.
+bool RunAndCollect(const std::string& cmd, std::map<std::string, std::vector<std::string>>* out) {
+  FILE* pipe = ::popen(cmd.c_str(), "r");
+  if (pipe == nullptr) return false;
+  char buf[4096];
+  while (std::fgets(buf, sizeof(buf), pipe) != nullptr) {
+    std::string line(buf);
+    while (!line.empty() && (line.back() == '\n' || line.back() == '\r')) line.pop_back();
+    const size_t sp = line.find(' ');
+    (*out)[line.substr(0, sp)].push_back(sp == std::string::npos ? "" : line.substr(sp + 1));
+  }
+  return ::pclose(pipe) == 0;
 }
 
 // A 3 s simulated drive (30 HDL-64 scans, 100 Hz IMU, RTK GNSS), once per test process.
@@ -228,6 +254,57 @@ TEST_F(SimulatedRoundTrip, ConcurrentReadScanMatchesSequential) {
   }
 }
 
+// The bag WriteRosbag writes, read by python3-rosbag (tests/rosbag/summarize_bag.py).
+TEST_F(SimulatedRoundTrip, PythonRosbagReadsTheWrittenBag) {
+  if (!PythonRosbagAvailable()) GTEST_SKIP() << kNoPythonRosbag;
+  const fs::path bag = dir_ / "sim.bag";
+  ASSERT_TRUE(WriteRosbag(*kitti_, bag, RosbagWriteOptions()).ok());
+  const fs::path script = fs::path(__FILE__).parent_path() / "summarize_bag.py";
+  std::map<std::string, std::vector<std::string>> lines;  // key -> the rest of its line(s)
+  ASSERT_TRUE(RunAndCollect("/usr/bin/python3 " + script.string() + " " + bag.string(), &lines));
+  const DriveStreams& s = kitti_->streams();
+  EXPECT_THAT(lines["topic"],
+              ::testing::UnorderedElementsAre(
+                  "/velodyne_points sensor_msgs/PointCloud2 " + std::to_string(kitti_->NumScans()),
+                  "/imu/data sensor_msgs/Imu " + std::to_string(s.imu.size()),
+                  "/gps/fix sensor_msgs/NavSatFix " + std::to_string(s.gnss.size()),
+                  "/gps/vel geometry_msgs/TwistStamped 1"));
+  EXPECT_EQ(lines["cloud_fields"].at(0), "x:0:7,y:4:7,z:8:7,intensity:12:7,time:16:7");
+  auto scan = kitti_->ReadScan(0);
+  ASSERT_TRUE(scan.ok());
+  std::istringstream p0(lines["cloud_point0"].at(0));
+  double x, y, z, i, t;
+  p0 >> x >> y >> z >> i >> t;
+  EXPECT_EQ(Eigen::Vector3f(x, y, z), scan->cloud.points()[0]);
+  EXPECT_EQ(static_cast<float>(i), scan->cloud.intensities()[0]);
+  EXPECT_EQ(static_cast<float>(t), scan->cloud.time_offsets_s()[0]);
+  const int64_t ns = kitti_->ScanStart(0).nanoseconds();
+  EXPECT_EQ(lines["cloud_stamp0"].at(0),
+            std::to_string(ns / 1000000000) + " " + std::to_string(ns % 1000000000));
+  // The attitude is on the IMU message at the initial state's stamp (the first here).
+  ASSERT_TRUE(s.initial_state.has_value());
+  ASSERT_EQ(s.initial_state->stamp, s.imu.front().stamp);
+  EXPECT_EQ(lines["imu_orientation_cov0"].at(0), "0.0 -1.0");
+  std::istringstream f0(lines["fix0"].at(0));
+  int status = 0, cov_type = 0;
+  double lat, lon, alt, c0, c8;
+  f0 >> status >> lat >> lon >> alt >> c0 >> c8 >> cov_type;
+  const GnssFix& fix = s.gnss.front();
+  EXPECT_EQ(status, rosbag_internal::NavSatStatusFor(fix.type));
+  EXPECT_EQ(lat, fix.latitude_deg);
+  EXPECT_EQ(lon, fix.longitude_deg);
+  EXPECT_EQ(alt, fix.height_m);
+  EXPECT_EQ(c0, fix.sigma_horizontal_m * fix.sigma_horizontal_m);
+  EXPECT_EQ(c8, fix.sigma_vertical_m * fix.sigma_vertical_m);
+  EXPECT_EQ(cov_type, 2);  // COVARIANCE_TYPE_DIAGONAL_KNOWN
+  std::istringstream v0(lines["vel0"].at(0));
+  std::string frame;
+  double vx, vy, vz;
+  v0 >> frame >> vx >> vy >> vz;
+  EXPECT_EQ(frame, "enu");
+  EXPECT_EQ(Eigen::Vector3d(vx, vy, vz), s.initial_state->v_world_mps);
+}
+
 TEST(RosbagRoundTrip, RealKittiFrames) {
   SLAM_MMS_REQUIRE_KITTI_RAW();
   KittiRawReader::Options ko;
@@ -257,10 +334,7 @@ struct KittiStyleBag {
 
 TEST(RosbagPythonBag, Kitti2bagStyleTopicsAreFoundAndRead) {
   const fs::path script = fs::path(__FILE__).parent_path() / "write_kitti2bag_style_bag.py";
-  if (std::system("/usr/bin/python3 -c 'import rosbag, sensor_msgs.msg, geometry_msgs.msg' "
-                  ">/dev/null 2>&1") != 0) {
-    GTEST_SKIP() << "python3-rosbag / python3-sensor-msgs not installed (scripts/install_deps.sh)";
-  }
+  if (!PythonRosbagAvailable()) GTEST_SKIP() << kNoPythonRosbag;
   const fs::path dir = testing::MakeTempDir("rosbag_py");
   const fs::path bag = dir / "kitti2bag_style.bag";
   const std::string cmd = "/usr/bin/python3 " + script.string() + " " + bag.string();

@@ -18,9 +18,9 @@
 // header stamps) and per-point times come from the azimuth over [start, end] exactly as for KITTI
 // (KittiAzimuthFraction). stamp_trigger = header.stamp; Scan::index = the message number on the
 // lidar topic (0-based, in bag order). is_bigendian, a missing x/y/z, a field outside point_step or
-// of an unknown type fail Open; a cloud whose data size disagrees with row_step x height, or whose
-// times lie more than 10 s from its stamp, is kDataLoss at ReadScan (naming bag, topic, message
-// number and field; logged by Open) so the caller may skip it.
+// of an unknown type fail Open; a cloud whose data size disagrees with row_step x height, whose
+// times lie more than 10 s from its stamp, or that is empty, is kDataLoss at ReadScan (naming bag,
+// topic, message number and field; logged by Open) so the caller may skip it.
 //
 // IMU: body frame, linear_acceleration = specific force [m/s^2], angular_velocity [rad/s]. The
 // initial attitude R_enu_body (ENU, as kitti2bag and robot_localization write it) is the
@@ -45,11 +45,11 @@
 // Ownership: owns the open bag, the index of the scans (about 100 bytes each, no points) and the
 // IMU/GNSS streams, read into memory by Open in one pass over the four topics (the bag file is
 // read once); Open deserialises each cloud of the range once (one at a time, constant memory) for
-// its stamps. ReadScan reads one message from the bag. Thread safety:
-// const methods may be called concurrently; ReadScan serialises its bag access through a mutex
-// (rosbag::Bag is not thread-safe) and decodes outside it. Not copyable; movable only as the
+// its stamps. ReadScan reads one message from the bag. Not copyable; movable only as the
 // unique_ptr Open returns. No exception leaves this class: rosbag, boost and ROS serialization
 // exceptions become a Status naming the bag.
+// Thread safety: const methods may be called concurrently; ReadScan serialises its bag access
+// through a mutex (rosbag::Bag is not thread-safe) and decodes outside it.
 
 #include <Eigen/Geometry>
 #include <cstdint>

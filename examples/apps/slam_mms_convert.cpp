@@ -5,7 +5,7 @@
 //                    [--extrinsics FILE.yaml] [--lidar-topic T --imu-topic T --gnss-topic T]
 //                    --to folder|rosbag|kitti-raw --out PATH
 //                    [--scan-format pcd_binary|pcd_ascii|ply_binary|ply_ascii|bin]
-//                    [--gnss csv|nmea] [--point-time]
+//                    [--gnss csv|nmea] [--point-time] [--no-point-time]
 //
 // --to folder: PATH is the folder (docs/drive_folder.md); --to rosbag: PATH is FILE.bag
 // (docs/rosbag.md); --to kitti-raw: PATH is the drive folder .../<date>_drive_<n>_sync
@@ -81,8 +81,12 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember(app::ScanFormatNames()));
   app.add_option("--gnss", settings.gnss_format, "GNSS file of --to folder")
       ->check(CLI::IsMember({"csv", "nmea"}));
-  app.add_flag("--point-time", settings.point_time,
-               "store per-point times (a `t` field in PCD/PLY, `time` in PointCloud2)");
+  app.add_flag("--point-time", settings.folder_point_time,
+               "--to folder: store per-point times as a float32 `t` field in PCD/PLY (default: "
+               "none, the reader derives them from the azimuth and scans.csv's start/end)");
+  app.add_flag("--no-point-time", settings.bag_no_point_time,
+               "--to rosbag: leave out PointCloud2's `time` field (as kitti2bag); the reader then "
+               "derives times from the azimuth over the median scan period");
   CLI11_PARSE(app, argc, argv);
 
   const int inputs = !kitti_raw.empty() + !folder.empty() + !rosbag.empty();

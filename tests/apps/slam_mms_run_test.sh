@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # End-to-end tests of examples/apps/slam_mms_run (registered in tests/CMakeLists.txt).
 #   slam_mms_run_test.sh CASE SLAM_MMS_RUN_BINARY SOURCE_DIR
-# Cases: kitti_frames, truncated_bin, bad_oxts, bad_config, bad_cli, sim_all.
+# Cases: kitti_frames, truncated_bin, bad_oxts, bad_config, bad_cli, sim_all, folder_input,
+# rosbag_input (these two convert the real frames with slam_mms_convert, next to the app, and also
+# run slam_mms_bench_e2e on them where it is built).
 # Exit 0 = pass, 77 = skipped (real KITTI data absent), anything else = fail (with a message).
 set -uo pipefail
 case_name=$1
@@ -54,6 +56,15 @@ check_report() {
 json_number() {
   if command -v jq >/dev/null; then jq -r "$2" "$1"; else echo ""; fi
 }
+# same_poses A.tum B.tum TOL: same stamps, positions within TOL metres.
+same_poses() {
+  awk -v tol="$3" 'NR==FNR { if ($1 !~ /^#/) { t[++n]=$1; x[n]=$2; y[n]=$3; z[n]=$4 } next }
+    $1 !~ /^#/ { ++m; if ($1 != t[m]) { print "stamp " m ": " $1 " vs " t[m]; bad=1; exit }
+                 d=($2-x[m])^2+($3-y[m])^2+($4-z[m])^2; if (d > tol*tol) { print "pose " m " off by " sqrt(d) " m"; bad=1; exit } }
+    END { if (!bad && m != n) { print m " vs " n " poses"; bad=1 } exit bad }' "$1" "$2"
+}
+convert=$(dirname "$bin")/slam_mms_convert
+bench=$(dirname "$bin")/../benchmarks/slam_mms_bench_e2e
 check_files() {
   local dir=$1; shift
   for f in "$@"; do [[ -s $dir/$f ]] || fail "missing or empty output $dir/$f"; done
@@ -178,6 +189,67 @@ case $case_name in
              ([.methods[] | .ate_rmse_m | type] == ["number","number","number"]) and
              .methods.full.ate_rmse_m < 1.0 and .methods.gnss_ins.ate_rmse_m < 1.0' \
         "$tmp/out/report.json" >/dev/null || fail "sim metrics: $(cat "$tmp/out/report.json")"
+    fi
+    ;;
+  folder_input)
+    require_kitti
+    [[ -x $convert ]] || fail "no slam_mms_convert next to $bin"
+    timeout 120 "$convert" --kitti-raw "$drive" --frames 0:9 --to folder --out "$tmp/folder" \
+      >"$tmp/clog" 2>&1 || fail "slam_mms_convert --to folder: $(cat "$tmp/clog")"
+    check_files "$tmp/folder" scans.csv imu.csv gnss.csv extrinsics.yaml initial_state.csv
+    run "$tmp/log_k" --kitti-raw "$drive" --frames 0:9 --out "$tmp/out_k" --mode full ||
+      fail "KITTI raw run: $(tail -20 "$tmp/log_k")"
+    run "$tmp/log" --folder "$tmp/folder" --out "$tmp/out" --mode full ||
+      fail "exit status $? on the folder: $(tail -20 "$tmp/log")"
+    check_files "$tmp/out" full.tum full.kitti map_full.ply map_full.las report.json summary.txt
+    if command -v jq >/dev/null; then
+      [[ $(jq -r .input.ground_truth "$tmp/out/report.json") == none ]] ||
+        fail "a folder without ground_truth/: ground_truth != none"
+      jq -e '.methods.full.ate_rmse_m == null and (.methods.full.mme | type) == "number"' \
+        "$tmp/out/report.json" >/dev/null || fail "folder metrics: $(cat "$tmp/out/report.json")"
+    fi
+    # Same numbers in, the same trajectory out (the attitude goes through degrees: 1e-9 m).
+    msg=$(same_poses "$tmp/out_k/full.tum" "$tmp/out/full.tum" 1e-9) ||
+      fail "folder vs KITTI raw trajectory: $msg"
+    # A truncated PCD is skipped with a warning naming it; the rest still runs.
+    pcd=$(ls "$tmp/folder/scans" | sed -n 4p)
+    head -c 3000 "$tmp/folder/scans/$pcd" >"$tmp/p" && mv "$tmp/p" "$tmp/folder/scans/$pcd"
+    run "$tmp/log2" --folder "$tmp/folder" --out "$tmp/out2" --mode gnss_ins ||
+      fail "a truncated PCD must be skipped (exit $?): $(tail -20 "$tmp/log2")"
+    grep -qi "warning.*$pcd" "$tmp/log2" || fail "no warning naming $pcd: $(cat "$tmp/log2")"
+    [[ $(grep -vc '^#' "$tmp/out2/gnss_ins.tum") == 9 ]] || fail "expected 9 poses after one skip"
+    if [[ -x $bench ]]; then
+      timeout 120 "$bench" --folder "$tmp/folder" --mode gnss_ins --out "$tmp/bench.json" \
+        >"$tmp/blog" 2>&1 || fail "slam_mms_bench_e2e --folder: $(tail -20 "$tmp/blog")"
+      grep -q '"scans_processed": 9' "$tmp/bench.json" || fail "bench: $(cat "$tmp/bench.json")"
+    fi
+    ;;
+  rosbag_input)
+    require_kitti
+    [[ -x $convert ]] || fail "no slam_mms_convert next to $bin"
+    timeout 120 "$convert" --kitti-raw "$drive" --frames 0:9 --to folder --out "$tmp/folder" \
+      >"$tmp/clog" 2>&1 || fail "slam_mms_convert --to folder: $(cat "$tmp/clog")"
+    timeout 120 "$convert" --kitti-raw "$drive" --frames 0:9 --to rosbag --out "$tmp/b/drive.bag" \
+      >"$tmp/clog" 2>&1 || fail "slam_mms_convert --to rosbag: $(cat "$tmp/clog")"
+    if grep -q "not built" "$tmp/clog"; then echo "SKIP: built without the rosbag module"; exit 77; fi
+    run "$tmp/log_k" --kitti-raw "$drive" --frames 0:9 --out "$tmp/out_k" --mode full ||
+      fail "KITTI raw run: $(tail -20 "$tmp/log_k")"
+    run "$tmp/log" --rosbag "$tmp/b/drive.bag" --extrinsics "$tmp/folder/extrinsics.yaml" \
+      --out "$tmp/out" --mode full || fail "exit status $? on the bag: $(tail -20 "$tmp/log")"
+    check_files "$tmp/out" full.tum map_full.las report.json
+    # PointCloud2 has no scan end stamp (the last point's time is used): within 1 mm.
+    msg=$(same_poses "$tmp/out_k/full.tum" "$tmp/out/full.tum" 1e-3) ||
+      fail "bag vs KITTI raw trajectory: $msg"
+    # A topic that is not in the bag: exit 1, and the message lists the bag's topics.
+    run "$tmp/log2" --rosbag "$tmp/b/drive.bag" --lidar-topic /nope --out "$tmp/out2"
+    [[ $? == 1 ]] || fail "--lidar-topic /nope: expected exit status 1"
+    grep -q "/nope" "$tmp/log2" && grep -q "/velodyne_points" "$tmp/log2" ||
+      fail "the error does not name the topic and list the bag's: $(cat "$tmp/log2")"
+    if [[ -x $bench ]]; then
+      timeout 120 "$bench" --rosbag "$tmp/b/drive.bag" --extrinsics "$tmp/folder/extrinsics.yaml" \
+        --mode gnss_ins --out "$tmp/bench.json" >"$tmp/blog" 2>&1 ||
+        fail "slam_mms_bench_e2e --rosbag: $(tail -20 "$tmp/blog")"
+      grep -q '"scans_processed": 10' "$tmp/bench.json" || fail "bench: $(cat "$tmp/bench.json")"
     fi
     ;;
   *) fail "unknown case $case_name" ;;

@@ -45,13 +45,13 @@ Status WriteDrive(const DriveReader& reader, const std::string& to,
     if (!known) return InvalidArgumentError("--scan-format " + settings.scan_format + ": unknown");
     o.gnss_format = settings.gnss_format == "nmea" ? FolderWriteOptions::GnssFormat::kNmea
                                                    : FolderWriteOptions::GnssFormat::kCsv;
-    o.write_point_time = settings.point_time;
+    o.write_point_time = settings.folder_point_time;
     return WriteDriveFolder(reader, out, o);
   }
   if (to == "rosbag") {
 #if defined(SLAM_MMS_HAVE_ROSBAG)
     RosbagWriteOptions o;
-    o.write_point_time = settings.point_time;
+    o.write_point_time = !settings.bag_no_point_time;
     return WriteRosbag(reader, out, o);
 #else
     return Status(StatusCode::kUnimplemented,

@@ -14,7 +14,12 @@ namespace slam_mms::app {
 struct WriteSettings {
   std::string scan_format = "pcd_binary";  ///< --to folder: see ScanFormatNames().
   std::string gnss_format = "csv";         ///< --to folder: csv | nmea.
-  bool point_time = false;                 ///< Store per-point times (folder, bag).
+  /// --to folder: a float32 `t` field per point. Without it the folder reader derives the times
+  /// from the azimuth over scans.csv's [start, end], exactly as KITTI raw.
+  bool folder_point_time = false;
+  /// --to rosbag: no `time` field. PointCloud2 has no end stamp, so the reader would take the
+  /// median scan period for the azimuth time: kept by default.
+  bool bag_no_point_time = false;
 };
 
 /// The accepted --scan-format values.

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "slam_mms/core/logging.hpp"
+#include "slam_mms/eval/ground_truth.hpp"
 #include "slam_mms/eval/map_entropy.hpp"
 #include "slam_mms/eval/report.hpp"
 #include "slam_mms/io/kitti_drive_reader.hpp"
@@ -29,7 +30,6 @@
 #include "slam_mms/sim/drive_simulator.hpp"
 #include "slam_mms_run/cli.hpp"
 #include "slam_mms_run/config_file.hpp"
-#include "slam_mms_run/ground_truth.hpp"
 #include "slam_mms_run/input.hpp"
 #include "slam_mms_run/outputs.hpp"
 #include "slam_mms_run/progress.hpp"
@@ -140,7 +140,7 @@ int main(int argc, char** argv) {
   // Ground truth: <gt_dir>/ground_truth/ (simulated drives, also converted to a folder or bag),
   // else the OXTS poses of a KITTI raw drive.
   const fs::path gt_dir = GroundTruthDir(args, drive_dir);
-  const bool sim_gt = HasSimulatorGroundTruth(gt_dir);
+  const bool sim_gt = eval::HasSimulatorGroundTruth(gt_dir);
   const bool kitti_input = dynamic_cast<const KittiDriveReader*>(&reader) != nullptr;
   const std::string gt_kind = sim_gt ? "simulator" : kitti_input ? "oxts" : "none";
   const Timestamp first_scan = reader.ScanStart(0);
@@ -177,8 +177,8 @@ int main(int argc, char** argv) {
   for (const ModeRun& r : runs) {
     if (r.origin && !any_origin) any_origin = r.origin;
   }
-  std::vector<std::pair<GeodeticPoint, GroundTruth>> gts;
-  std::vector<const GroundTruth*> gt_of_run(runs.size(), nullptr);
+  std::vector<std::pair<GeodeticPoint, eval::GroundTruth>> gts;
+  std::vector<const eval::GroundTruth*> gt_of_run(runs.size(), nullptr);
   for (size_t i = 0; i < runs.size(); ++i) {
     std::optional<GeodeticPoint> origin = runs[i].origin ? runs[i].origin : any_origin;
     if (!origin) {
@@ -188,7 +188,7 @@ int main(int argc, char** argv) {
     bool found = false;
     for (const auto& [o, gt] : gts) found = found || SameOrigin(o, *origin);
     if (!found) {
-      StatusOr<GroundTruth> gt = LoadGroundTruth(gt_dir, reader, *origin);
+      StatusOr<eval::GroundTruth> gt = eval::LoadGroundTruth(gt_dir, reader, *origin);
       if (!gt.ok()) {
         if (gt.status().code() == StatusCode::kNotFound && gt_kind == "none") break;
         SLAM_MMS_LOG(kError) << "ground truth: " << gt.status().ToString();

@@ -1,13 +1,15 @@
 // Evaluation bindings: ATE, KITTI relative error, outage errors, map entropy, report.json (the C++
 // writer, so the keys are exactly the schema of eval/report.hpp), map files, and the ground truth
-// of a drive in a run's world frame (slam_mms_run's own loader, compiled in unchanged so that
-// Python and the app evaluate against the same poses).
+// of a drive in a run's world frame (eval/ground_truth.hpp, the loader slam_mms_run uses), the
+// PNG plots slam_mms_run draws (eval/plots.hpp) and slam_mms_run's --config file reader.
 
 #include <cmath>
 
 #include "common.hpp"
+#include "slam_mms/eval/ground_truth.hpp"
 #include "slam_mms/eval/map_entropy.hpp"
 #include "slam_mms/eval/outage_error.hpp"
+#include "slam_mms/eval/plots.hpp"
 #include "slam_mms/eval/relative_error.hpp"
 #include "slam_mms/eval/report.hpp"
 #include "slam_mms/eval/trajectory_error.hpp"
@@ -15,7 +17,6 @@
 #include "slam_mms/io/map_io.hpp"
 #include "slam_mms/pipeline/mapping_system.hpp"
 #include "slam_mms_run/config_file.hpp"
-#include "slam_mms_run/ground_truth.hpp"
 
 namespace slam_mms::python {
 namespace {
@@ -63,6 +64,21 @@ RelativeErrorOptions RelativeOptions(py::object lengths, int step_frames) {
   o.step_frames = step_frames;
   ThrowIfError(o.Validate());
   return o;
+}
+
+PlotOptions MakePlotOptions(const std::string& title, int width_px, int height_px) {
+  PlotOptions o;
+  o.title = title;
+  o.width_px = width_px;
+  o.height_px = height_px;
+  ThrowIfError(o.Validate());
+  return o;
+}
+
+std::vector<OutageWindow> Windows(const std::vector<std::pair<double, double>>& outages) {
+  std::vector<OutageWindow> w;
+  for (const auto& [start, duration] : outages) w.push_back({start, duration});
+  return w;
 }
 
 }  // namespace
@@ -311,17 +327,78 @@ void RegisterEval(py::module_& m) {
       py::arg("points"), py::arg("path"), py::arg("origin") = py::none(),
       "Writes N x 3 / N x 4 points as PLY, PCD or geo-referenced LAS 1.4 (by extension).");
 
-  // ---- slam_mms_run's ground truth and config file (app code, compiled in unchanged) ----
+  // ---- PNG plots (eval/plots.hpp: the ones slam_mms_run draws) ----
+  m.def(
+      "plot_trajectories_top_view",
+      [](const Trajectory& ground_truth, const std::string& ground_truth_name,
+         const std::vector<std::pair<std::string, Trajectory>>& methods,
+         const std::vector<std::pair<double, double>>& outages, int64_t outage_reference_ns,
+         const std::filesystem::path& path, const std::string& title, int width_px, int height_px) {
+        const PlotOptions o = MakePlotOptions(title, width_px, height_px);
+        std::vector<NamedTrajectory> named;
+        for (const auto& [name, t] : methods) named.push_back({name, t});
+        const std::vector<OutageWindow> w = Windows(outages);
+        ThrowIfError(WithoutGil([&] {
+          return PlotTrajectoriesTopView({ground_truth_name, ground_truth}, named, w,
+                                         Timestamp::FromNanoseconds(outage_reference_ns), path, o);
+        }));
+      },
+      py::arg("ground_truth"), py::arg("ground_truth_name"), py::arg("methods"),
+      py::arg("gnss_outages"), py::arg("outage_reference_ns"), py::arg("path"),
+      py::arg("title") = "", py::arg("width_px") = 1400, py::arg("height_px") = 1050,
+      "slam_mms_run's trajectories.png: the ground truth and [(name, Trajectory), ...] from "
+      "above, outage windows [(start_s, duration_s)] relative to outage_reference_ns.");
+  m.def(
+      "plot_position_errors",
+      [](const std::vector<std::pair<std::string, const AteResult*>>& methods,
+         const std::vector<std::pair<double, double>>& outages, int64_t reference_ns,
+         const std::filesystem::path& path, const std::string& title, int width_px, int height_px) {
+        const PlotOptions o = MakePlotOptions(title, width_px, height_px);
+        std::vector<ErrorSeries> series;
+        for (const auto& [name, ate] : methods) {
+          if (ate == nullptr) throw py::value_error("plot_position_errors: " + name + ": no ATE");
+          series.push_back(
+              MakeErrorSeries(name, ate->errors, Timestamp::FromNanoseconds(reference_ns)));
+        }
+        const std::vector<OutageWindow> w = Windows(outages);
+        ThrowIfError(WithoutGil([&] { return PlotPositionErrors(series, w, path, o); }));
+      },
+      py::arg("methods"), py::arg("gnss_outages"), py::arg("reference_ns"), py::arg("path"),
+      py::arg("title") = "", py::arg("width_px") = 1400, py::arg("height_px") = 1050,
+      "slam_mms_run's position_error.png: [(name, AteResult), ...] over time from reference_ns.");
+  m.def(
+      "plot_map_height",
+      [](py::object points, const std::filesystem::path& path, py::object overlay,
+         const std::string& title, int width_px, int height_px) {
+        const PlotOptions o = MakePlotOptions(title, width_px, height_px);
+        const PointCloud cloud = CloudFromArrays(points, py::none(), py::none());
+        std::vector<Eigen::Vector3d> line;
+        if (!overlay.is_none()) {
+          auto a = py::array_t<double, py::array::forcecast>::ensure(overlay);
+          if (!a || a.ndim() != 2 || a.shape(1) != 3) {
+            throw py::value_error("overlay: expected shape (N, 3)");
+          }
+          auto r = a.unchecked<2>();
+          for (py::ssize_t i = 0; i < r.shape(0); ++i) line.emplace_back(r(i, 0), r(i, 1), r(i, 2));
+        }
+        ThrowIfError(WithoutGil([&] { return PlotMapHeight(cloud, line, path, o); }));
+      },
+      py::arg("points"), py::arg("path"), py::arg("overlay") = py::none(), py::arg("title") = "",
+      py::arg("width_px") = 1400, py::arg("height_px") = 1050,
+      "slam_mms_run's map_<mode>_height.png: N x 3/4 points from above coloured by height, an "
+      "optional N x 3 line (the trajectory) on top.");
+
+  // ---- ground truth (eval/ground_truth.hpp) and slam_mms_run's config file ----
   m.def(
       "has_simulator_ground_truth",
-      [](const std::filesystem::path& d) { return app::HasSimulatorGroundTruth(d); },
+      [](const std::filesystem::path& d) { return eval::HasSimulatorGroundTruth(d); },
       py::arg("drive_dir"));
   m.def(
       "load_ground_truth",
       [](const std::filesystem::path& gt_dir, const DriveReader& reader,
          const GeodeticPoint& origin) {
-        app::GroundTruth gt =
-            ValueOrThrow(WithoutGil([&] { return app::LoadGroundTruth(gt_dir, reader, origin); }));
+        eval::GroundTruth gt =
+            ValueOrThrow(WithoutGil([&] { return eval::LoadGroundTruth(gt_dir, reader, origin); }));
         py::dict d;
         d["kind"] = gt.kind;
         d["trajectory"] = std::move(gt.T_world_body);
@@ -330,7 +407,8 @@ void RegisterEval(py::module_& m) {
         return d;
       },
       py::arg("gt_dir"), py::arg("reader"), py::arg("origin"),
-      "slam_mms_run's ground truth (gt_dir/ground_truth/ of the simulator, else the OXTS records "
+      "The ground truth slam_mms_run evaluates against (eval::LoadGroundTruth: "
+      "gt_dir/ground_truth/ of the simulator, else the OXTS records "
       "of a KITTI reader; FileNotFoundError otherwise) carried into the ENU frame at origin "
       "through WGS-84: {'kind', 'trajectory', 'scene_map', 'source'}.");
   m.def(
@@ -340,6 +418,16 @@ void RegisterEval(py::module_& m) {
       },
       py::arg("path"), py::arg("options"),
       "Applies a slam_mms_run --config file to options in place (ValueError naming the key).");
+  m.def(
+      "config_keys",
+      [] {
+        py::list out;
+        for (const app::ConfigKeyInfo& k : app::ConfigKeys()) {
+          out.append(py::make_tuple(k.key, k.type, k.default_value));
+        }
+        return out;
+      },
+      "Every --config key as (key, type, default), as slam_mms_run --config-keys prints them.");
 }
 
 }  // namespace slam_mms::python

@@ -1,4 +1,4 @@
-#include "slam_mms_run/ground_truth.hpp"
+#include "slam_mms/eval/ground_truth.hpp"
 
 #include <GeographicLib/LocalCartesian.hpp>
 #include <algorithm>
@@ -8,14 +8,13 @@
 #include <sstream>
 #include <vector>
 
+#include "slam_mms/core/geodesy.hpp"
 #include "slam_mms/io/kitti_drive_reader.hpp"
 #include "slam_mms/io/oxts_record.hpp"
 #include "slam_mms/io/trajectory_io.hpp"
 
-namespace slam_mms::app {
+namespace slam_mms::eval {
 namespace {
-
-constexpr double kDegToRad = M_PI / 180.0;
 
 // The number after "key": inside `text` from `from` on (a tiny reader for scenario.json).
 StatusOr<double> JsonNumberAfter(const std::string& text, size_t from, const std::string& key,
@@ -35,17 +34,6 @@ StatusOr<double> JsonNumberAfter(const std::string& text, size_t from, const std
 }
 
 }  // namespace
-
-Eigen::Matrix3d R_ecef_enu(double latitude_deg, double longitude_deg) {
-  const double slat = std::sin(latitude_deg * kDegToRad), clat = std::cos(latitude_deg * kDegToRad);
-  const double slon = std::sin(longitude_deg * kDegToRad),
-               clon = std::cos(longitude_deg * kDegToRad);
-  Eigen::Matrix3d R;  // columns: east, north, up in ECEF
-  R.col(0) << -slon, clon, 0.0;
-  R.col(1) << -slat * clon, -slat * slon, clat;
-  R.col(2) << clat * clon, clat * slon, slat;
-  return R;
-}
 
 StatusOr<GeodeticPoint> ReadScenarioOrigin(const std::filesystem::path& scenario_json) {
   std::ifstream in(scenario_json);
@@ -166,4 +154,4 @@ StatusOr<GroundTruth> LoadGroundTruth(const std::filesystem::path& gt_dir,
                        (gt_dir / "ground_truth").string() + " folder)");
 }
 
-}  // namespace slam_mms::app
+}  // namespace slam_mms::eval

@@ -7,24 +7,13 @@
 #include <limits>
 #include <memory>
 
+#include "slam_mms/core/geodesy.hpp"
 #include "slam_mms/core/logging.hpp"
 
 namespace slam_mms {
 namespace {
 
 constexpr double kDegToRad = M_PI / 180.0;
-
-// Rotation of the ENU tangent frame at (lat, lon) into ECEF (columns: east, north, up).
-Eigen::Matrix3d R_ecef_enu(double latitude_deg, double longitude_deg) {
-  const double slat = std::sin(latitude_deg * kDegToRad), clat = std::cos(latitude_deg * kDegToRad);
-  const double slon = std::sin(longitude_deg * kDegToRad),
-               clon = std::cos(longitude_deg * kDegToRad);
-  Eigen::Matrix3d R;
-  R.col(0) << -slon, clon, 0.0;
-  R.col(1) << -slat * clon, -slat * slon, clat;
-  R.col(2) << clat * clon, clat * slon, slat;
-  return R;
-}
 
 // The next record of the three input streams in time order (IMU, then GNSS/POS, then the scan
 // at equal stamps; a scan once the streams reached its end).

@@ -11,6 +11,7 @@
 #include "slam_mms/eval/relative_error.hpp"
 #include "slam_mms/io/map_io.hpp"
 #include "slam_mms/io/trajectory_io.hpp"
+#include "slam_mms/pipeline/scan_results_csv.hpp"
 
 namespace slam_mms::app {
 namespace {
@@ -31,31 +32,6 @@ std::string Cell(const std::optional<double>& v, const char* format) {
 
 }  // namespace
 
-/// Per-scan level-1 results: one row per scan (registration, degeneracy, motion factor, stage
-/// times).
-Status WriteScanResults(const std::vector<LocalizationResult>& results,
-                        const std::filesystem::path& path) {
-  std::ofstream f(path);
-  if (!f) return UnavailableError("cannot write " + path.string());
-  f << "scan_index,stamp,submap_id,motion_factor,registered,registration_used,downweighted,"
-       "termination,inlier_ratio,rms_residual_m,icp_iterations,degenerate,consistency_d2,"
-       "num_model_surfels,num_surfels";
-  for (const char* name : StageTimings::Names()) f << "," << name << "_ms";
-  f << ",total_ms\n";
-  f.precision(9);
-  for (const LocalizationResult& r : results) {
-    f << r.scan_index << "," << r.stamp.ToKittiString() << "," << r.submap_id << ","
-      << MotionFactorTypeName(r.motion_factor) << "," << r.registered << "," << r.registration_used
-      << "," << r.registration_downweighted << "," << IcpTerminationName(r.termination) << ","
-      << r.inlier_ratio << "," << r.rms_residual_m << "," << r.icp_iterations << "," << r.degenerate
-      << "," << r.consistency_mahalanobis_sq << "," << r.num_model_surfels << "," << r.num_surfels;
-    for (double v : r.timings.Values()) f << "," << v;
-    f << "," << r.timings.total_ms << "\n";
-  }
-  if (!f) return DataLossError("write failed: " + path.string());
-  return OkStatus();
-}
-
 Status WriteMethodFiles(const ModeRun& run, const std::filesystem::path& out_dir) {
   Status first;
   if (!run.trajectory.empty()) {
@@ -66,7 +42,7 @@ Status WriteMethodFiles(const ModeRun& run, const std::filesystem::path& out_dir
     SLAM_MMS_LOG(kWarning) << run.name << ": no pose estimated, no trajectory written";
   }
   if (!run.results.empty())
-    KeepFirst(&first, WriteScanResults(run.results, out_dir / (run.name + "_scans.csv")));
+    KeepFirst(&first, WriteScanResultsCsv(run.results, out_dir / (run.name + "_scans.csv")));
   if (run.mode != MappingMode::kGnssIns && !run.results.empty()) {
     // Level 1 alone (before any level-2 correction): the "before" of the paper's Table 2.
     Trajectory level1;
@@ -95,7 +71,7 @@ Status WriteMethodFiles(const ModeRun& run, const std::filesystem::path& out_dir
   return first;
 }
 
-MethodEvaluation EvaluateMethod(const ModeRun& run, const GroundTruth* gt,
+MethodEvaluation EvaluateMethod(const ModeRun& run, const eval::GroundTruth* gt,
                                 const std::vector<eval::OutageWindow>& outages, Timestamp reference,
                                 int num_threads) {
   MethodEvaluation ev;
@@ -163,7 +139,7 @@ MethodEvaluation EvaluateMethod(const ModeRun& run, const GroundTruth* gt,
 }
 
 void WritePlots(const std::vector<ModeRun>& runs, const std::vector<MethodEvaluation>& evals,
-                const GroundTruth* gt, const std::vector<eval::OutageWindow>& outages,
+                const eval::GroundTruth* gt, const std::vector<eval::OutageWindow>& outages,
                 Timestamp reference, const std::filesystem::path& out_dir) {
   auto warn = [](const char* what, const Status& s) {
     if (!s.ok()) {

@@ -8,10 +8,10 @@
 #include <vector>
 
 #include "slam_mms/core/status.hpp"
+#include "slam_mms/eval/ground_truth.hpp"
 #include "slam_mms/eval/outage_error.hpp"
 #include "slam_mms/eval/report.hpp"
 #include "slam_mms/eval/trajectory_error.hpp"
-#include "slam_mms_run/ground_truth.hpp"
 #include "slam_mms_run/run_mode.hpp"
 
 namespace slam_mms::app {
@@ -34,13 +34,13 @@ struct MethodEvaluation {
 /// ATE, rotation RMSE, KITTI relative error (devkit lengths when the ground-truth path is at least
 /// 400 m, else the short 10-80 m lengths, named so), outage errors (windows relative to
 /// `reference`), map entropy; scans/s and peak RSS from the run. `gt` may be null.
-MethodEvaluation EvaluateMethod(const ModeRun& run, const GroundTruth* gt,
+MethodEvaluation EvaluateMethod(const ModeRun& run, const eval::GroundTruth* gt,
                                 const std::vector<eval::OutageWindow>& outages, Timestamp reference,
                                 int num_threads);
 
 /// trajectories.png, position_error.png, map_<name>_height.png (full, gnss_ins). Logs failures.
 void WritePlots(const std::vector<ModeRun>& runs, const std::vector<MethodEvaluation>& evals,
-                const GroundTruth* gt, const std::vector<eval::OutageWindow>& outages,
+                const eval::GroundTruth* gt, const std::vector<eval::OutageWindow>& outages,
                 Timestamp reference, const std::filesystem::path& out_dir);
 
 /// The methods side by side (ATE, rot RMSE, t_rel, max error in outages, MME, scans/s, RSS).

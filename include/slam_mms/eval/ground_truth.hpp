@@ -1,6 +1,7 @@
 #pragma once
-// Ground truth of a run, carried into the run's world frame (local ENU at MappingSystem::Origin())
-// through WGS-84, never by aligning trajectories (ARCHITECTURE.md, "Compare in one frame"):
+// Ground truth of a run (what slam_mms_run and the Python run_drive evaluate against), carried
+// into the run's world frame (local ENU at MappingSystem::Origin()) through WGS-84, never by
+// aligning trajectories (ARCHITECTURE.md, "Compare in one frame"):
 // - simulated drives: DRIVE_DIR/ground_truth/ (poses_100hz.tum + scan_start.tum in the
 //   simulator's ENU, scenario.json with its WGS-84 origin): positions sim ENU -> geodetic
 //   (GeographicLib LocalCartesian at the sim origin) -> run ENU (LocalCartesian at the run origin);
@@ -8,8 +9,12 @@
 // - otherwise, for a KITTI raw drive, the OXTS records (lat/lon/alt -> run ENU; roll/pitch/yaw are
 //   relative to the local level frame at each record, rotated into run ENU the same way);
 // - otherwise (a folder or bag without ground_truth/): kNotFound, the run has no metrics.
+// The result is what eval::ComputeAte / ComputeRelativeError take as the ground truth of a
+// trajectory in that world frame (report.json input.ground_truth = GroundTruth::kind).
+//
+// Errors: kNotFound where there is no ground truth; kDataLoss (naming the file and field) for a
+// malformed scenario.json or TUM file. Thread safety: free functions; reads files only.
 
-#include <Eigen/Geometry>
 #include <filesystem>
 #include <string>
 
@@ -18,7 +23,7 @@
 #include "slam_mms/ins/gnss_prior.hpp"
 #include "slam_mms/io/drive_reader.hpp"
 
-namespace slam_mms::app {
+namespace slam_mms::eval {
 
 struct GroundTruth {
   std::string kind;                 ///< "simulator" or "oxts" (report.json input.ground_truth).
@@ -30,15 +35,14 @@ struct GroundTruth {
 /// True when `drive_dir`/ground_truth/ holds the simulator's files.
 bool HasSimulatorGroundTruth(const std::filesystem::path& drive_dir);
 
-/// The ground truth in the run ENU frame about `run_origin`: `gt_dir`/ground_truth/ (simulator),
-/// else the OXTS records where `reader` is a KittiDriveReader, else kNotFound.
+/// The ground truth in the run ENU frame about `run_origin` (MappingSystem::Origin()):
+/// `gt_dir`/ground_truth/ (simulator), else the OXTS records where `reader` is a
+/// KittiDriveReader (the 100 Hz ones where the drive has them), else kNotFound. `gt_dir` is the
+/// drive folder, or the folder holding a bag.
 StatusOr<GroundTruth> LoadGroundTruth(const std::filesystem::path& gt_dir,
                                       const DriveReader& reader, const GeodeticPoint& run_origin);
-
-/// Rotation of the ENU tangent frame at (lat, lon) into ECEF.
-Eigen::Matrix3d R_ecef_enu(double latitude_deg, double longitude_deg);
 
 /// The WGS-84 origin in a simulator scenario.json ("origin_wgs84": {...}).
 StatusOr<GeodeticPoint> ReadScenarioOrigin(const std::filesystem::path& scenario_json);
 
-}  // namespace slam_mms::app
+}  // namespace slam_mms::eval

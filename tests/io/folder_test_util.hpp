@@ -16,6 +16,7 @@
 #include "slam_mms/core/logging.hpp"
 #include "slam_mms/io/drive_reader.hpp"
 #include "slam_mms/io/kitti_raw_writer.hpp"
+#include "testing/log_capture.hpp"
 
 namespace slam_mms::testing {
 
@@ -28,27 +29,6 @@ inline std::string ReadFile(const std::filesystem::path& file) {
   std::ifstream in(file, std::ios::binary);
   return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
-
-/// Collects log messages while alive.
-class LogCapture {
- public:
-  LogCapture() {
-    previous_ = SetLogSink([this](LogLevel, const std::string& m) {
-      std::lock_guard<std::mutex> lock(mu_);
-      messages_ += m + "\n";
-    });
-  }
-  ~LogCapture() { SetLogSink(previous_); }
-  std::string messages() {
-    std::lock_guard<std::mutex> lock(mu_);
-    return messages_;
-  }
-
- private:
-  LogSink previous_;
-  std::mutex mu_;
-  std::string messages_;
-};
 
 inline OxtsRecord SyntheticOxts(std::mt19937_64& rng, int i) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);

@@ -14,6 +14,7 @@
 
 #include "slam_mms/core/logging.hpp"
 #include "slam_mms/io/kitti_timestamp.hpp"
+#include "testing/log_capture.hpp"
 #include "testing/test_data.hpp"
 
 namespace slam_mms {
@@ -70,26 +71,7 @@ fs::path MakeMiniDrive(const fs::path& tmp, int n) {
   return drive;
 }
 
-// Captures log messages for the test's duration.
-class LogCapture {
- public:
-  LogCapture() {
-    previous_ = SetLogSink([this](LogLevel, const std::string& m) {
-      std::lock_guard<std::mutex> lock(mu_);
-      messages_ += m + "\n";
-    });
-  }
-  ~LogCapture() { SetLogSink(previous_); }
-  std::string messages() {
-    std::lock_guard<std::mutex> lock(mu_);
-    return messages_;
-  }
-
- private:
-  LogSink previous_;
-  std::mutex mu_;
-  std::string messages_;
-};
+using testing::LogCapture;
 
 // ------------------------------------------------------------------------------------------------
 // Real data.

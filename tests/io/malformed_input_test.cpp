@@ -16,6 +16,7 @@
 #include "slam_mms/io/kitti_raw_writer.hpp"
 #include "slam_mms/io/kitti_timestamp.hpp"
 #include "slam_mms/io/trajectory_io.hpp"
+#include "testing/log_capture.hpp"
 #include "testing/test_data.hpp"
 
 namespace slam_mms {
@@ -76,25 +77,7 @@ OxtsRecord SomeOxts(int i) {
   return r;
 }
 
-class LogCapture {
- public:
-  LogCapture() {
-    previous_ = SetLogSink([this](LogLevel, const std::string& m) {
-      std::lock_guard<std::mutex> lock(mu_);
-      messages_ += m + "\n";
-    });
-  }
-  ~LogCapture() { SetLogSink(previous_); }
-  std::string messages() {
-    std::lock_guard<std::mutex> lock(mu_);
-    return messages_;
-  }
-
- private:
-  LogSink previous_;
-  std::mutex mu_;
-  std::string messages_;
-};
+using testing::LogCapture;
 
 class MalformedDriveTest : public ::testing::Test {
  protected:

@@ -84,8 +84,11 @@ HAVE_ROSBAG_READER: bool = _C.HAVE_ROSBAG_READER
 HAVE_OPEN_DRIVE: bool = _C.HAVE_OPEN_DRIVE
 if HAVE_FOLDER_READER:
     FolderDriveReader = _C.FolderDriveReader
+    write_drive_folder = _C.write_drive_folder
+    write_extrinsics_yaml = _C.write_extrinsics_yaml
 if HAVE_ROSBAG_READER:
     RosbagDriveReader = _C.RosbagDriveReader
+    write_rosbag = _C.write_rosbag
 
 AteResult = _C.AteResult
 RelativeErrorResult = _C.RelativeErrorResult
@@ -102,6 +105,13 @@ peak_rss_mb = _C.peak_rss_mb
 read_ply = _C.read_ply
 write_map = _C.write_map
 apply_config_file = _C.apply_config_file
+config_keys = _C.config_keys
+load_ground_truth = _C.load_ground_truth
+has_simulator_ground_truth = _C.has_simulator_ground_truth
+plot_trajectories_top_view = _C.plot_trajectories_top_view
+plot_position_errors = _C.plot_position_errors
+plot_map_height = _C.plot_map_height
+write_scan_results_csv = _C.write_scan_results_csv
 parse_mapping_mode = _C.parse_mapping_mode
 set_min_log_level = _C.set_min_log_level
 flush_log = _C.flush_log

@@ -74,7 +74,8 @@ class DriveResult:
             "ate_rmse_xyz_m", "rot_rmse_deg", "rot_rmse_rpy_deg", "t_rel_pct",
             "r_rel_deg_per_100m", "max_pos_err_in_outage_m", "max_rot_err_in_outage_deg", "mme",
             "scans_per_s", "peak_rss_mb"}}, "ground_truth_map": {"mme"}}``; metrics that could
-            not be computed (no ground truth, too short for any segment) are None.
+            not be computed (no ground truth, too short for any segment) are None;
+            ``input.ground_truth`` is ``"simulator"``, ``"oxts"`` or ``"none"``.
         run: the C++ ``DriveRun`` (results per scan, counts, skipped scans, status, timing).
         origin: WGS-84 origin of world (GeodeticPoint) or None.
         ground_truth: the ground truth in world (Trajectory) when one was found, else None.
@@ -153,9 +154,11 @@ def _evaluate(result: DriveResult, drive: pathlib.Path, gnss_outages, num_thread
             if result.ate is not None:
                 p = result.ate.p_gt_world
                 path_m = float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum()) if len(p) else 0.0
+            lengths = "kitti" if path_m >= 400.0 else "short"
+            result.extra["relative_label"] = {"kitti": "kitti_100-800m",
+                                              "short": "short_10-80m"}[lengths]
             try:
-                result.relative_error = _C.compute_relative_error(
-                    run.trajectory, gt, "kitti" if path_m >= 400.0 else "short")
+                result.relative_error = _C.compute_relative_error(run.trajectory, gt, lengths)
             except (ValueError, IndexError, _C.Error) as e:
                 _log.warning("relative error: %s", e)
     if len(result.map_points):
@@ -180,14 +183,14 @@ def _evaluate(result: DriveResult, drive: pathlib.Path, gnss_outages, num_thread
     if len(reader):
         duration_s = (reader.scan_end_ns(len(reader) - 1) - reader.scan_start_ns(0)) * 1e-9
     text = _C.report_to_json(
-        str(drive), run.scans_processed, duration_s,
-        gt_kind if gt_kind in ("simulator", "oxts") else "oxts",
+        str(drive), run.scans_processed, duration_s, gt_kind or "none",
         [(float(s), float(d)) for s, d in gnss_outages],
         [(_C.mapping_mode_name(run.mode), method)], gt_map_mme)
-    report = json.loads(text)
-    if gt_kind is None:
-        report["input"]["ground_truth"] = None  # the C++ schema has no word for "none"
-    return report
+    result.extra["method_report"] = method
+    result.extra["ground_truth_kind"] = gt_kind or "none"
+    result.extra["ground_truth_map_mme"] = gt_map_mme
+    result.extra["outage_reference_ns"] = reference_ns
+    return json.loads(text)
 
 
 def run_drive(path: PathLike, mode: Union[str, "_C.MappingMode"] = "full",
@@ -228,12 +231,27 @@ def run_drive(path: PathLike, mode: Union[str, "_C.MappingMode"] = "full",
     opts = options.copy() if options is not None else _C.Options()
     if config is not None:
         _C.apply_config_file(os.fspath(config), opts)
+    outages = [(float(s), float(d)) for s, d in gnss_outages]
+    _options_for_reader(opts, reader, outages)
+    return _run_reader(reader, drive, mode, opts, outages, evaluate, ground_truth_map, progress,
+                       check)
+
+
+def _options_for_reader(opts: "_C.Options", reader: "_C.DriveReader", outages) -> None:
+    """As slam_mms_run: T_body_lidar (and the antenna lever arm where the input has one) from the
+    reader, then the outage windows."""
     streams = reader.streams
     opts.T_body_lidar = streams.T_body_lidar
     if streams.t_body_antenna_m is not None:
         opts.ins.gnss.t_body_antenna = streams.t_body_antenna_m
-    outages = [(float(s), float(d)) for s, d in gnss_outages]
-    opts.gnss_outages = outages
+    opts.gnss_outages = list(outages)
+
+
+def _run_reader(reader, drive: pathlib.Path, mode, options: "_C.Options", outages,
+                evaluate: bool = True, ground_truth_map: bool = True, progress=None,
+                check: bool = True) -> DriveResult:
+    """One method over an opened reader with `options` (copied; mode set here)."""
+    opts = options.copy()
     opts.mode = _mode_of(mode)
     opts.validate()
     run = _C._run_drive(reader, opts, progress)

@@ -222,6 +222,11 @@ class DriveRun:
         ...
     def raise_if_error(self: DriveRun) -> None:
         """Raises the run's fatal error (ValueError for bad options, ...), if any."""
+    @property
+    def level1_trajectory(self) -> Trajectory:
+        """Trajectory of the level-1 poses of the results (slam_mms_run's <mode>_level1.tum)."""
+    def write_scan_results_csv(self: DriveRun, path: os.PathLike[str]) -> None:
+        """Writes the per-scan results as slam_mms_run's <mode>_scans.csv."""
 
 class DriveStreams:
     """The non-scan streams of a drive and its calibration, as numpy arrays."""
@@ -1964,6 +1969,8 @@ class Trajectory:
         ...
     def path_length_m(self: Trajectory) -> float:
         ...
+    def between(self: Trajectory, start_ns: int, end_ns: int) -> Trajectory:
+        """The poses with start_ns <= stamp <= end_ns (exact copies, covariances included)."""
     def interpolate(self: Trajectory, stamp_ns: int) -> numpy.ndarray:
         """T_world_body (4 x 4) interpolated at stamp_ns."""
     @staticmethod
@@ -2035,6 +2042,9 @@ def compute_outage_errors(ate: AteResult, windows: List[Tuple[float, float]], re
 def compute_relative_error(estimate: Trajectory, ground_truth: Trajectory, segment_lengths_m: object = 'kitti', step_frames: int = 10) -> RelativeErrorResult:
     """KITTI relative error; segment_lengths_m: 'kitti' (100..800 m), 'short' (10..80 m) or a list of lengths [m]. t_rel_pct / r_rel_deg_per_100m are None without any segment."""
 
+def config_keys() -> list:
+    """Every --config key as (key, type, default), as slam_mms_run --config-keys prints them."""
+
 def flush_log() -> None:
     """Delivers the library messages logged so far by other threads to the Python handler now."""
 
@@ -2042,7 +2052,7 @@ def has_simulator_ground_truth(drive_dir: os.PathLike[str]) -> bool:
     ...
 
 def load_ground_truth(gt_dir: os.PathLike[str], reader: DriveReader, origin: GeodeticPoint) -> dict:
-    """slam_mms_run's ground truth (gt_dir/ground_truth/ of the simulator, else the OXTS records of a KITTI reader; FileNotFoundError otherwise) carried into the ENU frame at origin through WGS-84: {'kind', 'trajectory', 'scene_map', 'source'}."""
+    """The ground truth slam_mms_run evaluates against (eval::LoadGroundTruth: gt_dir/ground_truth/ of the simulator, else the OXTS records of a KITTI reader; FileNotFoundError otherwise) carried into the ENU frame at origin through WGS-84: {'kind', 'trajectory', 'scene_map', 'source'}."""
 
 def make_method_report(ate: AteResult = None, relative: RelativeErrorResult = None, outage: OutageErrorResult = None, entropy: MapEntropyResult = None) -> MethodReport:
     """The metric fields of a MethodReport (None leaves null)."""
@@ -2059,6 +2069,15 @@ def parse_mapping_mode(name: str) -> MappingMode:
 def peak_rss_mb() -> Optional[float]:
     """Peak resident set size of this process [MB] (Linux)."""
 
+def plot_map_height(points: object, path: os.PathLike[str], overlay: object = None, title: str = '', width_px: int = 1400, height_px: int = 1050) -> None:
+    """slam_mms_run's map_<mode>_height.png: N x 3/4 points from above coloured by height, an optional N x 3 line (the trajectory) on top."""
+
+def plot_position_errors(methods: List[Tuple[str, AteResult]], gnss_outages: List[Tuple[float, float]], reference_ns: int, path: os.PathLike[str], title: str = '', width_px: int = 1400, height_px: int = 1050) -> None:
+    """slam_mms_run's position_error.png: [(name, AteResult), ...] over time from reference_ns."""
+
+def plot_trajectories_top_view(ground_truth: Trajectory, ground_truth_name: str, methods: List[Tuple[str, Trajectory]], gnss_outages: List[Tuple[float, float]], outage_reference_ns: int, path: os.PathLike[str], title: str = '', width_px: int = 1400, height_px: int = 1050) -> None:
+    """slam_mms_run's trajectories.png: the ground truth and [(name, Trajectory), ...] from above, outage windows [(start_s, duration_s)] relative to outage_reference_ns."""
+
 def read_ply(path: os.PathLike[str]) -> numpy.ndarray:
     """N x 4 float32 [x y z intensity]."""
 
@@ -2068,7 +2087,19 @@ def report_to_json(drive: str, scans: int, duration_s: float, ground_truth: str,
 def set_min_log_level(level: LogLevel) -> None:
     """Messages below this level are not even formatted by the library (default INFO)."""
 
+def write_drive_folder(reader: DriveReader, dir: os.PathLike[str], scan_format: str = 'pcd_binary', gnss_format: str = 'csv', write_point_time: bool = False, nmea_time_decimals: int = 3, overwrite: bool = False) -> None:
+    """The C++ WriteDriveFolder: any DriveReader's drive as a plain drive folder (docs/drive_folder.md) that FolderDriveReader reads back."""
+
+def write_extrinsics_yaml(path: os.PathLike[str], T_body_lidar: object, t_body_antenna_m: object = None) -> None:
+    """extrinsics.yaml (the drive folder's, also --extrinsics of a bag) with T_body_lidar 4 x 4."""
+
 def write_map(points: object, path: os.PathLike[str], origin: Optional[GeodeticPoint] = None) -> None:
     """Writes N x 3 / N x 4 points as PLY, PCD or geo-referenced LAS 1.4 (by extension)."""
+
+def write_rosbag(reader: DriveReader, bag: os.PathLike[str], write_point_time: bool = True, lidar_topic: str = '/velodyne_points', imu_topic: str = '/imu/data', gnss_topic: str = '/gps/fix') -> None:
+    """The C++ WriteRosbag: any DriveReader's drive as a ROS 1 bag (no extrinsics inside: write_extrinsics_yaml and open it with extrinsics=...)."""
+
+def write_scan_results_csv(results: List[LocalizationResult], path: os.PathLike[str]) -> None:
+    """Writes LocalizationResults (MappingSystem.results) as slam_mms_run's <mode>_scans.csv."""
 
 KittiDriveReader = KittiRawReader

@@ -614,6 +614,19 @@ void RegisterCore(py::module_& m) {
       .def("__len__", &Trajectory::size)
       .def("path_length_m", &Trajectory::PathLength)
       .def(
+          "between",
+          [](const Trajectory& t, int64_t start_ns, int64_t end_ns) {
+            const Timestamp a = Timestamp::FromNanoseconds(start_ns);
+            const Timestamp b = Timestamp::FromNanoseconds(end_ns);
+            Trajectory out;
+            for (const StampedPose& p : t.poses()) {
+              if (p.stamp >= a && p.stamp <= b) ThrowIfError(out.Add(p));
+            }
+            return out;
+          },
+          py::arg("start_ns"), py::arg("end_ns"),
+          "The poses with start_ns <= stamp <= end_ns (exact copies, covariances included).")
+      .def(
           "interpolate",
           [](const Trajectory& t, int64_t stamp_ns) {
             return IsometryToArray(

@@ -8,6 +8,7 @@
 
 #include "common.hpp"
 #include "slam_mms/pipeline/drive_runner.hpp"
+#include "slam_mms/pipeline/scan_results_csv.hpp"
 
 namespace slam_mms::python {
 namespace {
@@ -390,7 +391,32 @@ void RegisterMappingSystem(py::module_& m) {
                              [](const DriveRun& r) { return r.status.ToString(); })
       .def(
           "raise_if_error", [](const DriveRun& r) { ThrowIfError(r.status); },
-          "Raises the run's fatal error (ValueError for bad options, ...), if any.");
+          "Raises the run's fatal error (ValueError for bad options, ...), if any.")
+      .def_property_readonly(
+          "level1_trajectory",
+          [](const DriveRun& r) {
+            // Level 1 alone (before any level-2 correction), as slam_mms_run's
+            // <method>_level1.tum: one pose per result, up to the first out-of-order stamp.
+            Trajectory level1;
+            for (const LocalizationResult& lr : r.results) {
+              if (!level1.Add(lr.stamp, lr.T_world_body).ok()) break;
+            }
+            return level1;
+          },
+          "Trajectory of the level-1 poses of the results (slam_mms_run's <mode>_level1.tum).")
+      .def(
+          "write_scan_results_csv",
+          [](const DriveRun& r, const std::filesystem::path& path) {
+            ThrowIfError(WithoutGil([&] { return WriteScanResultsCsv(r.results, path); }));
+          },
+          py::arg("path"), "Writes the per-scan results as slam_mms_run's <mode>_scans.csv.");
+  m.def(
+      "write_scan_results_csv",
+      [](const std::vector<LocalizationResult>& results, const std::filesystem::path& path) {
+        ThrowIfError(WithoutGil([&] { return WriteScanResultsCsv(results, path); }));
+      },
+      py::arg("results"), py::arg("path"),
+      "Writes LocalizationResults (MappingSystem.results) as slam_mms_run's <mode>_scans.csv.");
 
   m.def(
       "_run_drive",

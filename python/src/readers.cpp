@@ -9,10 +9,13 @@
 #include "slam_mms/io/kitti_drive_reader.hpp"
 #include "slam_mms/io/kitti_raw_reader.hpp"
 #ifdef SLAM_MMS_PY_WITH_FOLDER_READER
+#include "slam_mms/io/drive_folder_writer.hpp"
+#include "slam_mms/io/extrinsics_yaml.hpp"
 #include "slam_mms/io/folder_drive_reader.hpp"
 #endif
 #ifdef SLAM_MMS_PY_WITH_ROSBAG
 #include "slam_mms/rosbag/rosbag_drive_reader.hpp"
+#include "slam_mms/rosbag/rosbag_writer.hpp"
 #endif
 #ifdef SLAM_MMS_PY_WITH_OPEN_DRIVE
 #include "slam_mms/pipeline/open_drive.hpp"
@@ -331,6 +334,62 @@ void RegisterReaders(py::module_& m) {
            py::arg("nmea_utc_date") = "")
       .def_property_readonly("dir", &FolderDriveReader::dir)
       .def_property_readonly("num_bad_nmea_sentences", &FolderDriveReader::num_bad_nmea_sentences);
+  m.def(
+      "write_drive_folder",
+      [](const DriveReader& reader, const std::filesystem::path& dir,
+         const std::string& scan_format, const std::string& gnss_format, bool write_point_time,
+         int nmea_time_decimals, bool overwrite) {
+        using SF = FolderWriteOptions::ScanFormat;
+        using GF = FolderWriteOptions::GnssFormat;
+        FolderWriteOptions o;
+        if (scan_format == "pcd_binary") {
+          o.scan_format = SF::kPcdBinary;
+        } else if (scan_format == "pcd_ascii") {
+          o.scan_format = SF::kPcdAscii;
+        } else if (scan_format == "ply_binary") {
+          o.scan_format = SF::kPlyBinary;
+        } else if (scan_format == "ply_ascii") {
+          o.scan_format = SF::kPlyAscii;
+        } else if (scan_format == "bin") {
+          o.scan_format = SF::kBin;
+        } else {
+          throw py::value_error("scan_format = '" + scan_format +
+                                "'; must be pcd_binary, pcd_ascii, ply_binary, ply_ascii or bin");
+        }
+        if (gnss_format == "csv") {
+          o.gnss_format = GF::kCsv;
+        } else if (gnss_format == "nmea") {
+          o.gnss_format = GF::kNmea;
+        } else {
+          throw py::value_error("gnss_format = '" + gnss_format + "'; must be csv or nmea");
+        }
+        o.write_point_time = write_point_time;
+        o.nmea_time_decimals = nmea_time_decimals;
+        o.overwrite = overwrite;
+        ThrowIfError(o.Validate());
+        ThrowIfError(WithoutGil([&] { return WriteDriveFolder(reader, dir, o); }));
+      },
+      py::arg("reader"), py::arg("dir"), py::arg("scan_format") = "pcd_binary",
+      py::arg("gnss_format") = "csv", py::arg("write_point_time") = false,
+      py::arg("nmea_time_decimals") = 3, py::arg("overwrite") = false,
+      "The C++ WriteDriveFolder: any DriveReader's drive as a plain drive folder "
+      "(docs/drive_folder.md) that FolderDriveReader reads back.");
+  m.def(
+      "write_extrinsics_yaml",
+      [](const std::filesystem::path& path, py::object T_body_lidar, py::object t_body_antenna_m) {
+        DriveExtrinsics e;
+        e.T_body_lidar = ArrayToIsometry(T_body_lidar, "T_body_lidar");
+        if (!t_body_antenna_m.is_none()) {
+          auto a = py::array_t<double, py::array::forcecast>::ensure(t_body_antenna_m);
+          if (!a || a.ndim() != 1 || a.shape(0) != 3) {
+            throw py::value_error("t_body_antenna_m: expected shape (3,)");
+          }
+          e.t_body_antenna_m = Eigen::Vector3d(a.at(0), a.at(1), a.at(2));
+        }
+        ThrowIfError(WriteExtrinsicsYaml(e, path));
+      },
+      py::arg("path"), py::arg("T_body_lidar"), py::arg("t_body_antenna_m") = py::none(),
+      "extrinsics.yaml (the drive folder's, also --extrinsics of a bag) with T_body_lidar 4 x 4.");
   m.attr("HAVE_FOLDER_READER") = true;
 #else
   m.attr("HAVE_FOLDER_READER") = false;
@@ -369,6 +428,24 @@ void RegisterReaders(py::module_& m) {
             return out;
           },
           py::arg("bag"), "[(name, datatype, num_messages), ...]");
+  m.def(
+      "write_rosbag",
+      [](const DriveReader& reader, const std::filesystem::path& bag, bool write_point_time,
+         const std::string& lidar_topic, const std::string& imu_topic,
+         const std::string& gnss_topic) {
+        RosbagWriteOptions o;
+        o.write_point_time = write_point_time;
+        o.lidar_topic = lidar_topic;
+        o.imu_topic = imu_topic;
+        o.gnss_topic = gnss_topic;
+        ThrowIfError(o.Validate());
+        ThrowIfError(WithoutGil([&] { return WriteRosbag(reader, bag, o); }));
+      },
+      py::arg("reader"), py::arg("bag"), py::arg("write_point_time") = true,
+      py::arg("lidar_topic") = "/velodyne_points", py::arg("imu_topic") = "/imu/data",
+      py::arg("gnss_topic") = "/gps/fix",
+      "The C++ WriteRosbag: any DriveReader's drive as a ROS 1 bag (no extrinsics inside: "
+      "write_extrinsics_yaml and open it with extrinsics=...).");
   m.attr("HAVE_ROSBAG_READER") = true;
 #else
   m.attr("HAVE_ROSBAG_READER") = false;

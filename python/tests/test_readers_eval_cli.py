@@ -93,24 +93,76 @@ def _python_env():
     return env
 
 
+# Files whose bytes depend on the run's timing or on threads: per-scan stage times, scans/s and
+# peak RSS, and the covariances of full/lidar_only (their last bits vary from run to run of the
+# app itself; compared to 1e-9 relative).
+_TIMED = {"report.json", "summary.txt", "full_scans.csv", "gnss_ins_scans.csv",
+          "lidar_only_scans.csv", "full_cov.csv", "lidar_only_cov.csv", "gnss_ins_cov.csv"}
+
+
 def test_python_m_slam_mms_run_writes_what_the_app_writes(sim_drive, slam_mms_run, tmp_path):
+    args = ["--frames", "0:7", "--mode", "all", "--gnss-outage", "0.3:0.4"]
     out = tmp_path / "py"
     cmd = [sys.executable, "-m", "slam_mms", "run", "--kitti-raw", str(sim_drive), "--out",
-           str(out), "--frames", "0:9", "--mode", "gnss_ins"]
+           str(out), *args]
     proc = subprocess.run(cmd, capture_output=True, text=True, env=_python_env(), timeout=600)
     assert proc.returncode == 0, proc.stdout + proc.stderr
-    app = run_app(slam_mms_run, sim_drive, tmp_path / "cpp", "--frames", "0:9", "--mode",
-                  "gnss_ins")
-    # Both written by the C++ TUM writer from the same RunDrive trajectory: byte-identical.
-    assert (out / "gnss_ins.tum").read_bytes() == (app / "gnss_ins.tum").read_bytes()
-    assert (out / "ground_truth.tum").read_bytes() == (app / "ground_truth.tum").read_bytes()
-    for f in ("gnss_ins.kitti", "gnss_ins_cov.csv", "map_gnss_ins.ply", "map_gnss_ins.las"):
-        assert (out / f).stat().st_size > 0, f
+    app = run_app(slam_mms_run, sim_drive, tmp_path / "cpp", *args)
+    expected = {p.name for p in app.iterdir() if p.is_file()}
+    for f in ("full.tum", "full_level1.tum", "lidar_only_level1.tum", "full_scans.csv",
+              "map_gnss_ins.las", "ground_truth.tum", "trajectories.png", "position_error.png",
+              "map_full_height.png", "map_gnss_ins_height.png", "summary.txt", "report.json"):
+        assert f in expected, f
+    assert expected <= {p.name for p in out.iterdir() if p.is_file()}
+    # Written by the same C++ writers and plot code from the same RunDrive results: the same bytes.
+    for f in sorted(expected - _TIMED):
+        assert (out / f).read_bytes() == (app / f).read_bytes(), f
+    for f in ("full_cov.csv", "lidar_only_cov.csv", "gnss_ins_cov.csv"):
+        a = np.loadtxt(out / f, delimiter=",", skiprows=1)
+        b = np.loadtxt(app / f, delimiter=",", skiprows=1)
+        np.testing.assert_array_equal(a[:, :8], b[:, :8])  # stamp and pose
+        np.testing.assert_allclose(a[:, 8:], b[:, 8:], rtol=1e-9, atol=1e-300)
+    for f in ("full_scans.csv", "lidar_only_scans.csv"):
+        ours = [line.split(",")[:15] for line in (out / f).read_text().splitlines()]
+        theirs = [line.split(",")[:15] for line in (app / f).read_text().splitlines()]
+        assert ours == theirs, f  # all but the stage times
     ours = json.loads((out / "report.json").read_text())
     theirs = json.loads((app / "report.json").read_text())
-    assert set(ours) == set(theirs) and set(ours["methods"]) == {"gnss_ins"}
-    assert ours["methods"]["gnss_ins"]["ate_rmse_m"] == pytest.approx(
-        theirs["methods"]["gnss_ins"]["ate_rmse_m"], rel=1e-12)
+    for m in ours["methods"].values():
+        assert m.pop("scans_per_s") > 0 and m.pop("peak_rss_mb") > 0
+    for m in theirs["methods"].values():
+        del m["scans_per_s"], m["peak_rss_mb"]
+    assert ours == theirs
+    assert list(ours["methods"]) == ["full", "gnss_ins", "lidar_only"]
+    assert ours["input"]["ground_truth"] == "simulator" and ours["gnss_outages"] == [[0.3, 0.4]]
+    n = 1 + len(ours["methods"])  # the header and one row per method, then the notes
+    ours = (out / "summary.txt").read_text().splitlines()
+    theirs = (app / "summary.txt").read_text().splitlines()
+    assert [r.split()[:7] for r in ours[:n]] == [r.split()[:7] for r in theirs[:n]]
+    assert ours[n:] == theirs[n:]
+
+
+def test_python_m_slam_mms_run_on_a_folder_without_ground_truth(sim_drive, tmp_path):
+    if not slam_mms.HAVE_FOLDER_READER:
+        pytest.skip("the folder reader is not built")
+    folder = tmp_path / "folder"
+    slam_mms.write_drive_folder(slam_mms.open_drive(sim_drive, frames="0:4"), folder)
+    out = tmp_path / "out"
+    proc = subprocess.run([sys.executable, "-m", "slam_mms", "run", "--folder", str(folder),
+                           "--out", str(out), "--mode", "gnss_ins"], capture_output=True,
+                          text=True, env=_python_env(), timeout=300)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    report = json.loads((out / "report.json").read_text())
+    assert report["input"]["ground_truth"] == "none" and report["input"]["scans"] == 5
+    assert report["methods"]["gnss_ins"]["ate_rmse_m"] is None
+    assert not (out / "ground_truth.tum").exists() and not (out / "trajectories.png").exists()
+    assert (out / "map_gnss_ins_height.png").stat().st_size > 1000
+    assert "against the none ground truth" in (out / "summary.txt").read_text()
+    # A bag topic without --rosbag is a usage error (exit 2), as in slam_mms_run.
+    proc = subprocess.run([sys.executable, "-m", "slam_mms", "run", "--folder", str(folder),
+                           "--out", str(out), "--lidar-topic", "/x"], capture_output=True,
+                          text=True, env=_python_env())
+    assert proc.returncode == 2 and "--rosbag" in proc.stderr
 
 
 def test_cli_bad_arguments_exit_2(tmp_path):

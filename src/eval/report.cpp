@@ -48,7 +48,8 @@ MethodReport MakeMethodReport(const AteResult* ate, const RelativeErrorResult* r
 }
 
 bool IsReportMethodName(const std::string& name) {
-  return name == "full" || name == "gnss_ins" || name == "lidar_only";
+  return name == "full" || name == "gnss_ins" || name == "gnss_ins_smoothed" ||
+         name == "lidar_only";
 }
 
 StatusOr<std::string> ReportToJson(const EvalReport& report) {
@@ -61,7 +62,8 @@ StatusOr<std::string> ReportToJson(const EvalReport& report) {
   for (const auto& [name, m] : report.methods) {
     if (!IsReportMethodName(name)) {
       return InvalidArgumentError("EvalReport::methods has \"" + name +
-                                  "\"; must be \"full\", \"gnss_ins\" or \"lidar_only\"");
+                                  "\"; must be \"full\", \"gnss_ins\", \"gnss_ins_smoothed\" or "
+                                  "\"lidar_only\"");
     }
     if (!seen.insert(name).second) {
       return InvalidArgumentError("EvalReport::methods has \"" + name + "\" twice");

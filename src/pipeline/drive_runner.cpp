@@ -9,6 +9,7 @@
 
 #include "slam_mms/core/geodesy.hpp"
 #include "slam_mms/core/logging.hpp"
+#include "slam_mms/ins/pos_smoother.hpp"
 
 namespace slam_mms {
 namespace {
@@ -55,8 +56,22 @@ StatusOr<std::vector<InsState>> PosRecordsInWorld(const std::vector<PosRecord>& 
   return states;
 }
 
+const char* PosWorkflowName(PosWorkflow pos) {
+  return pos == PosWorkflow::kSmoothed ? "smoothed" : "forward";
+}
+
+bool ParsePosWorkflow(const std::string& name, PosWorkflow* pos) {
+  for (PosWorkflow p : {PosWorkflow::kForward, PosWorkflow::kSmoothed}) {
+    if (name == PosWorkflowName(p)) {
+      *pos = p;
+      return true;
+    }
+  }
+  return false;
+}
+
 DriveRun RunDrive(const DriveReader& reader, const MappingSystem::Options& base_options,
-                  const DriveRunCallbacks& callbacks) {
+                  const DriveRunCallbacks& callbacks, const DriveRunOptions& run_options) {
   const DriveStreams& in = reader.streams();
   DriveRun run;
   run.mode = base_options.mode;
@@ -64,8 +79,35 @@ DriveRun RunDrive(const DriveReader& reader, const MappingSystem::Options& base_
   const auto t0 = std::chrono::steady_clock::now();
 
   MappingSystem::Options options = base_options;
+  const bool smooth =
+      base_options.mode == MappingMode::kGnssInsSmoothed ||
+      (base_options.mode == MappingMode::kFull && run_options.pos == PosWorkflow::kSmoothed);
+  // The offline method places scans through the external-POS path of a gnss_ins system.
+  if (options.mode == MappingMode::kGnssInsSmoothed) options.mode = MappingMode::kGnssIns;
   std::vector<InsState> pos;
-  if (!in.pos.empty()) {
+  if (smooth && in.pos.empty()) {
+    // The offline workflow: the forward-backward smoothed POS over the whole drive first.
+    PosSmoother::Options so;
+    so.ins = options.ins;
+    so.origin = options.origin;
+    so.gnss_outages = options.gnss_outages;
+    if (run.scans_total > 0) so.outage_reference = reader.ScanStart(0);
+    StatusOr<PosSmoother::Result> smoothed =
+        PosSmoother::Run(so, in.imu, in.gnss, in.initial_state);
+    if (!smoothed.ok()) {
+      run.status = smoothed.status().WithContext(reader.Describe());
+      return run;
+    }
+    options.origin = smoothed->origin;
+    pos = std::move(smoothed->smoothed);
+    run.smoothed_pos = true;
+    run.smoothing_wall_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  } else if (!in.pos.empty()) {
+    if (smooth) {
+      SLAM_MMS_LOG(kInfo) << reader.Describe()
+                          << ": the input's own external POS is used as the smoothed POS";
+    }
     if (!options.origin) {
       options.origin = GeodeticPoint{in.pos.front().latitude_deg, in.pos.front().longitude_deg,
                                      in.pos.front().height_m};
@@ -88,9 +130,10 @@ DriveRun RunDrive(const DriveReader& reader, const MappingSystem::Options& base_
   if (pos.empty() && in.initial_state) {
     status = system->InitializePos(*in.initial_state).WithContext(in.initial_state_source);
   }
-  const bool use_pos = !pos.empty();
-  const size_t n_imu = use_pos ? 0 : in.imu.size();
-  const size_t n_gnss = use_pos ? 0 : in.gnss.size();
+  // An input's external POS replaces IMU + GNSS; a smoothed one comes with them (see the header).
+  const bool imu_gnss = pos.empty() || run.smoothed_pos;
+  const size_t n_imu = imu_gnss ? in.imu.size() : 0;
+  const size_t n_gnss = imu_gnss ? in.gnss.size() : 0;
   const size_t n_pos = pos.size(), n_scan = run.scans_total;
   size_t i_imu = 0, i_gnss = 0, i_pos = 0, i_scan = 0;
   bool stopped = false;

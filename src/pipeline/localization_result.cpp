@@ -9,12 +9,14 @@ const char* MappingModeName(MappingMode mode) {
     case MappingMode::kFull: return "full";
     case MappingMode::kGnssIns: return "gnss_ins";
     case MappingMode::kLidarOnly: return "lidar_only";
+    case MappingMode::kGnssInsSmoothed: return "gnss_ins_smoothed";
   }
   return "?";
 }
 
 bool ParseMappingMode(const std::string& name, MappingMode* mode) {
-  for (MappingMode m : {MappingMode::kFull, MappingMode::kGnssIns, MappingMode::kLidarOnly}) {
+  for (MappingMode m : {MappingMode::kFull, MappingMode::kGnssIns, MappingMode::kLidarOnly,
+                        MappingMode::kGnssInsSmoothed}) {
     if (name == MappingModeName(m)) {
       *mode = m;
       return true;

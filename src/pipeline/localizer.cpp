@@ -85,9 +85,9 @@ Status Localizer::Options::Validate() const {
     return bad("registration_voxel_m", registration_voxel_m, "must be > 0");
   }
   if (num_threads < 1) return bad("num_threads", num_threads, "must be >= 1");
-  if (mode == MappingMode::kGnssIns) {
-    return InvalidArgumentError(
-        "Localizer::Options::mode = gnss_ins; the Localizer runs only in full or lidar_only mode");
+  if (mode == MappingMode::kGnssIns || mode == MappingMode::kGnssInsSmoothed) {
+    return InvalidArgumentError(std::string("Localizer::Options::mode = ") + MappingModeName(mode) +
+                                "; the Localizer runs only in full or lidar_only mode");
   }
   SLAM_MMS_RETURN_IF_ERROR(surfels.Validate());
   SLAM_MMS_RETURN_IF_ERROR(icp.Validate());

@@ -49,6 +49,12 @@ Status MappingSystem::Options::Validate() const {
     return InvalidArgumentError(
         "MappingSystem::Options::num_threads = " + std::to_string(num_threads) + "; must be >= 1");
   }
+  if (mode == MappingMode::kGnssInsSmoothed) {
+    return InvalidArgumentError(
+        "MappingSystem::Options::mode = gnss_ins_smoothed; an offline method: RunDrive smooths the "
+        "whole IMU/GNSS stream first (PosSmoother), or feed a smoothed POS with AddInsPose in "
+        "gnss_ins mode");
+  }
   SLAM_MMS_RETURN_IF_ERROR(ins.Validate());
   if (mode != MappingMode::kGnssIns) {
     Localizer::Options loc = localizer;
@@ -88,6 +94,7 @@ struct MappingSystem::Impl {
   bool in_outage = false;
   Timestamp outage_start;
   bool gnss_returned_pending = false;
+  bool have_gnss_fed = false;  // GNSS fixes reached the GnssPrior (also with an external POS)
   size_t submaps_reported = 0;
 
   // gnss_ins mode.
@@ -104,8 +111,8 @@ struct MappingSystem::Impl {
   }
 
   Status FeedGnss(const GnssFix& fix) {
-    if (external_pos) return OkStatus();
-    auto decision = ins.AddGnss(fix);
+    have_gnss_fed = true;
+    auto decision = external_pos ? DecideAgainstExternalPos(fix) : ins.AddGnss(fix);
     if (!decision.ok()) return decision.status();
     MarkPosInput(fix.stamp);
     if (decision->usable() && level2) {
@@ -116,6 +123,22 @@ struct MappingSystem::Impl {
                            << " rejected: " << decision->reason;
     }
     return OkStatus();
+  }
+
+  /// With an external POS the fixes are not fused: each is decided (GnssPrior: outage windows,
+  /// type, innovation against the POS antenna position at the fix time) for level 2 only.
+  StatusOr<GnssDecisionResult> DecideAgainstExternalPos(const GnssFix& fix) {
+    const Eigen::Vector3d& t_ba = opt.ins.gnss.t_body_antenna;
+    StatusOr<InsState> s = ins.StateAt(fix.stamp);
+    if (!s.ok()) return ins.mutable_gnss_prior().Process(fix, nullptr);
+    // p_antenna = p + R t_ba; with T = T_hat Exp([w; rho]): dp_antenna = R (rho - [t_ba]x w).
+    const Eigen::Matrix3d R = s->T_world_body.linear();
+    Eigen::Matrix<double, 3, 6> J;
+    J << -R * so3::Hat(t_ba), R;
+    GnssPrediction pred;
+    pred.p_world_antenna = s->T_world_body.translation() + R * t_ba;
+    pred.cov_world_antenna = J * s->cov_T_world_body * J.transpose();
+    return ins.mutable_gnss_prior().Process(fix, &pred);
   }
 
   void MarkPosInput(Timestamp t) {
@@ -269,9 +292,12 @@ struct MappingSystem::Impl {
           loc->SetInitialPose(s0->T_world_body);  // the anchor, as SuMa is started at a known pose
         }
       } else {
-        const bool gnss_valid = external_pos || ins.gnss_prior().AvailabilityAt(scan.stamp_start) !=
-                                                    GnssAvailability::kOutage;
-        UpdateOutageState(gnss_valid, scan.stamp_start);
+        // An external POS is a solution over GNSS outages too (e.g. a smoothed one): F_Odom from it
+        // throughout; the GNSS availability (where fixes are fed) only triggers level 2.
+        const bool gnss_available =
+            ins.gnss_prior().AvailabilityAt(scan.stamp_start) != GnssAvailability::kOutage;
+        const bool gnss_valid = external_pos || gnss_available;
+        if (!external_pos || have_gnss_fed) UpdateOutageState(gnss_available, scan.stamp_start);
         if (gnss_valid && s0.ok() && s1.ok() && !PosJumped(scan, *s0, *s1)) {
           motion.type = MotionFactorType::kOdometry;
           motion.T_world_body_pos_start = s0->T_world_body;
@@ -316,12 +342,14 @@ struct MappingSystem::Impl {
       in_outage = true;
       outage_start = t;
       SLAM_MMS_LOG(kInfo) << "GNSS lost at " << t.ToKittiString()
-                          << ": level 1 switches from F_Odom to F_Prein (IMU preintegration)";
+                          << (external_pos ? ": level 1 keeps F_Odom from the external POS"
+                                           : ": level 1 switches from F_Odom to F_Prein (IMU "
+                                             "preintegration)");
     } else if (gnss_valid && in_outage) {
       in_outage = false;
       const double duration = t.SecondsSince(outage_start);
-      SLAM_MMS_LOG(kInfo) << "GNSS back after " << duration
-                          << " s: level 1 switches from F_Prein back to F_Odom";
+      SLAM_MMS_LOG(kInfo) << "GNSS back after " << duration << " s"
+                          << (external_pos ? "" : ": level 1 switches from F_Prein back to F_Odom");
       if (level2 && duration >= opt.level2.long_outage_s) gnss_returned_pending = true;
     }
   }

@@ -5,7 +5,7 @@
 //   {"input": {"drive": str, "scans": int, "duration_s": float, "ground_truth":
 //   "simulator"|"oxts"|"none"},
 //    "gnss_outages": [[start_s, duration_s], ...],
-//    "methods": {"full"|"gnss_ins"|"lidar_only": {
+//    "methods": {"full"|"gnss_ins"|"gnss_ins_smoothed"|"lidar_only": {
 //        "ate_rmse_m": f, "ate_rmse_xyz_m": [f,f,f], "rot_rmse_deg": f, "rot_rmse_rpy_deg":
 //        [f,f,f], "t_rel_pct": f|null, "r_rel_deg_per_100m": f|null, "max_pos_err_in_outage_m":
 //        f|null, "max_rot_err_in_outage_deg": f|null, "mme": f, "scans_per_s": f, "peak_rss_mb":
@@ -31,9 +31,9 @@
 namespace slam_mms::eval {
 
 struct ReportInput {
-  std::string drive;                       ///< Drive folder or name.
-  int64_t scans = 0;                       ///< Scans processed.
-  double duration_s = 0.0;                 ///< Drive duration covered [s].
+  std::string drive;        ///< Drive folder or name.
+  int64_t scans = 0;        ///< Scans processed.
+  double duration_s = 0.0;  ///< Drive duration covered [s].
   /// "simulator", "oxts" or "none" (a folder or bag without ground truth: metrics are null).
   std::string ground_truth = "simulator";
 };
@@ -61,7 +61,8 @@ MethodReport MakeMethodReport(const AteResult* ate, const RelativeErrorResult* r
 struct EvalReport {
   ReportInput input;
   std::vector<OutageWindow> gnss_outages;
-  /// Method name ("full", "gnss_ins" or "lidar_only") and its numbers, written in this order.
+  /// Method name ("full", "gnss_ins", "gnss_ins_smoothed" or "lidar_only") and its numbers,
+  /// written in this order.
   std::vector<std::pair<std::string, MethodReport>> methods;
   std::optional<double> ground_truth_map_mme;
 };

@@ -15,6 +15,18 @@
 // External POS (reader.streams().pos non-empty): the records are converted to world (local ENU at
 // options.origin, else at the first record) and fed with AddInsPose instead of IMU + GNSS.
 //
+// Two POS workflows (ARCHITECTURE.md): streaming (DriveRunOptions::pos = kForward, the default,
+// as a host calling MappingSystem live gets) and offline (kSmoothed, slam_mms_run's default for
+// full): PosSmoother runs the forward EKF over the whole IMU/GNSS stream with options.ins and the
+// outage windows (relative to scan 0's start), then a Rauch-Tung-Striebel backward pass; the
+// smoothed states (one per IMU sample and fix) are fed with AddInsPose, and the IMU samples and
+// GNSS fixes are fed too: the IMU for the POS-jump check and preintegration, the raw fixes as
+// level-2 GNSS factors (decided against the smoothed POS, withheld in the outage windows). Level 1
+// then takes F_Odom from the smoothed POS also inside outages (its relative motion there is the
+// IMU's, with biases estimated from both ends). Mode kGnssInsSmoothed always runs offline (scans
+// placed with the smoothed POS); kGnssIns is always the forward filter, kLidarOnly uses no POS.
+// An input with its own external POS keeps it (it is a POS solution already) in every workflow.
+//
 // Thread safety: RunDrive may run concurrently with itself on distinct readers (or one reader whose
 // ReadScan is thread-safe); callbacks are called on the calling thread.
 
@@ -50,8 +62,21 @@ struct DriveRun {
   int scans_skipped_by_system = 0;  ///< Bad scans MappingSystem skipped (empty, no finite point).
   std::vector<std::string> skipped_scans;  ///< Source and reason of every skipped scan.
   bool finished = false;                   ///< Finish() completed.
-  bool complete = false;  ///< Every scan was fed and Finish() completed (no error, no stop).
-  Status status;          ///< The fatal error, if any.
+  bool complete = false;      ///< Every scan was fed and Finish() completed (no error, no stop).
+  bool smoothed_pos = false;  ///< The scans were placed on (kFull: F_Odom from) a smoothed POS.
+  double smoothing_wall_s = 0.0;  ///< Of which the forward-backward pass over the drive [s].
+  Status status;                  ///< The fatal error, if any.
+};
+
+/// Which POS a run of kFull uses (see the file comment); kGnssIns/kGnssInsSmoothed fix their own.
+enum class PosWorkflow { kForward = 0, kSmoothed = 1 };
+const char* PosWorkflowName(PosWorkflow pos);  ///< "forward", "smoothed"
+/// Parses "forward" / "smoothed".
+bool ParsePosWorkflow(const std::string& name, PosWorkflow* pos);
+
+/// Run options that are not MappingSystem options (the streaming API has no offline pass).
+struct DriveRunOptions {
+  PosWorkflow pos = PosWorkflow::kForward;  ///< For kFull.
 };
 
 struct DriveRunCallbacks {
@@ -63,8 +88,10 @@ struct DriveRunCallbacks {
 
 /// Runs `options.mode` over `reader`. options.T_body_lidar is used as given (set it from
 /// reader.streams().T_body_lidar); an options error is returned in DriveRun::status.
+/// kGnssInsSmoothed and `run_options.pos` = kSmoothed need IMU, GNSS and an initial attitude
+/// (reader.streams().initial_state), else FailedPrecondition in DriveRun::status.
 DriveRun RunDrive(const DriveReader& reader, const MappingSystem::Options& options,
-                  const DriveRunCallbacks& callbacks = {});
+                  const DriveRunCallbacks& callbacks = {}, const DriveRunOptions& run_options = {});
 
 /// The external POS records in world (local ENU about `origin`): positions through WGS-84, the
 /// attitudes rotated from each record's local ENU into world, covariances from the sigmas (else

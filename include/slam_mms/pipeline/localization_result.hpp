@@ -14,11 +14,15 @@
 
 namespace slam_mms {
 
-/// The mapping method (paper §6): the SLAM-integrated system, the traditional MMS (POS only) and
-/// the SuMa-like LiDAR-only baseline.
-enum class MappingMode { kFull = 0, kGnssIns = 1, kLidarOnly = 2 };
-const char* MappingModeName(MappingMode mode);  ///< "full", "gnss_ins", "lidar_only"
-/// Parses "full" / "gnss_ins" / "lidar_only".
+/// The mapping method (paper §6): the SLAM-integrated system, the traditional MMS (POS only: the
+/// forward filter as in real time, or the post-processed forward-backward smoothed POS) and the
+/// SuMa-like LiDAR-only baseline. kGnssInsSmoothed is offline only: RunDrive smooths the whole
+/// IMU/GNSS stream first (PosSmoother), then places the scans with it through a kGnssIns
+/// MappingSystem fed the smoothed POS (AddInsPose); MappingSystem::Create rejects it.
+enum class MappingMode { kFull = 0, kGnssIns = 1, kLidarOnly = 2, kGnssInsSmoothed = 3 };
+/// "full", "gnss_ins", "lidar_only", "gnss_ins_smoothed".
+const char* MappingModeName(MappingMode mode);
+/// Parses "full" / "gnss_ins" / "lidar_only" / "gnss_ins_smoothed".
 bool ParseMappingMode(const std::string& name, MappingMode* mode);
 
 /// Which motion factor level 1 used for a scan (the explicit switch of paper §5.1.1).

@@ -86,7 +86,15 @@ class MappingSystem {
   /// the filter aligns from the first records it gets (see InsFilter). IMU samples after the stamp
   /// carry the attitude to the first usable GNSS fix, which sets the position.
   [[nodiscard]] Status InitializePos(const InsState& state);
-  /// An external POS solution instead of IMU + GNSS (AddImu/AddGnss then unused for the POS).
+  /// An external POS solution instead of IMU + GNSS (AddImu/AddGnss then unused for the POS), e.g.
+  /// a commercial INS's output or a post-processed smoothed POS (PosSmoother, RunDrive with
+  /// DriveRunOptions::pos = kSmoothed). It is taken as valid also inside GNSS outages: level 1 uses
+  /// F_Odom from it throughout (the jump check still applies where IMU samples are fed, which
+  /// also keep F_Prein possible). GNSS fixes fed with AddGnss are not fused into the POS: each is
+  /// decided by the GnssPrior (outage windows, fix type, innovation against the POS antenna
+  /// position at the fix time) and a usable one becomes a level-2 GNSS factor (kFull), as with the
+  /// internal filter; the availability then comes from them and triggers level 2 when GNSS
+  /// returns after a long outage. Without fixes level 2 has no GNSS factors.
   [[nodiscard]] Status AddInsPose(const InsState& state);
   /// A raw scan (lidar frame, per-point time offsets, not de-skewed). A bad scan (empty, all
   /// points non-finite) is skipped with a warning and counted; the return is then OK.

@@ -1,9 +1,11 @@
 // slam_mms_run: the main job (issue 8). A KITTI raw drive (or the embedded default drive, simulated
-// first) in; per method (full, gnss_ins, lidar_only) trajectories and maps out, evaluated against
-// the ground truth (simulator's, else OXTS) in report.json, plots and a summary table.
+// first) in; per method (full, gnss_ins, gnss_ins_smoothed, lidar_only) trajectories and maps out,
+// evaluated against the ground truth (simulator's, else OXTS) in report.json, plots and a summary
+// table.
 //
-//   slam_mms_run --kitti-raw DRIVE_DIR --out DIR [--mode full|gnss_ins|lidar_only|all]
-//                [--frames A:B] [--gnss-outage START_S:DURATION_S ...] [--config FILE]
+//   slam_mms_run --kitti-raw DRIVE_DIR --out DIR [--mode full|gnss_ins|gnss_ins_smoothed|
+//                lidar_only|all] [--pos smoothed|forward] [--frames A:B]
+//                [--gnss-outage START_S:DURATION_S ...] [--config FILE]
 //   slam_mms_run --out DIR
 //
 // Errors: a scan that cannot be read is skipped with a warning naming its file; any other input or
@@ -164,7 +166,7 @@ int main(int argc, char** argv) {
   std::vector<ModeRun> runs;
   Status fatal;
   for (const MappingMode mode : args.modes) {
-    ModeRun run = RunMode(mode, options, reader, tty);
+    ModeRun run = RunMode(mode, options, reader, args.pos, tty);
     const Status written = WriteMethodFiles(run, args.out_dir);
     if (!run.status.ok()) fatal = run.status;
     if (fatal.ok() && !written.ok()) fatal = written;

@@ -178,15 +178,18 @@ case $case_name in
   sim_all)
     run "$tmp/log" --out "$tmp/out" --mode all --sim-duration 3 --gnss-outage 1:1 ||
       fail "exit status $? on a simulated drive: $(tail -30 "$tmp/log")"
-    check_report "$tmp/out/report.json" full gnss_ins lidar_only
-    check_files "$tmp/out" full.tum gnss_ins.tum lidar_only.tum full_cov.csv lidar_only.kitti \
-      map_full.ply map_full.pcd map_full.las map_gnss_ins.las trajectories.png \
-      position_error.png map_full_height.png
+    check_report "$tmp/out/report.json" full gnss_ins gnss_ins_smoothed lidar_only
+    check_files "$tmp/out" full.tum gnss_ins.tum gnss_ins_smoothed.tum lidar_only.tum \
+      full_cov.csv gnss_ins_smoothed_cov.csv lidar_only.kitti map_full.ply map_full.pcd \
+      map_full.las map_gnss_ins.las map_gnss_ins_smoothed.las trajectories.png \
+      position_error.png map_full_height.png map_gnss_ins_smoothed_height.png
+    grep -q "(on the smoothed POS)" "$tmp/log" || fail "full did not run on the smoothed POS"
     if command -v jq >/dev/null; then
       [[ $(jq -r .input.ground_truth "$tmp/out/report.json") == simulator ]] ||
         fail "ground_truth != simulator"
       jq -e '(.gnss_outages == [[1,1]]) and ((.ground_truth_map.mme | type) == "number") and
-             ([.methods[] | .ate_rmse_m | type] == ["number","number","number"]) and
+             ([.methods[] | .ate_rmse_m | type] == ["number","number","number","number"]) and
+             .methods.gnss_ins_smoothed.ate_rmse_m < 1.0 and
              .methods.full.ate_rmse_m < 1.0 and .methods.gnss_ins.ate_rmse_m < 1.0' \
         "$tmp/out/report.json" >/dev/null || fail "sim metrics: $(cat "$tmp/out/report.json")"
     fi

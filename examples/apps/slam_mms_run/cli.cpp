@@ -60,7 +60,8 @@ std::string RunUsage() {
 simulated one; writes trajectories, maps, report.json and plots.
 
 Usage:
-  slam_mms_run --kitti-raw DRIVE_DIR --out DIR [--mode full|gnss_ins|lidar_only|all]
+  slam_mms_run --kitti-raw DRIVE_DIR --out DIR
+               [--mode full|gnss_ins|gnss_ins_smoothed|lidar_only|all] [--pos smoothed|forward]
                [--frames A:B] [--gnss-outage START_S:DURATION_S ...] [--config FILE]
   slam_mms_run --folder DIR --out DIR [...]         a plain drive folder (PCD/PLY/bin + CSV/NMEA)
   slam_mms_run --rosbag FILE.bag --out DIR [--lidar-topic T] [--imu-topic T] [--gnss-topic T]
@@ -83,7 +84,14 @@ Options:
   --extrinsics FILE.yaml  T_body_lidar and t_body_antenna_m (the folder's extrinsics.yaml format);
                           for bags, and to override a folder's own.
   --out DIR               output folder (created).
-  --mode M                full | gnss_ins | lidar_only | all (default all = the three in turn).
+  --mode M                full | gnss_ins | gnss_ins_smoothed | lidar_only | all (default all =
+                          the four in turn). gnss_ins: scans on the forward GNSS/INS filter (the
+                          real-time POS); gnss_ins_smoothed: on the forward-backward smoothed POS
+                          (post-processed, as survey software does).
+  --pos P                 smoothed | forward (default smoothed): the POS `full` runs on. smoothed:
+                          the offline workflow (the smoothed POS over the whole drive first, F_Odom
+                          from it also in GNSS outages, raw fixes as level-2 factors); forward:
+                          the streaming workflow (the forward filter, F_Prein in outages).
   --frames A:B            only frames A..B (inclusive file numbers); A: = from A to the end.
   --gnss-outage S:D       withhold GNSS fixes for D seconds from S seconds after the first scan's
                           start; repeat the flag or list several windows after it.
@@ -100,7 +108,7 @@ Options:
 Outputs in DIR: <method>.tum, <method>.kitti, <method>_cov.csv per method; <method>_scans.csv
 (per-scan level-1 results and stage times) and <method>_level1.tum (level 1 before level 2) for
 full and lidar_only; ground_truth.tum (in the run's world frame, for slam_mms_eval); map_full and
-map_gnss_ins as .ply, .pcd and geo-referenced .las (UTM); report.json; summary.txt;
+map_gnss_ins(_smoothed) as .ply, .pcd and geo-referenced .las (UTM); report.json; summary.txt;
 trajectories.png, position_error.png, map_<method>_height.png.
 Exit status: 0 done; 1 input or processing error (outputs computed so far are written);
 2 bad command line or config file.
@@ -149,11 +157,19 @@ StatusOr<RunArgs> ParseRunArgs(int argc, const char* const* argv) {
       mode_given = true;
       MappingMode mode;
       if (v == "all") {
-        args.modes = {MappingMode::kFull, MappingMode::kGnssIns, MappingMode::kLidarOnly};
+        args.modes = {MappingMode::kFull, MappingMode::kGnssIns, MappingMode::kGnssInsSmoothed,
+                      MappingMode::kLidarOnly};
       } else if (ParseMappingMode(v, &mode)) {
         args.modes = {mode};
       } else {
-        return InvalidArgumentError("--mode " + v + ": expected full, gnss_ins, lidar_only or all");
+        return InvalidArgumentError("--mode " + v +
+                                    ": expected full, gnss_ins, gnss_ins_smoothed, lidar_only or "
+                                    "all");
+      }
+    } else if (flag == "--pos") {
+      SLAM_MMS_RETURN_IF_ERROR(value(&v));
+      if (!ParsePosWorkflow(v, &args.pos)) {
+        return InvalidArgumentError("--pos " + v + ": expected smoothed or forward");
       }
     } else if (flag == "--frames") {
       SLAM_MMS_RETURN_IF_ERROR(value(&v));
@@ -208,7 +224,8 @@ StatusOr<RunArgs> ParseRunArgs(int argc, const char* const* argv) {
     return InvalidArgumentError("--lidar-topic/--imu-topic/--gnss-topic go with --rosbag");
   }
   if (!mode_given) {
-    args.modes = {MappingMode::kFull, MappingMode::kGnssIns, MappingMode::kLidarOnly};
+    args.modes = {MappingMode::kFull, MappingMode::kGnssIns, MappingMode::kGnssInsSmoothed,
+                  MappingMode::kLidarOnly};
   }
   return args;
 }

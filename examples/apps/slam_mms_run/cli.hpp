@@ -1,6 +1,7 @@
 #pragma once
 // Command line of slam_mms_run (issue 8: the exact interface other tools call):
-//   slam_mms_run --kitti-raw DRIVE_DIR --out DIR [--mode full|gnss_ins|lidar_only|all]
+//   slam_mms_run --kitti-raw DRIVE_DIR --out DIR
+//                [--mode full|gnss_ins|gnss_ins_smoothed|lidar_only|all] [--pos smoothed|forward]
 //                [--frames A:B] [--gnss-outage START_S:DURATION_S ...] [--config FILE]
 //   slam_mms_run --out DIR      (no data: simulates the embedded default drive into DIR/sim first)
 // plus --sim-duration S and --sim-seed N for the simulated drive, --log-level, and --help.
@@ -13,6 +14,7 @@
 
 #include "slam_mms/core/logging.hpp"
 #include "slam_mms/core/status.hpp"
+#include "slam_mms/pipeline/drive_runner.hpp"
 #include "slam_mms/pipeline/localization_result.hpp"
 
 namespace slam_mms::app {
@@ -25,9 +27,12 @@ struct RunArgs {
   std::string lidar_topic, imu_topic, gnss_topic;
   std::filesystem::path extrinsics;  ///< Empty: none (bags: identity, logged).
   std::filesystem::path out_dir;
-  std::vector<MappingMode> modes;  ///< In run order (all = full, gnss_ins, lidar_only).
-  int64_t first_frame = 0;         ///< --frames A:B, inclusive file numbers.
-  int64_t last_frame = -1;         ///< -1 = the drive's last frame.
+  /// In run order (all = full, gnss_ins, gnss_ins_smoothed, lidar_only).
+  std::vector<MappingMode> modes;
+  /// --pos: the POS `full` runs on (offline default: the forward-backward smoothed one).
+  PosWorkflow pos = PosWorkflow::kSmoothed;
+  int64_t first_frame = 0;  ///< --frames A:B, inclusive file numbers.
+  int64_t last_frame = -1;  ///< -1 = the drive's last frame.
   /// --gnss-outage windows [start_s, duration_s] relative to the first scan's start.
   std::vector<std::pair<double, double>> gnss_outages;
   std::filesystem::path config;  ///< Empty: none.

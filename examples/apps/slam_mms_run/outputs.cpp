@@ -43,7 +43,9 @@ Status WriteMethodFiles(const ModeRun& run, const std::filesystem::path& out_dir
   }
   if (!run.results.empty())
     KeepFirst(&first, WriteScanResultsCsv(run.results, out_dir / (run.name + "_scans.csv")));
-  if (run.mode != MappingMode::kGnssIns && !run.results.empty()) {
+  const bool pos_only =
+      run.mode == MappingMode::kGnssIns || run.mode == MappingMode::kGnssInsSmoothed;
+  if (!pos_only && !run.results.empty()) {
     // Level 1 alone (before any level-2 correction): the "before" of the paper's Table 2.
     Trajectory level1;
     for (const LocalizationResult& r : run.results) {
@@ -51,7 +53,7 @@ Status WriteMethodFiles(const ModeRun& run, const std::filesystem::path& out_dir
     }
     KeepFirst(&first, WriteTrajectoryTum(level1, out_dir / (run.name + "_level1.tum")));
   }
-  const bool map_wanted = run.mode == MappingMode::kFull || run.mode == MappingMode::kGnssIns;
+  const bool map_wanted = run.mode != MappingMode::kLidarOnly;
   if (map_wanted && !run.map.empty()) {
     MapCloud map;
     map.cloud = run.map;
@@ -194,12 +196,12 @@ std::string SummaryTable(const std::vector<MethodEvaluation>& evals,
                          const std::optional<double>& gt_map_mme, const std::string& gt_kind) {
   std::ostringstream s;
   char line[512];
-  std::snprintf(line, sizeof(line), "%-11s %9s %9s %9s %12s %14s %8s %8s %9s\n", "method", "ATE[m]",
+  std::snprintf(line, sizeof(line), "%-17s %9s %9s %9s %12s %14s %8s %8s %9s\n", "method", "ATE[m]",
                 "rotRMSE", "t_rel[%]", "r_rel[d/100]", "maxErrOut[m]", "MME", "scans/s", "RSS[MB]");
   s << line;
   for (const MethodEvaluation& e : evals) {
     const eval::MethodReport& m = e.report;
-    std::snprintf(line, sizeof(line), "%-11s %9s %9s %9s %12s %14s %8s %8s %9s\n", e.name.c_str(),
+    std::snprintf(line, sizeof(line), "%-17s %9s %9s %9s %12s %14s %8s %8s %9s\n", e.name.c_str(),
                   Cell(m.ate_rmse_m, "%.3f").c_str(), Cell(m.rot_rmse_deg, "%.3f").c_str(),
                   Cell(m.t_rel_pct, "%.3f").c_str(), Cell(m.r_rel_deg_per_100m, "%.4f").c_str(),
                   Cell(m.max_pos_err_in_outage_m, "%.3f").c_str(), Cell(m.mme, "%.4f").c_str(),

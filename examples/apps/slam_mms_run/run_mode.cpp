@@ -20,7 +20,7 @@ bool ResetPeakRss() {
 }
 
 ModeRun RunMode(MappingMode mode, const MappingSystem::Options& base_options,
-                const DriveReader& reader, bool tty) {
+                const DriveReader& reader, PosWorkflow pos, bool tty) {
   ModeRun run;
   run.mode = mode;
   run.name = MappingModeName(mode);
@@ -32,7 +32,9 @@ ModeRun RunMode(MappingMode mode, const MappingSystem::Options& base_options,
   ProgressReporter progress(run.name, run.scans_total, tty);
   DriveRunCallbacks callbacks;
   callbacks.on_scan = [&](size_t fed, size_t) { progress.Update(fed); };
-  DriveRun d = RunDrive(reader, options, callbacks);
+  DriveRunOptions run_options;
+  run_options.pos = pos;
+  DriveRun d = RunDrive(reader, options, callbacks, run_options);
 
   run.trajectory = std::move(d.trajectory);
   run.results = std::move(d.results);
@@ -47,12 +49,16 @@ ModeRun RunMode(MappingMode mode, const MappingSystem::Options& base_options,
   run.skipped_scans = std::move(d.skipped_scans);
   run.finished = d.finished;
   run.complete = d.complete;
+  run.smoothed_pos = d.smoothed_pos;
   run.status = d.status;
   run.scans_per_s = run.wall_s > 0 ? static_cast<double>(run.scans_processed) / run.wall_s : 0.0;
   run.peak_rss_mb = eval::PeakRssMb();
   std::string note;
   const size_t skipped = run.scans_unreadable + static_cast<size_t>(run.scans_skipped_by_system);
   if (skipped > 0) note = "(" + std::to_string(skipped) + " skipped)";
+  if (run.mode == MappingMode::kFull && run.smoothed_pos) {
+    note += (note.empty() ? "" : " ") + std::string("(on the smoothed POS)");
+  }
   if (!run.status.ok()) note += (note.empty() ? "" : " ") + std::string("(stopped by an error)");
   progress.Finish(run.scans_processed, note);
   return run;

@@ -14,6 +14,7 @@
 #include "slam_mms/core/status.hpp"
 #include "slam_mms/core/trajectory.hpp"
 #include "slam_mms/io/drive_reader.hpp"
+#include "slam_mms/pipeline/drive_runner.hpp"
 #include "slam_mms/pipeline/mapping_system.hpp"
 
 namespace slam_mms::app {
@@ -36,14 +37,16 @@ struct ModeRun {
   std::vector<std::string> skipped_scans;  ///< Source and reason of each skipped scan.
   double scans_per_s = 0.0;
   std::optional<double> peak_rss_mb;
-  bool finished = false;  ///< Finish() completed.
-  bool complete = false;  ///< Every scan fed and Finish() completed.
-  Status status;          ///< The fatal error, if any.
+  bool finished = false;      ///< Finish() completed.
+  bool complete = false;      ///< Every scan fed and Finish() completed.
+  bool smoothed_pos = false;  ///< On a forward-backward smoothed POS (gnss_ins_smoothed, full).
+  Status status;              ///< The fatal error, if any.
 };
 
-/// Runs `mode` with `options` (mode overridden) on `reader`. `tty`: progress bar vs plain lines.
+/// Runs `mode` with `options` (mode overridden) on `reader`; `pos`: the POS of full (--pos).
+/// `tty`: progress bar vs plain lines.
 ModeRun RunMode(MappingMode mode, const MappingSystem::Options& options, const DriveReader& reader,
-                bool tty);
+                PosWorkflow pos, bool tty);
 
 /// Resets the kernel's peak-RSS counter (VmHWM) so the next mode's peak is its own; returns false
 /// where /proc/self/clear_refs is not writable (the peak is then the process's).

@@ -4,7 +4,7 @@
 // table.
 //
 //   slam_mms_run --kitti-raw DRIVE_DIR --out DIR [--mode full|gnss_ins|gnss_ins_smoothed|
-//                lidar_only|all] [--pos smoothed|forward] [--frames A:B]
+//                lidar_only|all] [--pos forward|smoothed] [--frames A:B]
 //                [--gnss-outage START_S:DURATION_S ...] [--config FILE]
 //   slam_mms_run --out DIR
 //

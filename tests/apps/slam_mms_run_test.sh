@@ -176,7 +176,8 @@ case $case_name in
     grep -q -- "--kitti-raw DRIVE_DIR --out DIR" "$tmp/log" || fail "--help text"
     ;;
   sim_all)
-    run "$tmp/log" --out "$tmp/out" --mode all --sim-duration 3 --gnss-outage 1:1 ||
+    # --pos smoothed: full on the smoothed POS (the default, forward, runs in folder_input).
+    run "$tmp/log" --out "$tmp/out" --mode all --pos smoothed --sim-duration 3 --gnss-outage 1:1 ||
       fail "exit status $? on a simulated drive: $(tail -30 "$tmp/log")"
     check_report "$tmp/out/report.json" full gnss_ins gnss_ins_smoothed lidar_only
     check_files "$tmp/out" full.tum gnss_ins.tum gnss_ins_smoothed.tum lidar_only.tum \

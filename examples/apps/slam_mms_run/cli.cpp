@@ -61,7 +61,7 @@ simulated one; writes trajectories, maps, report.json and plots.
 
 Usage:
   slam_mms_run --kitti-raw DRIVE_DIR --out DIR
-               [--mode full|gnss_ins|gnss_ins_smoothed|lidar_only|all] [--pos smoothed|forward]
+               [--mode full|gnss_ins|gnss_ins_smoothed|lidar_only|all] [--pos forward|smoothed]
                [--frames A:B] [--gnss-outage START_S:DURATION_S ...] [--config FILE]
   slam_mms_run --folder DIR --out DIR [...]         a plain drive folder (PCD/PLY/bin + CSV/NMEA)
   slam_mms_run --rosbag FILE.bag --out DIR [--lidar-topic T] [--imu-topic T] [--gnss-topic T]
@@ -88,10 +88,11 @@ Options:
                           the four in turn). gnss_ins: scans on the forward GNSS/INS filter (the
                           real-time POS); gnss_ins_smoothed: on the forward-backward smoothed POS
                           (post-processed, as survey software does).
-  --pos P                 smoothed | forward (default smoothed): the POS `full` runs on. smoothed:
-                          the offline workflow (the smoothed POS over the whole drive first, F_Odom
-                          from it also in GNSS outages, raw fixes as level-2 factors); forward:
-                          the streaming workflow (the forward filter, F_Prein in outages).
+  --pos P                 forward | smoothed (default forward): the POS `full` runs on.
+                          forward: the streaming workflow (the forward filter, F_Prein in
+                          outages). smoothed: the offline workflow (the smoothed POS over the
+                          whole drive first, F_Odom from it also in GNSS outages, raw fixes as
+                          level-2 factors); not the default until it helps `full` (docs/results.md).
   --frames A:B            only frames A..B (inclusive file numbers); A: = from A to the end.
   --gnss-outage S:D       withhold GNSS fixes for D seconds from S seconds after the first scan's
                           start; repeat the flag or list several windows after it.

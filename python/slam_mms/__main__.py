@@ -1,6 +1,8 @@
 """``python -m slam_mms run ...``: the Python twin of ``slam_mms_run`` (same flags, same outputs).
 
-    python -m slam_mms run --kitti-raw DRIVE_DIR --out DIR [--mode full|gnss_ins|lidar_only|all]
+    python -m slam_mms run --kitti-raw DRIVE_DIR --out DIR
+                           [--mode full|gnss_ins|gnss_ins_smoothed|lidar_only|all]
+                           [--pos forward|smoothed]
                            [--frames A:B] [--gnss-outage START_S:DURATION_S ...] [--config FILE]
     python -m slam_mms run --folder DIR --out DIR [...]
     python -m slam_mms run --rosbag FILE.bag --out DIR [--lidar-topic T] [--imu-topic T]
@@ -11,7 +13,7 @@
 
 Writes in DIR what slam_mms_run writes: <method>.tum, <method>.kitti, <method>_cov.csv per method;
 <method>_scans.csv and <method>_level1.tum for full and lidar_only; map_<method>.ply/.pcd/.las for
-full and gnss_ins; ground_truth.tum; report.json; summary.txt; trajectories.png,
+every method but lidar_only; ground_truth.tum; report.json; summary.txt; trajectories.png,
 position_error.png and map_<method>_height.png (drawn by the app's C++ plot code). Every file
 comes from the C++ writers, so the trajectories, maps, ground truth and plots are byte-identical
 to the app's on the same input (report.json and summary.txt differ in scans/s and RSS only).
@@ -34,7 +36,7 @@ from . import _C, __version__
 from ._drive import (DriveResult, _options_for_reader, _parse_frames, _run_reader, open_drive,
                      simulate_drive)
 
-_ALL = ["full", "gnss_ins", "lidar_only"]  # slam_mms_run's --mode all, in run order
+_ALL = ["full", "gnss_ins", "gnss_ins_smoothed", "lidar_only"]  # slam_mms_run's --mode all
 _LEVELS = {"debug": _C.LogLevel.DEBUG, "info": _C.LogLevel.INFO,
            "warning": _C.LogLevel.WARNING, "error": _C.LogLevel.ERROR}
 _log = logging.getLogger("slam_mms")
@@ -62,7 +64,8 @@ def _modes(text: str) -> List[str]:
         return [_C.mapping_mode_name(_C.parse_mapping_mode(text))]
     except ValueError:
         raise argparse.ArgumentTypeError(
-            f"--mode {text}: expected full, gnss_ins, lidar_only or all") from None
+            f"--mode {text}: expected full, gnss_ins, gnss_ins_smoothed, lidar_only or all"
+        ) from None
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -80,7 +83,10 @@ def _parser() -> argparse.ArgumentParser:
                    help="extrinsics.yaml (for a bag, or to override a folder's)")
     r.add_argument("--out", type=pathlib.Path, help="output folder (created)")
     r.add_argument("--mode", type=_modes, default=list(_ALL),
-                   help="full | gnss_ins | lidar_only | all (default all = the three in turn)")
+                   help="full | gnss_ins | gnss_ins_smoothed | lidar_only | all (default all = "
+                        "the four in turn)")
+    r.add_argument("--pos", choices=["forward", "smoothed"], default="forward",
+                   help="the POS `full` runs on (as slam_mms_run --pos; default forward)")
     r.add_argument("--frames", help="A:B inclusive (A: = from A to the end)")
     r.add_argument("--gnss-outage", type=_outage, nargs="+", action="extend", default=[],
                    metavar="START_S:DURATION_S")
@@ -119,10 +125,10 @@ def _write_method(result: DriveResult, name: str, out: pathlib.Path) -> bool:
     if len(run.results):
         ok &= _try(f"{name}_scans.csv", run.write_scan_results_csv,
                    os.fspath(out / f"{name}_scans.csv"))
-        if name != "gnss_ins":
+        if name not in ("gnss_ins", "gnss_ins_smoothed"):
             ok &= _try(f"{name}_level1.tum", run.level1_trajectory.write_tum,
                        os.fspath(out / f"{name}_level1.tum"))
-    if name in ("full", "gnss_ins"):
+    if name != "lidar_only":
         if len(result.map_points):
             base = out / f"map_{name}"
             ok &= _try(f"map_{name}.ply", _C.write_map, result.map_points, f"{base}.ply")
@@ -174,7 +180,7 @@ def _cell(v, fmt: str) -> str:
 
 def _summary_table(results: List[DriveResult], report: dict) -> str:
     """slam_mms_run's summary.txt (the same columns and formats)."""
-    row = "%-11s %9s %9s %9s %12s %14s %8s %8s %9s\n"
+    row = "%-17s %9s %9s %9s %12s %14s %8s %8s %9s\n"
     s = row % ("method", "ATE[m]", "rotRMSE", "t_rel[%]", "r_rel[d/100]", "maxErrOut[m]", "MME",
                "scans/s", "RSS[MB]")
     for r in results:
@@ -258,7 +264,7 @@ def _run(args) -> int:
         print(f"[{name}] running ...", flush=True)
         # The simulator's scene map entropy once (it does not depend on the method).
         result = _run_reader(reader, path, name, options, outages, evaluate=True,
-                             ground_truth_map=(i == 0), check=False)
+                             ground_truth_map=(i == 0), check=False, pos=args.pos)
         result.extra["name"] = name
         results.append(result)
         written = _write_method(result, name, out)

@@ -116,6 +116,16 @@ def _mode_of(mode: Union[str, "_C.MappingMode"]) -> "_C.MappingMode":
     return _C.parse_mapping_mode(str(mode))
 
 
+def _pos_of(pos: Union[str, "_C.PosWorkflow"]) -> "_C.PosWorkflow":
+    if isinstance(pos, _C.PosWorkflow):
+        return pos
+    if pos == "forward":
+        return _C.PosWorkflow.FORWARD
+    if pos == "smoothed":
+        return _C.PosWorkflow.SMOOTHED
+    raise ValueError(f"pos = {pos!r}; must be 'forward' or 'smoothed'")
+
+
 def _ground_truth_dir(path: pathlib.Path) -> pathlib.Path:
     # slam_mms_run: the drive or folder itself, the folder of a bag.
     return path.parent if path.is_file() else path
@@ -198,14 +208,17 @@ def run_drive(path: PathLike, mode: Union[str, "_C.MappingMode"] = "full",
               options: Optional["_C.Options"] = None, config: Optional[PathLike] = None,
               evaluate: bool = True, ground_truth_map: bool = True,
               progress: Optional[Callable[[int, int], None]] = None, check: bool = True,
-              kind: str = "auto", **open_kwargs: Any) -> DriveResult:
+              kind: str = "auto", pos: str = "forward", **open_kwargs: Any) -> DriveResult:
     """Runs one mapping method over a whole drive with the C++ ``RunDrive`` (the loop
     ``slam_mms_run`` runs), so the trajectory equals slam_mms_run's on the same input and options.
 
     Args:
         path: a KITTI raw drive folder (…/2011_09_26_drive_0013_sync), a plain drive folder or a
             ROS 1 bag (see :func:`open_drive`).
-        mode: "full", "gnss_ins" or "lidar_only" (or a :class:`MappingMode`).
+        mode: "full", "gnss_ins", "gnss_ins_smoothed" or "lidar_only" (or a
+            :class:`MappingMode`); gnss_ins_smoothed is offline: the whole IMU/GNSS stream is
+            smoothed (forward EKF + Rauch-Tung-Striebel) before the scans are placed.
+        pos: "forward" (default, as slam_mms_run --pos) or "smoothed": the POS `full` runs on.
         frames: ``"A:B"`` / ``(A, B)`` inclusive, as ``slam_mms_run --frames A:B``; None = all.
         gnss_outages: ``[(start_s, duration_s), ...]`` relative to the first scan's start.
         options: :class:`Options` to start from (copied; default: the C++ defaults). As the app
@@ -234,7 +247,7 @@ def run_drive(path: PathLike, mode: Union[str, "_C.MappingMode"] = "full",
     outages = [(float(s), float(d)) for s, d in gnss_outages]
     _options_for_reader(opts, reader, outages)
     return _run_reader(reader, drive, mode, opts, outages, evaluate, ground_truth_map, progress,
-                       check)
+                       check, pos)
 
 
 def _options_for_reader(opts: "_C.Options", reader: "_C.DriveReader", outages) -> None:
@@ -249,12 +262,17 @@ def _options_for_reader(opts: "_C.Options", reader: "_C.DriveReader", outages) -
 
 def _run_reader(reader, drive: pathlib.Path, mode, options: "_C.Options", outages,
                 evaluate: bool = True, ground_truth_map: bool = True, progress=None,
-                check: bool = True) -> DriveResult:
+                check: bool = True, pos: str = "forward") -> DriveResult:
     """One method over an opened reader with `options` (copied; mode set here)."""
     opts = options.copy()
     opts.mode = _mode_of(mode)
-    opts.validate()
-    run = _C._run_drive(reader, opts, progress)
+    # gnss_ins_smoothed is RunDrive's (offline): MappingSystem itself runs it as gnss_ins.
+    check_opts = opts.copy()
+    if check_opts.mode == _C.MappingMode.GNSS_INS_SMOOTHED:
+        check_opts.mode = _C.MappingMode.GNSS_INS
+    check_opts.validate()
+    workflow = _pos_of(pos)
+    run = _C._run_drive(reader, opts, progress, workflow)
     if check:
         run.raise_if_error()
     traj = run.trajectory

@@ -215,6 +215,12 @@ class DriveRun:
     def complete(self) -> bool:
         ...
     @property
+    def smoothed_pos(self) -> bool:
+        ...
+    @property
+    def smoothing_wall_s(self) -> float:
+        ...
+    @property
     def ok(self) -> bool:
         ...
     @property
@@ -1171,7 +1177,7 @@ class MapEntropyResult:
         ...
 
 class MappingMode:
-    """FULL: the SLAM-integrated system; GNSS_INS: scans at the POS poses; LIDAR_ONLY: the SuMa-like baseline.
+    """FULL: the SLAM-integrated system; GNSS_INS: scans at the forward POS poses; GNSS_INS_SMOOTHED: scans at the forward-backward smoothed POS (offline: run_drive only, not MappingSystem); LIDAR_ONLY: the SuMa-like baseline.
 
 Members:
 
@@ -1179,9 +1185,12 @@ Members:
 
   GNSS_INS
 
+  GNSS_INS_SMOOTHED
+
   LIDAR_ONLY"""
     FULL: typing.ClassVar[MappingMode]
     GNSS_INS: typing.ClassVar[MappingMode]
+    GNSS_INS_SMOOTHED: typing.ClassVar[MappingMode]
     LIDAR_ONLY: typing.ClassVar[MappingMode]
     def __init__(self, value: int) -> None: ...
     def __int__(self) -> int: ...
@@ -1509,6 +1518,23 @@ class PointIcpOptions:
         """Raises ValueError naming the first bad field and its rule."""
     def to_dict(*args, **kwargs) -> typing.Any:
         """The fields as a dict (nested options as dicts, arrays as lists)."""
+
+class PosWorkflow:
+    """The POS `full` runs on in run_drive: FORWARD (streaming, the default) or SMOOTHED (the whole drive smoothed first, offline).
+
+Members:
+
+  FORWARD
+
+  SMOOTHED"""
+    FORWARD: typing.ClassVar[PosWorkflow]
+    SMOOTHED: typing.ClassVar[PosWorkflow]
+    def __init__(self, value: int) -> None: ...
+    def __int__(self) -> int: ...
+    @property
+    def name(self) -> str: ...
+    @property
+    def value(self) -> int: ...
 
 class ProjectiveIcpOptions:
     """Frame-to-model projective ICP (level 1)."""
@@ -2021,8 +2047,8 @@ def _open_drive(path: os.PathLike[str], kind: str = 'auto', first_frame: int = 0
 def _remove_log_sink() -> None:
     """Removes the sink (messages are dropped again) and ends _drain_log."""
 
-def _run_drive(reader: DriveReader, options: Options, progress: object = None) -> DriveRun:
-    """The C++ RunDrive (GIL released). progress(fed, total) after every scan; an exception in it (or Ctrl-C) stops the run after the current scan and is raised."""
+def _run_drive(reader: DriveReader, options: Options, progress: object = None, pos: PosWorkflow = ...) -> DriveRun:
+    """The C++ RunDrive (GIL released); pos: the POS `full` runs on. progress(fed, total) after every scan; an exception in it (or Ctrl-C) stops the run after the current scan and is raised."""
 
 def _simulate_drive(out_dir: os.PathLike[str], scenario: str = 'default', duration_s: float = 30.0, seed: int = 1, oxts_drive_dir: Optional[os.PathLike[str]] = None, write_scene_cloud: bool = True, num_threads: int = 2, progress: object = None) -> dict:
     """Simulates a drive into out_dir (GIL released); returns the Summary as a dict."""

@@ -386,6 +386,8 @@ void RegisterMappingSystem(py::module_& m) {
       .def_readonly("skipped_scans", &DriveRun::skipped_scans)
       .def_readonly("finished", &DriveRun::finished)
       .def_readonly("complete", &DriveRun::complete)
+      .def_readonly("smoothed_pos", &DriveRun::smoothed_pos)
+      .def_readonly("smoothing_wall_s", &DriveRun::smoothing_wall_s)
       .def_property_readonly("ok", [](const DriveRun& r) { return r.status.ok(); })
       .def_property_readonly("status_message",
                              [](const DriveRun& r) { return r.status.ToString(); })
@@ -420,7 +422,8 @@ void RegisterMappingSystem(py::module_& m) {
 
   m.def(
       "_run_drive",
-      [](const DriveReader& reader, const MappingSystem::Options& options, py::object progress) {
+      [](const DriveReader& reader, const MappingSystem::Options& options, py::object progress,
+         PosWorkflow pos) {
         PendingError pending;
         std::atomic<bool> stop{false};
         DriveRunCallbacks callbacks;
@@ -436,12 +439,17 @@ void RegisterMappingSystem(py::module_& m) {
             stop = true;  // RunDrive finishes what it was fed, then returns
           }
         };
-        DriveRun run = WithoutGil([&] { return RunDrive(reader, options, callbacks); });
+        DriveRunOptions run_options;
+        run_options.pos = pos;
+        DriveRun run =
+            WithoutGil([&] { return RunDrive(reader, options, callbacks, run_options); });
         pending.RaiseIfAny();
         return run;
       },
       py::arg("reader"), py::arg("options"), py::arg("progress") = py::none(),
-      "The C++ RunDrive (GIL released). progress(fed, total) after every scan; an exception in "
+      py::arg("pos") = PosWorkflow::kForward,
+      "The C++ RunDrive (GIL released); pos: the POS `full` runs on. progress(fed, total) after "
+      "every scan; an exception in "
       "it (or Ctrl-C) stops the run after the current scan and is raised.");
 }
 

@@ -10,6 +10,7 @@
 #include "slam_mms/ins/gnss_prior.hpp"
 #include "slam_mms/ins/imu_preintegration.hpp"
 #include "slam_mms/ins/ins_filter.hpp"
+#include "slam_mms/pipeline/drive_runner.hpp"
 #include "slam_mms/pipeline/localizer.hpp"
 #include "slam_mms/pipeline/mapping_system.hpp"
 #include "slam_mms/pipeline/scan_deskewer.hpp"
@@ -69,17 +70,26 @@ class OptionsClass {
 
 void RegisterOptions(py::module_& m) {
   py::enum_<MappingMode>(m, "MappingMode",
-                         "FULL: the SLAM-integrated system; GNSS_INS: scans at the POS poses; "
-                         "LIDAR_ONLY: the SuMa-like baseline.")
+                         "FULL: the SLAM-integrated system; GNSS_INS: scans at the forward POS "
+                         "poses; GNSS_INS_SMOOTHED: scans at the forward-backward smoothed POS "
+                         "(offline: run_drive only, not MappingSystem); LIDAR_ONLY: the SuMa-like "
+                         "baseline.")
       .value("FULL", MappingMode::kFull)
       .value("GNSS_INS", MappingMode::kGnssIns)
+      .value("GNSS_INS_SMOOTHED", MappingMode::kGnssInsSmoothed)
       .value("LIDAR_ONLY", MappingMode::kLidarOnly);
+  py::enum_<PosWorkflow>(m, "PosWorkflow",
+                         "The POS `full` runs on in run_drive: FORWARD (streaming, the default) or "
+                         "SMOOTHED (the whole drive smoothed first, offline).")
+      .value("FORWARD", PosWorkflow::kForward)
+      .value("SMOOTHED", PosWorkflow::kSmoothed);
   m.def(
       "parse_mapping_mode",
       [](const std::string& name) {
         MappingMode mode = MappingMode::kFull;
         if (!ParseMappingMode(name, &mode)) {
-          throw py::value_error("mode = '" + name + "'; must be full, gnss_ins or lidar_only");
+          throw py::value_error("mode = '" + name +
+                                "'; must be full, gnss_ins, gnss_ins_smoothed or lidar_only");
         }
         return mode;
       },

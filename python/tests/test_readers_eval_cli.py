@@ -117,7 +117,8 @@ def test_python_m_slam_mms_run_writes_what_the_app_writes(sim_drive, slam_mms_ru
     # Written by the same C++ writers and plot code from the same RunDrive results: the same bytes.
     for f in sorted(expected - _TIMED):
         assert (out / f).read_bytes() == (app / f).read_bytes(), f
-    for f in ("full_cov.csv", "lidar_only_cov.csv", "gnss_ins_cov.csv"):
+    for f in ("full_cov.csv", "lidar_only_cov.csv", "gnss_ins_cov.csv",
+              "gnss_ins_smoothed_cov.csv"):
         a = np.loadtxt(out / f, delimiter=",", skiprows=1)
         b = np.loadtxt(app / f, delimiter=",", skiprows=1)
         np.testing.assert_array_equal(a[:, :8], b[:, :8])  # stamp and pose
@@ -133,7 +134,7 @@ def test_python_m_slam_mms_run_writes_what_the_app_writes(sim_drive, slam_mms_ru
     for m in theirs["methods"].values():
         del m["scans_per_s"], m["peak_rss_mb"]
     assert ours == theirs
-    assert list(ours["methods"]) == ["full", "gnss_ins", "lidar_only"]
+    assert list(ours["methods"]) == ["full", "gnss_ins", "gnss_ins_smoothed", "lidar_only"]
     assert ours["input"]["ground_truth"] == "simulator" and ours["gnss_outages"] == [[0.3, 0.4]]
     n = 1 + len(ours["methods"])  # the header and one row per method, then the notes
     ours = (out / "summary.txt").read_text().splitlines()

@@ -190,6 +190,13 @@ struct RosbagDriveReader::Impl {
   struct StreamState {
     uint64_t n = 0;
     int64_t prev_ns = 0;
+    // Counts message `ns` of the stream after checking it comes after the previous one.
+    Status Advance(int64_t ns, const std::string& source) {
+      SLAM_MMS_RETURN_IF_ERROR(CheckIncreasing(prev_ns, ns, static_cast<int64_t>(n) - 1, source));
+      prev_ns = ns;
+      ++n;
+      return OkStatus();
+    }
   };
 
   fs::path path;
@@ -274,10 +281,7 @@ Status RosbagDriveReader::Impl::OnImu(const rosbag::MessageInstance& m) {
   const std::string source = Source(imu_topic, imu_state.n);
   SLAM_MMS_ASSIGN_OR_RETURN(const auto msg, Instantiate<sensor_msgs::Imu>(m, source));
   const auto ns = static_cast<int64_t>(msg->header.stamp.toNSec());
-  SLAM_MMS_RETURN_IF_ERROR(
-      CheckIncreasing(imu_state.prev_ns, ns, static_cast<int64_t>(imu_state.n) - 1, source));
-  imu_state.prev_ns = ns;
-  ++imu_state.n;
+  SLAM_MMS_RETURN_IF_ERROR(imu_state.Advance(ns, source));
   ImuSample s;
   s.stamp = Timestamp::FromNanoseconds(ns);
   s.accel_mps2 = Eigen::Vector3d(msg->linear_acceleration.x, msg->linear_acceleration.y,
@@ -303,10 +307,7 @@ Status RosbagDriveReader::Impl::OnVelocity(const rosbag::MessageInstance& m) {
   const std::string source = Source(velocity_topic, velocity_state.n);
   SLAM_MMS_ASSIGN_OR_RETURN(const auto msg, Instantiate<geometry_msgs::TwistStamped>(m, source));
   const auto ns = static_cast<int64_t>(msg->header.stamp.toNSec());
-  SLAM_MMS_RETURN_IF_ERROR(CheckIncreasing(velocity_state.prev_ns, ns,
-                                           static_cast<int64_t>(velocity_state.n) - 1, source));
-  velocity_state.prev_ns = ns;
-  ++velocity_state.n;
+  SLAM_MMS_RETURN_IF_ERROR(velocity_state.Advance(ns, source));
   const Eigen::Vector3d v(msg->twist.linear.x, msg->twist.linear.y, msg->twist.linear.z);
   if (v.allFinite()) {
     velocities.push_back({ns, v, rosbag_internal::IsEnuFrameId(msg->header.frame_id),
@@ -319,10 +320,7 @@ Status RosbagDriveReader::Impl::OnGnss(const rosbag::MessageInstance& m) {
   const std::string source = Source(gnss_topic, gnss_state.n);
   SLAM_MMS_ASSIGN_OR_RETURN(const auto msg, Instantiate<sensor_msgs::NavSatFix>(m, source));
   const auto ns = static_cast<int64_t>(msg->header.stamp.toNSec());
-  SLAM_MMS_RETURN_IF_ERROR(
-      CheckIncreasing(gnss_state.prev_ns, ns, static_cast<int64_t>(gnss_state.n) - 1, source));
-  gnss_state.prev_ns = ns;
-  ++gnss_state.n;
+  SLAM_MMS_RETURN_IF_ERROR(gnss_state.Advance(ns, source));
   if (!std::isfinite(msg->latitude) || !std::isfinite(msg->longitude) ||
       !std::isfinite(msg->altitude)) {
     ++skipped_gnss;

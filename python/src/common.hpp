@@ -30,6 +30,21 @@ namespace slam_mms::python {
 
 namespace py = pybind11;
 
+/// A GnssFix from the Python arguments (GnssFix(...) and MappingSystem.add_gnss take the same).
+inline GnssFix MakeGnssFix(int64_t stamp_ns, double lat, double lon, double h, double sh, double sv,
+                           GnssFixType type, int sats) {
+  GnssFix f;
+  f.stamp = Timestamp::FromNanoseconds(stamp_ns);
+  f.latitude_deg = lat;
+  f.longitude_deg = lon;
+  f.height_m = h;
+  f.sigma_horizontal_m = sh;
+  f.sigma_vertical_m = sv;
+  f.type = type;
+  f.num_satellites = sats;
+  return f;
+}
+
 /// Raises the Python exception of a non-ok Status: InvalidArgument -> ValueError, NotFound ->
 /// FileNotFoundError, OutOfRange -> IndexError, others -> slam_mms.Error (a RuntimeError with
 /// `.code`). The message is the Status message (which names the field, file or option).

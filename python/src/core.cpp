@@ -437,16 +437,7 @@ void RegisterCore(py::module_& m) {
   py::class_<GnssFix>(m, "GnssFix", "One GNSS position fix of the antenna in WGS-84.")
       .def(py::init([](int64_t stamp_ns, double lat, double lon, double h, double sh, double sv,
                        GnssFixType type, int sats) {
-             GnssFix f;
-             f.stamp = Timestamp::FromNanoseconds(stamp_ns);
-             f.latitude_deg = lat;
-             f.longitude_deg = lon;
-             f.height_m = h;
-             f.sigma_horizontal_m = sh;
-             f.sigma_vertical_m = sv;
-             f.type = type;
-             f.num_satellites = sats;
-             return f;
+             return MakeGnssFix(stamp_ns, lat, lon, h, sh, sv, type, sats);
            }),
            py::arg("stamp_ns"), py::arg("latitude_deg"), py::arg("longitude_deg"),
            py::arg("height_m"), py::arg("sigma_horizontal_m") = 1.0,

@@ -217,15 +217,7 @@ void RegisterMappingSystem(py::module_& m) {
           "add_gnss",
           [](PyMappingSystem& self, int64_t stamp_ns, double lat, double lon, double h, double sh,
              double sv, GnssFixType type, int sats) {
-            GnssFix f;
-            f.stamp = Timestamp::FromNanoseconds(stamp_ns);
-            f.latitude_deg = lat;
-            f.longitude_deg = lon;
-            f.height_m = h;
-            f.sigma_horizontal_m = sh;
-            f.sigma_vertical_m = sv;
-            f.type = type;
-            f.num_satellites = sats;
+            const GnssFix f = MakeGnssFix(stamp_ns, lat, lon, h, sh, sv, type, sats);
             self.Call([&](MappingSystem& sys) { return sys.AddGnss(f); });
           },
           py::arg("stamp_ns"), py::arg("latitude_deg"), py::arg("longitude_deg"),

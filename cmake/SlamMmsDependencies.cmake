@@ -12,6 +12,10 @@ endif()
 find_path(NANOFLANN_INCLUDE_DIR nanoflann.hpp REQUIRED)
 # extrinsics.yaml of a drive folder (io, private).
 find_package(yaml-cpp REQUIRED)
+# Output coordinate reference systems (io, private): PROJ 9 (Debian libproj-dev).
+find_package(PROJ 9 REQUIRED CONFIG)
+# Every JSON read and written (report.json, georef.json, ...): nlohmann-json (header-only).
+find_package(nlohmann_json 3.11 REQUIRED)
 
 # GeographicLib ships only a find module with variables: wrap it in a target we can export.
 add_library(slam_mms_geographiclib INTERFACE)

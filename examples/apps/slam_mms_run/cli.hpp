@@ -42,7 +42,19 @@ struct RunArgs {
   LogLevel log_level =
       LogLevel::kWarning;  ///< --log-level: the library's messages from this level.
   bool help = false;
-  bool list_config_keys = false;  ///< --config-keys: print the config keys (markdown table).
+  bool version = false;           ///< --version: print the library version and exit.
+  bool list_config_keys = false;  ///< --config-keys: print the config keys.
+  /// --dump-config FILE: write the effective options (defaults + --config) as a YAML file that
+  /// --config reads back unchanged, then exit.
+  std::filesystem::path dump_config;
+  /// --crs EPSG:nnnn: the output CRS of LAS maps and <method>_<crs>.csv trajectories (through
+  /// PROJ); empty = WGS 84 / UTM zone of the world origin (EPSG 326nn/327nn).
+  std::string crs;
+  double las_tile_size_m = 0.0;  ///< --las-tile-size M: square LAS tiles of M metres; 0 = one file.
+  bool resume = false;           ///< --resume: continue a killed run from its checkpoint in --out.
+  int checkpoint_every_submaps = 10;  ///< --checkpoint-every N finished submaps (0 = never).
+  bool keep_sim = false;  ///< --keep-sim: keep the simulated default drive in --out/sim.
+  std::vector<std::string> command_line;  ///< argv as given (report.json).
 };
 
 /// Parses argv; errors name the flag and what was expected (exit code 2 in main).

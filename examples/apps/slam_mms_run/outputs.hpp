@@ -1,6 +1,7 @@
 #pragma once
 // Outputs of slam_mms_run: per-method trajectory and map files, the metrics of each method against
-// the ground truth (eval), report.json (issue 8's exact schema), PNG plots and the summary table.
+// the ground truth (eval), report.json (issue 8's exact schema) and the summary table. The PNG
+// plots are in plot_outputs.hpp.
 
 #include <filesystem>
 #include <optional>
@@ -38,13 +39,12 @@ MethodEvaluation EvaluateMethod(const ModeRun& run, const eval::GroundTruth* gt,
                                 const std::vector<eval::OutageWindow>& outages, Timestamp reference,
                                 int num_threads);
 
-/// trajectories.png, position_error.png, map_<name>_height.png (full, gnss_ins). Logs failures.
-void WritePlots(const std::vector<ModeRun>& runs, const std::vector<MethodEvaluation>& evals,
-                const eval::GroundTruth* gt, const std::vector<eval::OutageWindow>& outages,
-                Timestamp reference, const std::filesystem::path& out_dir);
-
 /// The methods side by side (ATE, rot RMSE, t_rel, max error in outages, MME, scans/s, RSS).
 std::string SummaryTable(const std::vector<MethodEvaluation>& evals,
                          const std::optional<double>& gt_map_mme, const std::string& gt_kind);
 
 }  // namespace slam_mms::app
+
+// Transitional: the plots moved to plot_outputs.hpp; included here so that code including only
+// outputs.hpp still sees WritePlots (include plot_outputs.hpp directly, then drop this line).
+#include "slam_mms_run/plot_outputs.hpp"  // IWYU pragma: export

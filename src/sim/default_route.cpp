@@ -150,6 +150,14 @@ std::vector<PoseSample> DefaultUrbanRouteSamples() {
   return RouteSamples(legs, {{470.0, 6.0}, {860.0, 8.0}});
 }
 
+std::vector<PoseSample> DemoUrbanRouteSamples() {
+  // One block (110 m x 80 m) driven anticlockwise, then its first street again (the revisit that
+  // level 2 closes a loop on): four 90 deg turns, about 60 s of scans.
+  const std::vector<Leg> legs = {{{0.0, 0.0}, 9.0},  {{110.0, 0.0}, 8.5}, {{110.0, 80.0}, 9.0},
+                                 {{0.0, 80.0}, 8.5}, {{0.0, 0.0}, 8.0},   {{70.0, 0.0}, 0.0}};
+  return RouteSamples(legs, {});
+}
+
 std::vector<PoseSample> LongUrbanRouteSamples(double min_duration_s) {
   // A serpentine through a street grid: 420 m east, 120 m north, 420 m west, 120 m north, ...,
   // always into new streets, so the area mapped grows with the drive. A traffic-light stop every

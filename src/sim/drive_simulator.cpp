@@ -37,9 +37,9 @@ Status DriveSimulator::Options::Validate() const {
   auto fail = [](const std::string& name, const std::string& v, const char* rule) {
     return InvalidArgumentError("DriveSimulator::Options::" + name + " = " + v + "; " + rule);
   };
-  if (oxts_drive_dir.empty() && scenario != "default" && scenario != "long")
+  if (oxts_drive_dir.empty() && scenario != "default" && scenario != "demo" && scenario != "long")
     return fail("scenario", "'" + scenario + "'",
-                "must be \"default\" or \"long\" (or set oxts_drive_dir)");
+                "must be \"default\", \"demo\" or \"long\" (or set oxts_drive_dir)");
   if (oxts_drive_dir.empty() && scenario == "long" && !(duration_s > 0.0))
     return fail("duration_s", std::to_string(duration_s), "must be > 0 for scenario \"long\"");
   if (!(duration_s >= 0.0)) return fail("duration_s", std::to_string(duration_s), "must be >= 0");
@@ -135,8 +135,9 @@ StatusOr<DriveSimulator> DriveSimulator::Create(const Options& options_in) {
     }
   } else {
     SLAM_MMS_ASSIGN_OR_RETURN(epoch, ParseKittiTimestamp(o.start_time));
-    samples = o.scenario == "long" ? LongUrbanRouteSamples(o.duration_s + o.lead_in_s + 5.0)
-                                   : DefaultUrbanRouteSamples();
+    samples = o.scenario == "long"   ? LongUrbanRouteSamples(o.duration_s + o.lead_in_s + 5.0)
+              : o.scenario == "demo" ? DemoUrbanRouteSamples()
+                                     : DefaultUrbanRouteSamples();
     if (o.date.empty()) o.date = "2026_01_15";
     if (o.drive_id < 0) o.drive_id = 1;
   }
@@ -174,7 +175,8 @@ int DriveSimulator::num_scans() const { return impl_->num_scans; }
 double DriveSimulator::seconds_world_build() const { return impl_->seconds_world; }
 
 StatusOr<DriveSimulator::Summary> DriveSimulator::Run(const std::filesystem::path& out_dir,
-                                                      const Progress& progress) {
+                                                      const Progress& progress,
+                                                      const std::atomic<bool>* stop) {
   const auto t_run = std::chrono::steady_clock::now();
   const Options& o = impl_->options;
   const ReferenceTrajectory& traj = impl_->trajectory;
@@ -196,9 +198,9 @@ StatusOr<DriveSimulator::Summary> DriveSimulator::Run(const std::filesystem::pat
 
   Hdl64Lidar lidar(o.lidar);
   const double period = lidar.PeriodSeconds();
-  const int n_scans = impl_->num_scans;
+  int n_scans = impl_->num_scans;
   const double first = impl_->first_scan_s;
-  const double last_end = first + (n_scans - 1) * period + lidar.LastFiringOffsetSeconds();
+  double last_end = first + (n_scans - 1) * period + lidar.LastFiringOffsetSeconds();
   const Eigen::Isometry3d T_body_lidar = o.T_lidar_body.inverse();
 
   // ---- 100 Hz IMU / GNSS / POS records ---------------------------------------------------------
@@ -245,6 +247,12 @@ StatusOr<DriveSimulator::Summary> DriveSimulator::Run(const std::filesystem::pat
   SceneCloudAccumulator scene(o.scene_cloud_voxel_m);
   Trajectory gt_start, gt_trigger, gt_end;
   for (int k = 0; k < n_scans; ++k) {
+    if (stop != nullptr && stop->load() && k > 0) {
+      summary.stopped = true;
+      n_scans = k;
+      last_end = first + (n_scans - 1) * period + lidar.LastFiringOffsetSeconds();
+      break;
+    }
     const double ts = first + k * period;
     auto t_l = std::chrono::steady_clock::now();
     Hdl64Lidar::Output out =

@@ -23,6 +23,7 @@
 // used concurrently.
 
 #include <Eigen/Geometry>
+#include <atomic>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -45,8 +46,9 @@ Eigen::Isometry3d KittiTLidarBody();
 class DriveSimulator {
  public:
   struct Options {
-    /// "default" (the embedded urban drive, ~190 s) or "long" (a serpentine through new streets,
-    /// as long as duration_s, which must then be > 0); ignored when oxts_drive_dir is set.
+    /// "default" (the embedded urban drive, ~190 s), "demo" (one block with four turns and a
+    /// revisit, ~60 s: the demo's drive) or "long" (a serpentine through new streets, as long as
+    /// duration_s, which must then be > 0); ignored when oxts_drive_dir is set.
     std::string scenario = "default";
     /// An unpacked KITTI OXTS drive folder (<drive>_sync with oxts/): real motion.
     std::filesystem::path oxts_drive_dir;
@@ -95,6 +97,9 @@ class DriveSimulator {
     double path_length_m = 0.0;      ///< Over the simulated span.
     double seconds_lidar = 0.0, seconds_writing = 0.0, seconds_total = 0.0;  ///< Wall time of Run.
     double fraction_fixed = 0.0, fraction_float = 0.0, fraction_sps = 0.0, fraction_none = 0.0;
+    /// Run's `stop` flag ended the scans early: the drive written is complete and consistent but
+    /// holds only the first num_scans scans (the IMU/POS records cover the whole span).
+    bool stopped = false;
   };
 
   /// Progress: (scans done, scans total).
@@ -109,9 +114,12 @@ class DriveSimulator {
   DriveSimulator& operator=(const DriveSimulator&) = delete;
   ~DriveSimulator();
 
-  /// Simulates and writes the drive under `out_dir`.
+  /// Simulates and writes the drive under `out_dir`. `stop` (may be null; e.g. set by a SIGINT
+  /// handler) is polled before every scan: once set, no further scan is simulated, the files of
+  /// the scans so far are finished, and Summary::stopped is true.
   [[nodiscard]] StatusOr<Summary> Run(const std::filesystem::path& out_dir,
-                                      const Progress& progress = {});
+                                      const Progress& progress = {},
+                                      const std::atomic<bool>* stop = nullptr);
 
   const ReferenceTrajectory& trajectory() const;
   const CityWorld& world() const;

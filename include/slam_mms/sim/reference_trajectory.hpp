@@ -91,6 +91,10 @@ class ReferenceTrajectory {
 /// route) so drives with different seeds share their motion.
 std::vector<PoseSample> DefaultUrbanRouteSamples();
 
+/// The demo drive of slam_mms_run / scripts/demo.sh: one city block with four turns, then its
+/// first street again (a revisit), about 60 s at 8-9 m/s.
+std::vector<PoseSample> DemoUrbanRouteSamples();
+
 /// Trajectory samples of the long urban drive ("--scenario long"): a serpentine through a street
 /// grid (420 m streets, 120 m apart), always into new streets, of at least `min_duration_s`
 /// (plus up to one street), at 30-36 km/h with a stop every fourth street. For long-run and memory

@@ -1,8 +1,8 @@
-// LAS 1.4 geo-referenced in UTM (see map_io.hpp). Layout references: ASPRS LAS 1.4 R15
-// (public header block 375 bytes, VLR header 54 bytes, point data record format 6 of 30 bytes,
+// LAS 1.4 geo-referenced through a GeoReference (see map_io.hpp). Layout references: ASPRS LAS 1.4
+// R15 (public header block 375 bytes, VLR header 54 bytes, point data record format 6 of 30 bytes,
 // OGC WKT in a LASF_Projection VLR with record ID 2112, global encoding bit 4 = WKT).
-#include <GeographicLib/LocalCartesian.hpp>
-#include <GeographicLib/UTMUPS.hpp>
+#include <proj.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -10,6 +10,9 @@
 #include <exception>
 #include <fstream>
 #include <limits>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <utility>
 
 #include "io/binary_util.hpp"
 #include "io/file_util.hpp"
@@ -61,76 +64,79 @@ Status LasWriteOptions::Validate() const {
 }
 
 std::string UtmZoneWkt(int zone, bool north) {
-  const std::string name = "WGS 84 / UTM zone " + std::to_string(zone) + (north ? "N" : "S");
-  const int epsg = (north ? 32600 : 32700) + zone;
-  const int central_meridian = 6 * zone - 183;
-  return "PROJCS[\"" + name +
-         "\",GEOGCS[\"WGS 84\",DATUM[\"WGS_1984\",SPHEROID[\"WGS 84\",6378137,298.257223563,"
-         "AUTHORITY[\"EPSG\",\"7030\"]],AUTHORITY[\"EPSG\",\"6326\"]],PRIMEM[\"Greenwich\",0,"
-         "AUTHORITY[\"EPSG\",\"8901\"]],UNIT[\"degree\",0.0174532925199433,AUTHORITY[\"EPSG\","
-         "\"9122\"]],AUTHORITY[\"EPSG\",\"4326\"]],PROJECTION[\"Transverse_Mercator\"],"
-         "PARAMETER[\"latitude_of_origin\",0],PARAMETER[\"central_meridian\"," +
-         std::to_string(central_meridian) +
-         "],PARAMETER[\"scale_factor\",0.9996],PARAMETER[\"false_easting\",500000],"
-         "PARAMETER[\"false_northing\"," +
-         std::string(north ? "0" : "10000000") +
-         "],UNIT[\"metre\",1,AUTHORITY[\"EPSG\",\"9001\"]],AXIS[\"Easting\",EAST],"
-         "AXIS[\"Northing\",NORTH],AUTHORITY[\"EPSG\",\"" +
-         std::to_string(epsg) + "\"]]";
+  if (zone < 1 || zone > 60) return "";
+  PJ_CONTEXT* ctx = proj_context_create();
+  if (ctx == nullptr) return "";
+  proj_log_func(ctx, nullptr, [](void*, int, const char*) {});
+  const std::string code = "EPSG:" + std::to_string((north ? 32600 : 32700) + zone);
+  std::string wkt;
+  if (PJ* crs = proj_create(ctx, code.c_str())) {
+    const char* const options[] = {"MULTILINE=NO", nullptr};
+    const char* w = proj_as_wkt(ctx, crs, PJ_WKT1_GDAL, options);
+    if (w != nullptr) wkt = w;
+    proj_destroy(crs);
+  }
+  proj_context_destroy(ctx);
+  return wkt;
 }
 
-Status WriteLas(const MapCloud& map, const GeoOrigin& origin, const fs::path& file) {
-  return WriteLas(map, origin, file, LasWriteOptions());
-}
+namespace {
 
-Status WriteLas(const MapCloud& map, const GeoOrigin& origin, const fs::path& file,
-                const LasWriteOptions& options) {
-  SLAM_MMS_RETURN_IF_ERROR(options.Validate());
+// The projected coordinates and adjusted GPS times (empty without times) of every point.
+Status ProjectMap(const MapCloud& map, const GeoReference& geo, std::vector<Eigen::Vector3d>* enh,
+                  std::vector<double>* gps_time) {
   SLAM_MMS_RETURN_IF_ERROR(map.Validate());
-  if (!std::isfinite(origin.latitude_deg) || !std::isfinite(origin.longitude_deg) ||
-      !std::isfinite(origin.height_m) || origin.latitude_deg < -80.0 ||
-      origin.latitude_deg > 84.0 || std::abs(origin.longitude_deg) > 180.0) {
-    return InvalidArgumentError("WriteLas: origin (" + std::to_string(origin.latitude_deg) + ", " +
-                                std::to_string(origin.longitude_deg) +
-                                ") outside the UTM latitude band [-80, 84] deg or invalid");
-  }
   const size_t n = map.cloud.size();
-  int zone = options.utm_zone;
-  bool north = options.north;
-  std::vector<Eigen::Vector3d> utm(n);
-  try {
-    if (zone == 0) {
-      zone = GeographicLib::UTMUPS::StandardZone(origin.latitude_deg, origin.longitude_deg);
-      north = origin.latitude_deg >= 0.0;
+  std::vector<Eigen::Vector3d> p_world(n);
+  for (size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3f& p = map.cloud.points()[i];
+    if (!p.allFinite()) {
+      return InvalidArgumentError("WriteLas: point " + std::to_string(i) + " is not finite");
     }
-    const GeographicLib::LocalCartesian enu(origin.latitude_deg, origin.longitude_deg,
-                                            origin.height_m);
-    for (size_t i = 0; i < n; ++i) {
-      const Eigen::Vector3f& p = map.cloud.points()[i];
-      if (!p.allFinite()) {
-        return InvalidArgumentError("WriteLas: point " + std::to_string(i) + " is not finite");
-      }
-      double lat, lon, h, gamma, k;
-      enu.Reverse(p.x(), p.y(), p.z(), lat, lon, h);
-      bool northp = north;
-      int z = zone;
-      GeographicLib::UTMUPS::Forward(lat, lon, z, northp, utm[i].x(), utm[i].y(), gamma, k, zone);
-      if (northp != north) {  // a point across the equator: keep the file's hemisphere
-        utm[i].y() +=
-            north ? -GeographicLib::UTMUPS::UTMShift() : GeographicLib::UTMUPS::UTMShift();
-      }
-      utm[i].z() = h;
-    }
-  } catch (const std::exception& e) {
-    return InvalidArgumentError(std::string("WriteLas: UTM conversion failed: ") + e.what());
+    p_world[i] = p.cast<double>();
   }
+  SLAM_MMS_RETURN_IF_ERROR(geo.EnuToProjected(p_world, enh).WithContext("WriteLas"));
+  gps_time->clear();
+  if (!map.time_ns.empty()) {
+    gps_time->resize(n);
+    for (size_t i = 0; i < n; ++i) {
+      StatusOr<double> t = AdjustedGpsTimeFromUtc(Timestamp::FromNanoseconds(map.time_ns[i]));
+      if (!t.ok()) return t.status().WithContext("WriteLas: point " + std::to_string(i));
+      (*gps_time)[i] = *t;
+    }
+  }
+  return OkStatus();
+}
 
+// The indices of `subset` (all points when null) in file order: by GPS time (stable) if wanted.
+std::vector<size_t> FileOrder(const MapCloud& map, const std::vector<size_t>* subset,
+                              const LasWriteOptions& options) {
+  std::vector<size_t> order;
+  if (subset != nullptr) {
+    order = *subset;
+  } else {
+    order.resize(map.cloud.size());
+    for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  }
+  if (options.sort_by_time && !map.time_ns.empty()) {
+    std::stable_sort(order.begin(), order.end(),
+                     [&](size_t a, size_t b) { return map.time_ns[a] < map.time_ns[b]; });
+  }
+  return order;
+}
+
+// One LAS 1.4 format-6 file of the points `order` (indices into map / enh / gps_time).
+Status WriteLasPoints(const MapCloud& map, const std::vector<Eigen::Vector3d>& enh,
+                      const std::vector<double>& gps_time, const std::vector<size_t>& order,
+                      const std::string& wkt, const fs::path& file,
+                      const LasWriteOptions& options) {
+  const size_t n = order.size();
   // Offsets: whole kilometres below the minimum, so int32 * scale covers +-2000 km at 1 mm.
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
   Eigen::Vector3d hi = -lo;
-  for (const auto& u : utm) {
-    lo = lo.cwiseMin(u);
-    hi = hi.cwiseMax(u);
+  for (const size_t i : order) {
+    lo = lo.cwiseMin(enh[i]);
+    hi = hi.cwiseMax(enh[i]);
   }
   if (n == 0) lo = hi = Eigen::Vector3d::Zero();
   Eigen::Vector3d offset;
@@ -144,11 +150,12 @@ Status WriteLas(const MapCloud& map, const GeoOrigin& origin, const fs::path& fi
   std::string points(n * kFormat6Size, '\0');
   Eigen::Vector3d qlo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
   Eigen::Vector3d qhi = -qlo;
-  for (size_t i = 0; i < n; ++i) {
-    char* rec = points.data() + i * kFormat6Size;
+  for (size_t k = 0; k < n; ++k) {
+    const size_t i = order[k];
+    char* rec = points.data() + k * kFormat6Size;
     Eigen::Vector3d q;
     for (int a = 0; a < 3; ++a) {
-      const auto v = static_cast<int32_t>(std::llround((utm[i][a] - offset[a]) / s));
+      const auto v = static_cast<int32_t>(std::llround((enh[i][a] - offset[a]) / s));
       PutLe<int32_t>(rec + 4 * a, v);
       q[a] = offset[a] + v * s;
     }
@@ -157,12 +164,14 @@ Status WriteLas(const MapCloud& map, const GeoOrigin& origin, const fs::path& fi
     const double in = std::clamp(static_cast<double>(map.cloud.intensities()[i]), 0.0, 1.0);
     PutLe<uint16_t>(rec + 12, static_cast<uint16_t>(std::lround(in * 65535.0)));
     rec[14] = static_cast<char>(1 | (1 << 4));  // return 1 of 1
-    // 15 flags, 16 classification (0: created, never classified), 17 user data, 18 scan angle,
-    // 20 point source id, 22 GPS time: all 0.
+    // 15: classification flags, scanner channel, scan direction, edge of flight line: 0.
+    rec[16] = static_cast<char>(map.classification.empty() ? 0 : map.classification[i]);
+    // 17 user data, 18 scan angle: 0.
+    PutLe<uint16_t>(rec + 20, map.source_id.empty() ? options.point_source_id : map.source_id[i]);
+    PutLe<double>(rec + 22, gps_time.empty() ? 0.0 : gps_time[i]);
   }
   if (n == 0) qlo = qhi = Eigen::Vector3d::Zero();
 
-  const std::string wkt = UtmZoneWkt(zone, north);
   const size_t wkt_size = wkt.size() + 1;  // null-terminated
   if (wkt_size > 65535) return InternalError("WriteLas: WKT too long");
   const size_t vlr_size = kVlrHeaderSize + wkt_size;
@@ -214,6 +223,101 @@ Status WriteLas(const MapCloud& map, const GeoOrigin& origin, const fs::path& fi
   out.close();
   if (!out) return DataLossError("cannot write " + file.string());
   return OkStatus();
+}
+
+std::string CornerText(double v, double tile_size_m) {
+  char buf[64];
+  const bool whole = std::floor(tile_size_m) == tile_size_m;
+  std::snprintf(buf, sizeof(buf), whole ? "%.0f" : "%.3f", v);
+  return buf;
+}
+
+}  // namespace
+
+Status WriteLas(const MapCloud& map, const GeoReference& geo, const fs::path& file,
+                const LasWriteOptions& options) {
+  SLAM_MMS_RETURN_IF_ERROR(options.Validate());
+  std::vector<Eigen::Vector3d> enh;
+  std::vector<double> gps_time;
+  SLAM_MMS_RETURN_IF_ERROR(ProjectMap(map, geo, &enh, &gps_time));
+  return WriteLasPoints(map, enh, gps_time, FileOrder(map, nullptr, options), geo.wkt1(), file,
+                        options);
+}
+
+Status WriteLas(const MapCloud& map, const GeoOrigin& origin, const fs::path& file) {
+  return WriteLas(map, origin, file, LasWriteOptions());
+}
+
+Status WriteLas(const MapCloud& map, const GeoOrigin& origin, const fs::path& file,
+                const LasWriteOptions& options) {
+  SLAM_MMS_RETURN_IF_ERROR(options.Validate());
+  std::string crs = options.crs;
+  if (crs.empty() && options.utm_zone != 0) {
+    crs = "EPSG:" + std::to_string((options.north ? 32600 : 32700) + options.utm_zone);
+  }
+  StatusOr<GeoReference> geo = GeoReference::Create(origin, crs);
+  if (!geo.ok()) return geo.status().WithContext("WriteLas");
+  return WriteLas(map, *geo, file, options);
+}
+
+StatusOr<std::vector<LasTile>> WriteLasTiles(const MapCloud& map, const GeoReference& geo,
+                                             const fs::path& folder, double tile_size_m,
+                                             const LasWriteOptions& options) {
+  SLAM_MMS_RETURN_IF_ERROR(options.Validate());
+  if (!(tile_size_m > 0.0) || !std::isfinite(tile_size_m)) {
+    return InvalidArgumentError("WriteLasTiles: tile_size_m = " + std::to_string(tile_size_m) +
+                                "; must be > 0");
+  }
+  std::vector<Eigen::Vector3d> enh;
+  std::vector<double> gps_time;
+  SLAM_MMS_RETURN_IF_ERROR(ProjectMap(map, geo, &enh, &gps_time));
+  std::error_code ec;
+  fs::create_directories(folder, ec);
+  if (ec)
+    return UnavailableError("WriteLasTiles: cannot create " + folder.string() + ": " +
+                            ec.message());
+  // Cell of each point; cells ordered row-major from the south-west.
+  std::map<std::pair<int64_t, int64_t>, std::vector<size_t>> cells;
+  for (size_t i = 0; i < enh.size(); ++i) {
+    const auto column = static_cast<int64_t>(std::floor(enh[i].x() / tile_size_m));
+    const auto row = static_cast<int64_t>(std::floor(enh[i].y() / tile_size_m));
+    cells[{row, column}].push_back(i);
+  }
+  std::vector<LasTile> tiles;
+  nlohmann::json index;
+  index["crs"] = {{"epsg", geo.epsg()}, {"name", geo.crs_name()}};
+  index["tile_size_m"] = tile_size_m;
+  index["cell"] = "column = floor(easting / tile_size_m), row = floor(northing / tile_size_m)";
+  index["tiles"] = nlohmann::json::array();
+  for (const auto& [cell, members] : cells) {
+    LasTile t;
+    t.row = cell.first;
+    t.column = cell.second;
+    t.min_easting_m = static_cast<double>(t.column) * tile_size_m;
+    t.min_northing_m = static_cast<double>(t.row) * tile_size_m;
+    t.file = "tile_" + CornerText(t.min_easting_m, tile_size_m) + "_" +
+             CornerText(t.min_northing_m, tile_size_m) + ".las";
+    t.num_points = members.size();
+    SLAM_MMS_RETURN_IF_ERROR(WriteLasPoints(map, enh, gps_time, FileOrder(map, &members, options),
+                                            geo.wkt1(), folder / t.file, options)
+                                 .WithContext("WriteLasTiles: tile " + t.file));
+    index["tiles"].push_back({{"file", t.file},
+                              {"column", t.column},
+                              {"row", t.row},
+                              {"min_easting_m", t.min_easting_m},
+                              {"min_northing_m", t.min_northing_m},
+                              {"max_easting_m", t.min_easting_m + tile_size_m},
+                              {"max_northing_m", t.min_northing_m + tile_size_m},
+                              {"points", t.num_points}});
+    tiles.push_back(std::move(t));
+  }
+  index["points"] = enh.size();
+  std::ofstream out(folder / "index.json", std::ios::trunc);
+  out << index.dump(2) << "\n";
+  out.close();
+  if (!out)
+    return UnavailableError("WriteLasTiles: cannot write " + (folder / "index.json").string());
+  return tiles;
 }
 
 StatusOr<LasCloud> ReadLas(const fs::path& file) {
@@ -283,6 +387,12 @@ StatusOr<LasCloud> ReadLas(const fs::path& file) {
   }
   size_t intensity_offset = 12;
   size_t min_length = 0;
+  const bool extended = las.point_format >= 6;
+  const size_t class_offset = extended ? 16 : 15;
+  const size_t source_offset = extended ? 20 : 18;
+  const size_t user_offset = 17;
+  const bool has_time = las.point_format == 1 || las.point_format == 3 || extended;
+  const size_t time_offset = extended ? 22 : 20;
   switch (las.point_format) {
     case 0: min_length = 20; break;
     case 1: min_length = 28; break;
@@ -309,12 +419,21 @@ StatusOr<LasCloud> ReadLas(const fs::path& file) {
   }
   las.points_utm.resize(count);
   las.intensities.resize(count);
+  las.point_source_id.resize(count);
+  las.classification.resize(count);
+  las.user_data.resize(count);
+  if (has_time) las.gps_time.resize(count);
   for (uint64_t i = 0; i < count; ++i) {
     const size_t r = point_offset + i * record_length;
     for (int a = 0; a < 3; ++a) {
       las.points_utm[i][a] = las.offset[a] + las.scale[a] * Le<int32_t>(b, r + 4 * a);
     }
     las.intensities[i] = Le<uint16_t>(b, r + intensity_offset);
+    const auto cls = static_cast<uint8_t>(b[r + class_offset]);
+    las.classification[i] = extended ? cls : static_cast<uint8_t>(cls & 0x1f);
+    las.user_data[i] = static_cast<uint8_t>(b[r + user_offset]);
+    las.point_source_id[i] = Le<uint16_t>(b, r + source_offset);
+    if (has_time) las.gps_time[i] = Le<double>(b, r + time_offset);
   }
   return las;
 }

@@ -20,6 +20,17 @@ Status MapCloud::Validate() const {
                                 " entries for " + std::to_string(cloud.size()) +
                                 " points; must be empty or equal");
   }
+  const auto check = [&](size_t size, const char* field) {
+    return size == 0 || size == cloud.size()
+               ? OkStatus()
+               : InvalidArgumentError(std::string("MapCloud::") + field + " has " +
+                                      std::to_string(size) + " entries for " +
+                                      std::to_string(cloud.size()) +
+                                      " points; must be empty or equal");
+  };
+  SLAM_MMS_RETURN_IF_ERROR(check(time_ns.size(), "time_ns"));
+  SLAM_MMS_RETURN_IF_ERROR(check(source_id.size(), "source_id"));
+  SLAM_MMS_RETURN_IF_ERROR(check(classification.size(), "classification"));
   if (cloud.intensities().size() != cloud.size()) {
     return InvalidArgumentError("MapCloud::cloud has " +
                                 std::to_string(cloud.intensities().size()) + " intensities for " +

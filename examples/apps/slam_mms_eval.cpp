@@ -12,19 +12,20 @@
 //
 // Prints a table; --json writes every number (with the entropy options and counts); --plots writes
 // trajectories.png, position_error.png and map_<NAME>.png.
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <iostream>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "slam_mms/core/logging.hpp"
-#include "slam_mms/eval/json_writer.hpp"
 #include "slam_mms/eval/map_entropy.hpp"
 #include "slam_mms/eval/outage_error.hpp"
 #include "slam_mms/eval/plots.hpp"
@@ -32,6 +33,7 @@
 #include "slam_mms/eval/trajectory_error.hpp"
 #include "slam_mms/io/map_io.hpp"
 #include "slam_mms/io/trajectory_io.hpp"
+#include "slam_mms/version.hpp"
 
 namespace fs = std::filesystem;
 using namespace slam_mms;        // NOLINT(google-build-using-namespace)
@@ -45,6 +47,7 @@ const char* kUsage =
     "         [--t0 SECONDS] [--format auto|tum|kitti] [--kitti-times FILE]\n"
     "         [--radius M] [--voxel M] [--min-neighbors N] [--threads N]\n"
     "         [--json OUT.json] [--plots DIR]\n"
+    "       slam_mms_eval --version | --help\n"
     "\n"
     "  --gt           ground truth, TUM (t tx ty tz qx qy qz qw), same world frame as the "
     "estimates\n"
@@ -63,7 +66,8 @@ const char* kUsage =
     "stamps\n"
     "  --radius, --voxel, --min-neighbors, --threads   entropy options (0.5 m, 0.1 m, 5, 2)\n"
     "  --json         write all numbers as JSON\n"
-    "  --plots        write PNG plots into this folder\n";
+    "  --plots        write PNG plots into this folder\n"
+    "  Values go after the flag or after '=' (--json=OUT.json).\n";
 
 struct Named {
   std::string name;
@@ -95,90 +99,101 @@ Named ParseNamed(const std::string& v) {
 bool ParseDouble(const std::string& s, double* out) {
   char* end = nullptr;
   *out = std::strtod(s.c_str(), &end);
-  return end != s.c_str() && *end == '\0';
+  return end != s.c_str() && *end == '\0' && std::isfinite(*out);
 }
 
+// The command line (CLI11: `--flag value` and `--flag=value`); values are taken as text and checked
+// here so that the messages say what was expected. "help" / "version": print and exit 0.
 StatusOr<Args> ParseArgs(int argc, char** argv) {
   Args a;
-  for (int i = 1; i < argc; ++i) {
-    const std::string opt = argv[i];
-    auto value = [&]() -> StatusOr<std::string> {
-      if (i + 1 >= argc) return InvalidArgumentError(opt + " needs a value");
-      return std::string(argv[++i]);
-    };
-    auto number = [&](double* out) -> Status {
-      SLAM_MMS_ASSIGN_OR_RETURN(const std::string v, value());
-      if (!ParseDouble(v, out)) return InvalidArgumentError(opt + " " + v + ": not a number");
-      return OkStatus();
-    };
-    if (opt == "--help" || opt == "-h") return NotFoundError("help");
-    if (opt == "--gt") {
-      SLAM_MMS_ASSIGN_OR_RETURN(const std::string v, value());
-      a.gt = v;
-    } else if (opt == "--est") {
-      SLAM_MMS_ASSIGN_OR_RETURN(const std::string v, value());
-      a.estimates.push_back(ParseNamed(v));
-    } else if (opt == "--map") {
-      SLAM_MMS_ASSIGN_OR_RETURN(const std::string v, value());
-      a.maps.push_back(ParseNamed(v));
-    } else if (opt == "--align") {
-      SLAM_MMS_ASSIGN_OR_RETURN(const std::string v, value());
-      if (v == "none")
-        a.alignment = Alignment::kNone;
-      else if (v == "se3")
-        a.alignment = Alignment::kSe3;
-      else if (v == "sim3")
-        a.alignment = Alignment::kSim3;
-      else
-        return InvalidArgumentError("--align " + v + ": must be none, se3 or sim3");
-    } else if (opt == "--segments") {
-      SLAM_MMS_ASSIGN_OR_RETURN(const std::string v, value());
-      if (v == "kitti")
-        a.segments = RelativeErrorOptions::Kitti();
-      else if (v == "short")
-        a.segments = RelativeErrorOptions::ShortDrive();
-      else
-        return InvalidArgumentError("--segments " + v + ": must be kitti or short");
-    } else if (opt == "--outage") {
-      SLAM_MMS_ASSIGN_OR_RETURN(const std::string v, value());
-      const size_t colon = v.find(':');
-      OutageWindow w;
-      if (colon == std::string::npos || !ParseDouble(v.substr(0, colon), &w.start_s) ||
-          !ParseDouble(v.substr(colon + 1), &w.duration_s) || !(w.duration_s > 0.0)) {
-        return InvalidArgumentError("--outage " + v +
-                                    ": expected START_S:DURATION_S, duration > 0");
-      }
-      a.outages.push_back(w);
-    } else if (opt == "--t0") {
-      SLAM_MMS_ASSIGN_OR_RETURN(const std::string v, value());
-      SLAM_MMS_ASSIGN_OR_RETURN(a.t0, ParseSecondsExact(v));
-      a.has_t0 = true;
-    } else if (opt == "--format") {
-      SLAM_MMS_ASSIGN_OR_RETURN(a.format, value());
-      if (a.format != "auto" && a.format != "tum" && a.format != "kitti") {
-        return InvalidArgumentError("--format " + a.format + ": must be auto, tum or kitti");
-      }
-    } else if (opt == "--kitti-times") {
-      SLAM_MMS_ASSIGN_OR_RETURN(const std::string v, value());
-      a.kitti_times = v;
-    } else if (opt == "--radius") {
-      SLAM_MMS_RETURN_IF_ERROR(number(&a.entropy.radius_m));
-    } else if (opt == "--voxel") {
-      SLAM_MMS_RETURN_IF_ERROR(number(&a.entropy.voxel_size_m));
-    } else if (opt == "--min-neighbors" || opt == "--threads") {
-      double d = 0.0;
-      SLAM_MMS_RETURN_IF_ERROR(number(&d));
-      (opt == "--threads" ? a.entropy.num_threads : a.entropy.min_neighbors) = static_cast<int>(d);
-    } else if (opt == "--json") {
-      SLAM_MMS_ASSIGN_OR_RETURN(const std::string v, value());
-      a.json = v;
-    } else if (opt == "--plots") {
-      SLAM_MMS_ASSIGN_OR_RETURN(const std::string v, value());
-      a.plots = v;
-    } else {
-      return InvalidArgumentError("unknown option " + opt);
+  CLI::App app("slam_mms_eval", "slam_mms_eval");
+  app.set_help_flag();
+  bool help = false, version = false;
+  std::vector<std::string> est, maps, outages;
+  std::string gt, align, segments, t0, format, kitti_times, radius, voxel, min_neighbors, threads,
+      json, plots;
+  app.add_flag("-h,--help", help);
+  app.add_flag("--version", version);
+  app.add_option("--gt", gt);
+  app.add_option("--est", est)->expected(1, CLI::detail::expected_max_vector_size);
+  app.add_option("--map", maps)->expected(1, CLI::detail::expected_max_vector_size);
+  app.add_option("--align", align);
+  app.add_option("--segments", segments);
+  app.add_option("--outage", outages)->expected(1, CLI::detail::expected_max_vector_size);
+  app.add_option("--t0", t0);
+  app.add_option("--format", format);
+  app.add_option("--kitti-times", kitti_times);
+  app.add_option("--radius", radius);
+  app.add_option("--voxel", voxel);
+  app.add_option("--min-neighbors", min_neighbors);
+  app.add_option("--threads", threads);
+  app.add_option("--json", json);
+  app.add_option("--plots", plots);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return InvalidArgumentError(e.what());
+  }
+  if (help) return NotFoundError("help");
+  if (version) return NotFoundError("version");
+  const auto given = [&app](const char* flag) { return app.count(flag) > 0; };
+  a.gt = gt;
+  for (const std::string& v : est) a.estimates.push_back(ParseNamed(v));
+  for (const std::string& v : maps) a.maps.push_back(ParseNamed(v));
+  if (given("--align")) {
+    if (align == "none")
+      a.alignment = Alignment::kNone;
+    else if (align == "se3")
+      a.alignment = Alignment::kSe3;
+    else if (align == "sim3")
+      a.alignment = Alignment::kSim3;
+    else
+      return InvalidArgumentError("--align " + align + ": must be none, se3 or sim3");
+  }
+  if (given("--segments")) {
+    if (segments == "kitti")
+      a.segments = RelativeErrorOptions::Kitti();
+    else if (segments == "short")
+      a.segments = RelativeErrorOptions::ShortDrive();
+    else
+      return InvalidArgumentError("--segments " + segments + ": must be kitti or short");
+  }
+  for (const std::string& v : outages) {
+    const size_t colon = v.find(':');
+    OutageWindow w;
+    if (colon == std::string::npos || !ParseDouble(v.substr(0, colon), &w.start_s) ||
+        !ParseDouble(v.substr(colon + 1), &w.duration_s) || !(w.duration_s > 0.0)) {
+      return InvalidArgumentError("--outage " + v + ": expected START_S:DURATION_S, duration > 0");
+    }
+    a.outages.push_back(w);
+  }
+  if (given("--t0")) {
+    SLAM_MMS_ASSIGN_OR_RETURN(a.t0, ParseSecondsExact(t0));
+    a.has_t0 = true;
+  }
+  if (given("--format")) {
+    a.format = format;
+    if (a.format != "auto" && a.format != "tum" && a.format != "kitti") {
+      return InvalidArgumentError("--format " + a.format + ": must be auto, tum or kitti");
     }
   }
+  a.kitti_times = kitti_times;
+  const auto number = [&](const char* flag, const std::string& v, double* out) -> Status {
+    if (given(flag) && !ParseDouble(v, out)) {
+      return InvalidArgumentError(std::string(flag) + " " + v + ": not a number");
+    }
+    return OkStatus();
+  };
+  SLAM_MMS_RETURN_IF_ERROR(number("--radius", radius, &a.entropy.radius_m));
+  SLAM_MMS_RETURN_IF_ERROR(number("--voxel", voxel, &a.entropy.voxel_size_m));
+  double d = a.entropy.min_neighbors;
+  SLAM_MMS_RETURN_IF_ERROR(number("--min-neighbors", min_neighbors, &d));
+  a.entropy.min_neighbors = static_cast<int>(d);
+  d = a.entropy.num_threads;
+  SLAM_MMS_RETURN_IF_ERROR(number("--threads", threads, &d));
+  a.entropy.num_threads = static_cast<int>(d);
+  a.json = json;
+  a.plots = plots;
   if (a.estimates.empty() && a.maps.empty()) {
     return InvalidArgumentError("nothing to evaluate: give --est (with --gt) and/or --map");
   }
@@ -318,72 +333,65 @@ void PrintTables(const Args& a, const std::vector<TrajectoryEval>& traj,
   }
 }
 
-void WriteVec(JsonWriter& w, const Eigen::Vector3d& v) {
-  w.BeginArray().Number(v.x()).Number(v.y()).Number(v.z()).EndArray();
-}
+using Json = nlohmann::ordered_json;
 
-StatusOr<std::string> ToJson(const Args& a, const std::vector<TrajectoryEval>& traj,
-                             const std::vector<MapEval>& maps, Timestamp t0) {
-  JsonWriter w;
-  w.BeginObject();
-  w.Key("ground_truth").String(a.gt.string());
-  w.Key("alignment").String(AlignmentName(a.alignment));
-  w.Key("relative_error_lengths").String(a.segments.LengthsLabel());
-  w.Key("t0_s").String(FormatSecondsExact(t0));
-  w.Key("gnss_outages").BeginArray();
-  for (const OutageWindow& o : a.outages)
-    w.BeginArray().Number(o.start_s).Number(o.duration_s).EndArray();
-  w.EndArray();
-  w.Key("trajectories").BeginObject();
+// A number, null where not finite (no segment, no pose in an outage).
+Json Num(double v) { return std::isfinite(v) ? Json(v) : Json(nullptr); }
+Json Vec(const Eigen::Vector3d& v) { return Json::array({Num(v.x()), Num(v.y()), Num(v.z())}); }
+
+std::string ToJson(const Args& a, const std::vector<TrajectoryEval>& traj,
+                   const std::vector<MapEval>& maps, Timestamp t0) {
+  Json j = Json::object();
+  j["version"] = SLAM_MMS_VERSION_STRING;
+  j["ground_truth"] = a.gt.string();
+  j["alignment"] = AlignmentName(a.alignment);
+  j["relative_error_lengths"] = a.segments.LengthsLabel();
+  j["t0_s"] = FormatSecondsExact(t0);
+  Json outages = Json::array();
+  for (const OutageWindow& o : a.outages) outages.push_back({Num(o.start_s), Num(o.duration_s)});
+  j["gnss_outages"] = std::move(outages);
+  Json trajectories = Json::object();
   for (const TrajectoryEval& t : traj) {
     const bool out = t.outage.num_poses > 0;
-    w.Key(t.name).BeginObject();
-    w.Key("file").String(t.file.string());
-    w.Key("num_matched").Int(static_cast<int64_t>(t.ate.num_matched));
-    w.Key("num_unmatched").Int(static_cast<int64_t>(t.ate.num_unmatched));
-    w.Key("ate_rmse_m").Number(t.ate.ate_rmse_m);
-    w.Key("ate_rmse_xyz_m");
-    WriteVec(w, t.ate.ate_rmse_xyz_m);
-    w.Key("ate_mean_m").Number(t.ate.ate_mean_m);
-    w.Key("ate_median_m").Number(t.ate.ate_median_m);
-    w.Key("ate_max_m").Number(t.ate.ate_max_m);
-    w.Key("rot_rmse_deg").Number(t.ate.rot_rmse_deg);
-    w.Key("rot_rmse_rpy_deg");
-    WriteVec(w, t.ate.rot_rmse_rpy_deg);
-    w.Key("t_rel_pct").Number(t.rel.t_rel_pct);
-    w.Key("r_rel_deg_per_100m").Number(t.rel.r_rel_deg_per_100m);
-    w.Key("relative_error_segments").Int(static_cast<int64_t>(t.rel.num_segments));
-    w.Key("max_pos_err_in_outage_m")
-        .Number(out ? std::optional<double>(t.outage.max_pos_err_m) : std::nullopt);
-    w.Key("rms_pos_err_in_outage_m")
-        .Number(out ? std::optional<double>(t.outage.rms_pos_err_m) : std::nullopt);
-    w.Key("max_rot_err_in_outage_deg")
-        .Number(out ? std::optional<double>(t.outage.max_rot_err_deg) : std::nullopt);
-    w.Key("rms_rot_err_in_outage_deg")
-        .Number(out ? std::optional<double>(t.outage.rms_rot_err_deg) : std::nullopt);
-    w.EndObject();
+    const Json null(nullptr);
+    Json e = Json::object();
+    e["file"] = t.file.string();
+    e["num_matched"] = t.ate.num_matched;
+    e["num_unmatched"] = t.ate.num_unmatched;
+    e["ate_rmse_m"] = Num(t.ate.ate_rmse_m);
+    e["ate_rmse_xyz_m"] = Vec(t.ate.ate_rmse_xyz_m);
+    e["ate_mean_m"] = Num(t.ate.ate_mean_m);
+    e["ate_median_m"] = Num(t.ate.ate_median_m);
+    e["ate_max_m"] = Num(t.ate.ate_max_m);
+    e["rot_rmse_deg"] = Num(t.ate.rot_rmse_deg);
+    e["rot_rmse_rpy_deg"] = Vec(t.ate.rot_rmse_rpy_deg);
+    e["t_rel_pct"] = Num(t.rel.t_rel_pct);
+    e["r_rel_deg_per_100m"] = Num(t.rel.r_rel_deg_per_100m);
+    e["relative_error_segments"] = t.rel.num_segments;
+    e["max_pos_err_in_outage_m"] = out ? Num(t.outage.max_pos_err_m) : null;
+    e["rms_pos_err_in_outage_m"] = out ? Num(t.outage.rms_pos_err_m) : null;
+    e["max_rot_err_in_outage_deg"] = out ? Num(t.outage.max_rot_err_deg) : null;
+    e["rms_rot_err_in_outage_deg"] = out ? Num(t.outage.rms_rot_err_deg) : null;
+    trajectories[t.name] = std::move(e);
   }
-  w.EndObject();
-  w.Key("maps").BeginObject();
+  j["trajectories"] = std::move(trajectories);
+  Json jmaps = Json::object();
   for (const MapEval& m : maps) {
     const MapEntropyResult& r = m.result;
-    w.Key(m.name).BeginObject();
-    w.Key("file").String(m.file.string());
-    w.Key("mme").Number(r.mean_map_entropy);
-    w.Key("mean_plane_variance_m2").Number(r.mean_plane_variance_m2);
-    w.Key("radius_m").Number(r.options.radius_m);
-    w.Key("voxel_size_m").Number(r.options.voxel_size_m);
-    w.Key("min_neighbors").Int(r.options.min_neighbors);
-    w.Key("num_input_points").Int(static_cast<int64_t>(r.num_input_points));
-    w.Key("num_evaluated_points").Int(static_cast<int64_t>(r.num_evaluated_points));
-    w.Key("num_valid_points").Int(static_cast<int64_t>(r.num_valid_points));
-    w.Key("num_sparse_points").Int(static_cast<int64_t>(r.num_sparse_points));
-    w.Key("num_degenerate_points").Int(static_cast<int64_t>(r.num_degenerate_points));
-    w.EndObject();
+    jmaps[m.name] = Json{{"file", m.file.string()},
+                         {"mme", Num(r.mean_map_entropy)},
+                         {"mean_plane_variance_m2", Num(r.mean_plane_variance_m2)},
+                         {"radius_m", Num(r.options.radius_m)},
+                         {"voxel_size_m", Num(r.options.voxel_size_m)},
+                         {"min_neighbors", r.options.min_neighbors},
+                         {"num_input_points", r.num_input_points},
+                         {"num_evaluated_points", r.num_evaluated_points},
+                         {"num_valid_points", r.num_valid_points},
+                         {"num_sparse_points", r.num_sparse_points},
+                         {"num_degenerate_points", r.num_degenerate_points}};
   }
-  w.EndObject();
-  w.EndObject();
-  return w.Finish();
+  j["maps"] = std::move(jmaps);
+  return j.dump(2, ' ', false, Json::error_handler_t::replace) + "\n";
 }
 
 Status Run(const Args& a) {
@@ -432,7 +440,7 @@ Status Run(const Args& a) {
   PrintTables(a, traj, maps);
 
   if (!a.json.empty()) {
-    SLAM_MMS_ASSIGN_OR_RETURN(const std::string text, ToJson(a, traj, maps, t0));
+    const std::string text = ToJson(a, traj, maps, t0);
     std::ofstream out(a.json, std::ios::binary | std::ios::trunc);
     if (!(out << text)) return NotFoundError("cannot write " + a.json.string());
     std::printf("\nwrote %s\n", a.json.string().c_str());
@@ -477,6 +485,10 @@ int main(int argc, char** argv) {
   if (!args.ok()) {
     if (args.status().message() == "help") {
       std::fputs(kUsage, stdout);
+      return 0;
+    }
+    if (args.status().message() == "version") {
+      std::printf("slam_mms_eval %s\n", SLAM_MMS_VERSION_STRING);
       return 0;
     }
     std::fprintf(stderr, "slam_mms_eval: %s\n\n%s", args.status().message().c_str(), kUsage);

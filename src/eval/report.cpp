@@ -2,26 +2,46 @@
 
 #include <cmath>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
 
-#include "slam_mms/eval/json_writer.hpp"
+#include "slam_mms/version.hpp"
 
 namespace slam_mms::eval {
 namespace {
+
+using Json = nlohmann::ordered_json;
 
 std::optional<double> Finite(double v) {
   return std::isfinite(v) ? std::optional<double>(v) : std::nullopt;
 }
 
-void WriteVector(JsonWriter& w, const std::optional<Eigen::Vector3d>& v) {
-  if (!v) {
-    w.Null();
-    return;
+// A number, or null for nullopt and non-finite values.
+Json Number(const std::optional<double>& v) {
+  return v && std::isfinite(*v) ? Json(*v) : Json(nullptr);
+}
+
+Json Vector(const std::optional<Eigen::Vector3d>& v) {
+  if (!v) return nullptr;
+  Json a = Json::array();
+  for (int k = 0; k < 3; ++k) a.push_back(Number((*v)(k)));
+  return a;
+}
+
+// An embedded object from the caller's text: null when empty, an error when not a JSON object.
+StatusOr<Json> EmbeddedObject(const std::string& text, const char* field) {
+  if (text.empty()) return Json(nullptr);
+  Json j = Json::parse(text, nullptr, /*allow_exceptions=*/false);
+  if (j.is_discarded()) {
+    return InvalidArgumentError(std::string("EvalReport::") + field +
+                                " is not valid JSON: " + text.substr(0, 80));
   }
-  w.BeginArray();
-  for (int k = 0; k < 3; ++k) w.Number((*v)(k));
-  w.EndArray();
+  if (!j.is_object()) {
+    return InvalidArgumentError(std::string("EvalReport::") + field +
+                                " must be a JSON object, got " + j.type_name());
+  }
+  return j;
 }
 
 }  // namespace
@@ -69,46 +89,65 @@ StatusOr<std::string> ReportToJson(const EvalReport& report) {
       return InvalidArgumentError("EvalReport::methods has \"" + name + "\" twice");
     }
   }
-  JsonWriter w;
-  w.BeginObject();
-  w.Key("input").BeginObject();
-  w.Key("drive").String(report.input.drive);
-  w.Key("scans").Int(report.input.scans);
-  w.Key("duration_s").Number(report.input.duration_s);
-  w.Key("ground_truth").String(report.input.ground_truth);
-  w.EndObject();
+  if (!report.input.kind.empty() && report.input.kind != "kitti_raw" &&
+      report.input.kind != "folder" && report.input.kind != "rosbag" &&
+      report.input.kind != "simulated") {
+    return InvalidArgumentError("EvalReport::input.kind = \"" + report.input.kind +
+                                "\"; must be \"kitti_raw\", \"folder\", \"rosbag\", "
+                                "\"simulated\" or empty");
+  }
+  SLAM_MMS_ASSIGN_OR_RETURN(Json options, EmbeddedObject(report.options_json, "options_json"));
+  SLAM_MMS_ASSIGN_OR_RETURN(Json georef, EmbeddedObject(report.georef_json, "georef_json"));
 
-  w.Key("gnss_outages").BeginArray();
+  Json j = Json::object();
+  j["version"] = SLAM_MMS_VERSION_STRING;
+  j["complete"] = report.complete;
+  j["command_line"] = report.command_line;
+  const ReportInput& in = report.input;
+  Json input = Json::object();
+  input["drive"] = in.drive;
+  input["kind"] = in.kind.empty() ? Json(nullptr) : Json(in.kind);
+  input["scans"] = in.scans;
+  input["scans_total"] = in.scans_total < 0 ? Json(nullptr) : Json(in.scans_total);
+  input["scans_processed"] = in.scans;
+  input["duration_s"] = Number(in.duration_s);
+  input["ground_truth"] = in.ground_truth;
+  Json skipped = Json::array();
+  for (const SkippedScan& s : in.skipped_scans) {
+    skipped.push_back(Json{{"source", s.source}, {"reason", s.reason}});
+  }
+  input["skipped_scans"] = Json{{"count", in.skipped_scans.size()}, {"scans", skipped}};
+  j["input"] = std::move(input);
+
+  Json outages = Json::array();
   for (const OutageWindow& o : report.gnss_outages) {
-    w.BeginArray().Number(o.start_s).Number(o.duration_s).EndArray();
+    outages.push_back(Json::array({Number(o.start_s), Number(o.duration_s)}));
   }
-  w.EndArray();
+  j["gnss_outages"] = std::move(outages);
 
-  w.Key("methods").BeginObject();
+  Json methods = Json::object();
   for (const auto& [name, m] : report.methods) {
-    w.Key(name).BeginObject();
-    w.Key("ate_rmse_m").Number(m.ate_rmse_m);
-    w.Key("ate_rmse_xyz_m");
-    WriteVector(w, m.ate_rmse_xyz_m);
-    w.Key("rot_rmse_deg").Number(m.rot_rmse_deg);
-    w.Key("rot_rmse_rpy_deg");
-    WriteVector(w, m.rot_rmse_rpy_deg);
-    w.Key("t_rel_pct").Number(m.t_rel_pct);
-    w.Key("r_rel_deg_per_100m").Number(m.r_rel_deg_per_100m);
-    w.Key("max_pos_err_in_outage_m").Number(m.max_pos_err_in_outage_m);
-    w.Key("max_rot_err_in_outage_deg").Number(m.max_rot_err_in_outage_deg);
-    w.Key("mme").Number(m.mme);
-    w.Key("scans_per_s").Number(m.scans_per_s);
-    w.Key("peak_rss_mb").Number(m.peak_rss_mb);
-    w.EndObject();
+    Json jm = Json::object();
+    jm["ate_rmse_m"] = Number(m.ate_rmse_m);
+    jm["ate_rmse_xyz_m"] = Vector(m.ate_rmse_xyz_m);
+    jm["rot_rmse_deg"] = Number(m.rot_rmse_deg);
+    jm["rot_rmse_rpy_deg"] = Vector(m.rot_rmse_rpy_deg);
+    jm["t_rel_pct"] = Number(m.t_rel_pct);
+    jm["r_rel_deg_per_100m"] = Number(m.r_rel_deg_per_100m);
+    jm["max_pos_err_in_outage_m"] = Number(m.max_pos_err_in_outage_m);
+    jm["max_rot_err_in_outage_deg"] = Number(m.max_rot_err_in_outage_deg);
+    jm["mme"] = Number(m.mme);
+    jm["scans_per_s"] = Number(m.scans_per_s);
+    jm["peak_rss_mb"] = Number(m.peak_rss_mb);
+    methods[name] = std::move(jm);
   }
-  w.EndObject();
-
-  w.Key("ground_truth_map").BeginObject();
-  w.Key("mme").Number(report.ground_truth_map_mme);
-  w.EndObject();
-  w.EndObject();
-  return w.Finish();
+  j["methods"] = std::move(methods);
+  j["ground_truth_map"] = Json{{"mme", Number(report.ground_truth_map_mme)}};
+  j["options"] = std::move(options);
+  j["georef"] = std::move(georef);
+  if (!report.outputs.empty()) j["outputs"] = Json{{"files", report.outputs}};
+  // Invalid UTF-8 in a path or message is replaced rather than failing the whole report.
+  return j.dump(2, ' ', false, Json::error_handler_t::replace) + "\n";
 }
 
 Status WriteReportJson(const EvalReport& report, const std::filesystem::path& path) {

@@ -2,159 +2,28 @@
 
 #include <gtest/gtest.h>
 
-#include <cctype>
 #include <cmath>
-#include <cstring>
 #include <fstream>
-#include <map>
-#include <memory>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
-#include "slam_mms/eval/json_writer.hpp"
+#include "slam_mms/version.hpp"
 #include "testing/test_data.hpp"
 
 namespace slam_mms::eval {
 namespace {
 
-// A minimal strict JSON parser for checking the written documents (test oracle, not the writer).
-struct Json {
-  enum class Type { kNull, kBool, kNumber, kString, kArray, kObject } type = Type::kNull;
-  bool b = false;
-  double num = 0.0;
-  std::string str;
-  std::vector<Json> arr;
-  std::vector<std::pair<std::string, Json>> obj;  // keeps order
+using Json = nlohmann::ordered_json;
 
-  const Json* Get(const std::string& key) const {
-    for (const auto& [k, v] : obj) {
-      if (k == key) return &v;
-    }
-    return nullptr;
-  }
-  std::vector<std::string> Keys() const {
-    std::vector<std::string> k;
-    for (const auto& kv : obj) k.push_back(kv.first);
-    return k;
-  }
-};
-
-class Parser {
- public:
-  explicit Parser(const std::string& s) : s_(s) {}
-  bool Parse(Json* out) {
-    if (!Value(out)) return false;
-    Ws();
-    return i_ == s_.size();
-  }
-
- private:
-  void Ws() {
-    while (i_ < s_.size() && std::isspace(static_cast<unsigned char>(s_[i_]))) ++i_;
-  }
-  bool Lit(const char* lit) {
-    const size_t n = std::strlen(lit);
-    if (s_.compare(i_, n, lit) != 0) return false;
-    i_ += n;
-    return true;
-  }
-  bool String(std::string* out) {
-    if (s_[i_] != '"') return false;
-    ++i_;
-    while (i_ < s_.size() && s_[i_] != '"') {
-      if (s_[i_] == '\\') {
-        ++i_;
-        if (i_ >= s_.size()) return false;
-        const char c = s_[i_];
-        if (c == 'n')
-          *out += '\n';
-        else if (c == 't')
-          *out += '\t';
-        else if (c == 'u') {
-          *out += static_cast<char>(std::stoi(s_.substr(i_ + 1, 4), nullptr, 16));
-          i_ += 4;
-        } else
-          *out += c;
-        ++i_;
-      } else {
-        if (static_cast<unsigned char>(s_[i_]) < 0x20) return false;
-        *out += s_[i_++];
-      }
-    }
-    if (i_ >= s_.size()) return false;
-    ++i_;
-    return true;
-  }
-  bool Value(Json* v) {
-    Ws();
-    if (i_ >= s_.size()) return false;
-    const char c = s_[i_];
-    if (c == '{') {
-      v->type = Json::Type::kObject;
-      ++i_;
-      Ws();
-      if (s_[i_] == '}') return ++i_, true;
-      while (true) {
-        Ws();
-        std::string key;
-        if (!String(&key)) return false;
-        Ws();
-        if (s_[i_++] != ':') return false;
-        Json child;
-        if (!Value(&child)) return false;
-        v->obj.emplace_back(key, std::move(child));
-        Ws();
-        if (s_[i_] == ',') {
-          ++i_;
-          continue;
-        }
-        if (s_[i_] == '}') return ++i_, true;
-        return false;
-      }
-    }
-    if (c == '[') {
-      v->type = Json::Type::kArray;
-      ++i_;
-      Ws();
-      if (s_[i_] == ']') return ++i_, true;
-      while (true) {
-        Json child;
-        if (!Value(&child)) return false;
-        v->arr.push_back(std::move(child));
-        Ws();
-        if (s_[i_] == ',') {
-          ++i_;
-          continue;
-        }
-        if (s_[i_] == ']') return ++i_, true;
-        return false;
-      }
-    }
-    if (c == '"') {
-      v->type = Json::Type::kString;
-      return String(&v->str);
-    }
-    if (Lit("null")) return v->type = Json::Type::kNull, true;
-    if (Lit("true")) return v->type = Json::Type::kBool, v->b = true, true;
-    if (Lit("false")) return v->type = Json::Type::kBool, v->b = false, true;
-    size_t used = 0;
-    try {
-      v->num = std::stod(s_.substr(i_), &used);
-    } catch (...) {
-      return false;
-    }
-    if (used == 0 || s_[i_] == '+' || s_[i_] == '.') return false;
-    v->type = Json::Type::kNumber;
-    i_ += used;
-    return true;
-  }
-  const std::string& s_;
-  size_t i_ = 0;
-};
+std::vector<std::string> Keys(const Json& j) {
+  std::vector<std::string> k;
+  for (auto it = j.begin(); it != j.end(); ++it) k.push_back(it.key());
+  return k;
+}
 
 Json ParseOrFail(const std::string& text) {
-  Json j;
-  Parser p(text);
-  EXPECT_TRUE(p.Parse(&j)) << "not valid JSON:\n" << text;
+  Json j = Json::parse(text, nullptr, false);
+  EXPECT_FALSE(j.is_discarded()) << "not valid JSON:\n" << text;
   return j;
 }
 
@@ -182,29 +51,52 @@ EvalReport SampleReport() {
   lidar.ate_rmse_m = 3.0;
   lidar.mme = std::nan("");  // NaN -> null
   r.methods.emplace_back("lidar_only", lidar);
+  r.input.kind = "kitti_raw";
+  r.input.scans_total = 150;
+  r.input.skipped_scans = {{"velodyne_points/data/0000000005.bin", "truncated: 1000 bytes"},
+                           {"velodyne_points/data/0000000009.bin", "quote \" and \\ and \n"}};
+  r.command_line = {"slam_mms_run", "--out=o", "--config", "a b.yaml"};
+  r.options_json = R"({"localizer": {"submap_duration_s": 2.5, "icp": {"max_iterations": 30}},
+                       "origin_height_m": null})";
+  r.georef_json = R"({"crs": "EPSG:32632", "origin": [49.0, 8.4, 110.0]})";
+  r.complete = false;
+  r.outputs = {"full.tum", "map_full.las"};
   return r;
 }
 
-TEST(ReportTest, JsonHasExactlyTheSchemaKeys) {
-  const StatusOr<std::string> text = ReportToJson(SampleReport());
+TEST(ReportTest, JsonHasTheSchemaKeysAndRoundTrips) {
+  const EvalReport r = SampleReport();
+  const StatusOr<std::string> text = ReportToJson(r);
   ASSERT_TRUE(text.ok()) << text.status().ToString();
   const Json j = ParseOrFail(*text);
-  ASSERT_EQ(j.type, Json::Type::kObject);
-  EXPECT_EQ(j.Keys(),
-            (std::vector<std::string>{"input", "gnss_outages", "methods", "ground_truth_map"}));
-  const Json* input = j.Get("input");
-  ASSERT_NE(input, nullptr);
-  EXPECT_EQ(input->Keys(),
-            (std::vector<std::string>{"drive", "scans", "duration_s", "ground_truth"}));
-  EXPECT_EQ(input->Get("drive")->str, "2011_09_26_drive_0013_sync");
-  EXPECT_EQ(input->Get("scans")->num, 144.0);
-  EXPECT_EQ(input->Get("ground_truth")->str, "oxts");
+  ASSERT_TRUE(j.is_object());
+  EXPECT_EQ(Keys(j), (std::vector<std::string>{"version", "complete", "command_line", "input",
+                                               "gnss_outages", "methods", "ground_truth_map",
+                                               "options", "georef", "outputs"}));
+  EXPECT_EQ(j["version"], SLAM_MMS_VERSION_STRING);
+  EXPECT_EQ(j["complete"], false);
+  EXPECT_EQ(j["command_line"].get<std::vector<std::string>>(), r.command_line);
+  const Json& input = j["input"];
+  EXPECT_EQ(Keys(input),
+            (std::vector<std::string>{"drive", "kind", "scans", "scans_total", "scans_processed",
+                                      "duration_s", "ground_truth", "skipped_scans"}));
+  EXPECT_EQ(input["drive"], "2011_09_26_drive_0013_sync");
+  EXPECT_EQ(input["kind"], "kitti_raw");
+  EXPECT_EQ(input["scans"], 144);
+  EXPECT_EQ(input["scans_processed"], 144);
+  EXPECT_EQ(input["scans_total"], 150);
+  EXPECT_EQ(input["duration_s"].get<double>(), 14.3);
+  EXPECT_EQ(input["ground_truth"], "oxts");
+  ASSERT_EQ(input["skipped_scans"]["count"], 2);
+  ASSERT_EQ(input["skipped_scans"]["scans"].size(), 2u);
+  EXPECT_EQ(input["skipped_scans"]["scans"][0]["source"], r.input.skipped_scans[0].source);
+  EXPECT_EQ(input["skipped_scans"]["scans"][1]["reason"], r.input.skipped_scans[1].reason);
 
-  const Json* outages = j.Get("gnss_outages");
-  ASSERT_EQ(outages->arr.size(), 2u);
-  EXPECT_EQ(outages->arr[1].arr.size(), 2u);
-  EXPECT_EQ(outages->arr[1].arr[0].num, 30.0);
-  EXPECT_EQ(outages->arr[1].arr[1].num, 20.0);
+  const Json& outages = j["gnss_outages"];
+  ASSERT_EQ(outages.size(), 2u);
+  EXPECT_EQ(outages[1].size(), 2u);
+  EXPECT_EQ(outages[1][0].get<double>(), 30.0);
+  EXPECT_EQ(outages[1][1].get<double>(), 20.0);
 
   const std::vector<std::string> method_keys = {"ate_rmse_m",
                                                 "ate_rmse_xyz_m",
@@ -217,24 +109,57 @@ TEST(ReportTest, JsonHasExactlyTheSchemaKeys) {
                                                 "mme",
                                                 "scans_per_s",
                                                 "peak_rss_mb"};
-  const Json* methods = j.Get("methods");
-  EXPECT_EQ(methods->Keys(), (std::vector<std::string>{"full", "lidar_only"}));
-  const Json* full = methods->Get("full");
-  EXPECT_EQ(full->Keys(), method_keys);
-  EXPECT_EQ(full->Get("ate_rmse_m")->num, 0.42);
-  ASSERT_EQ(full->Get("rot_rmse_rpy_deg")->arr.size(), 3u);
-  EXPECT_EQ(full->Get("rot_rmse_rpy_deg")->arr[2].num, 0.4);
-  EXPECT_EQ(full->Get("peak_rss_mb")->num, 812.0);
-  const Json* lidar = methods->Get("lidar_only");
-  EXPECT_EQ(lidar->Keys(), method_keys);
-  EXPECT_EQ(lidar->Get("ate_rmse_m")->num, 3.0);
-  EXPECT_EQ(lidar->Get("ate_rmse_xyz_m")->type, Json::Type::kNull);
-  EXPECT_EQ(lidar->Get("t_rel_pct")->type, Json::Type::kNull);
-  EXPECT_EQ(lidar->Get("mme")->type, Json::Type::kNull);
+  const Json& methods = j["methods"];
+  EXPECT_EQ(Keys(methods), (std::vector<std::string>{"full", "lidar_only"}));
+  const Json& full = methods["full"];
+  EXPECT_EQ(Keys(full), method_keys);
+  EXPECT_EQ(full["ate_rmse_m"].get<double>(), 0.42);
+  ASSERT_EQ(full["rot_rmse_rpy_deg"].size(), 3u);
+  EXPECT_EQ(full["rot_rmse_rpy_deg"][2].get<double>(), 0.4);
+  EXPECT_EQ(full["peak_rss_mb"].get<double>(), 812.0);
+  const Json& lidar = methods["lidar_only"];
+  EXPECT_EQ(Keys(lidar), method_keys);
+  EXPECT_EQ(lidar["ate_rmse_m"].get<double>(), 3.0);
+  EXPECT_TRUE(lidar["ate_rmse_xyz_m"].is_null());
+  EXPECT_TRUE(lidar["t_rel_pct"].is_null());
+  EXPECT_TRUE(lidar["mme"].is_null());  // NaN -> null
 
-  const Json* gt_map = j.Get("ground_truth_map");
-  EXPECT_EQ(gt_map->Keys(), (std::vector<std::string>{"mme"}));
-  EXPECT_EQ(gt_map->Get("mme")->type, Json::Type::kNull);
+  EXPECT_EQ(Keys(j["ground_truth_map"]), (std::vector<std::string>{"mme"}));
+  EXPECT_TRUE(j["ground_truth_map"]["mme"].is_null());
+  // The embedded texts, parsed: same tree.
+  EXPECT_EQ(j["options"], Json::parse(r.options_json));
+  EXPECT_EQ(j["options"]["localizer"]["icp"]["max_iterations"], 30);
+  EXPECT_TRUE(j["options"]["origin_height_m"].is_null());
+  EXPECT_EQ(j["georef"]["crs"], "EPSG:32632");
+  EXPECT_EQ(j["outputs"]["files"].get<std::vector<std::string>>(), r.outputs);
+}
+
+TEST(ReportTest, DoublesReadBackExactlyAndDefaultsAreNull) {
+  EvalReport r;
+  r.input.ground_truth = "none";
+  r.input.duration_s = 0.1 + 0.2;  // 0.30000000000000004
+  MethodReport m;
+  m.ate_rmse_m = 1.0 / 3.0;
+  m.scans_per_s = 1e-300;
+  m.peak_rss_mb = 123456789.123456789;
+  r.methods.emplace_back("gnss_ins", m);
+  const StatusOr<std::string> text = ReportToJson(r);
+  ASSERT_TRUE(text.ok()) << text.status().ToString();
+  const Json j = ParseOrFail(*text);
+  EXPECT_EQ(j["input"]["duration_s"].get<double>(), 0.1 + 0.2);
+  EXPECT_EQ(j["methods"]["gnss_ins"]["ate_rmse_m"].get<double>(), 1.0 / 3.0);
+  EXPECT_EQ(j["methods"]["gnss_ins"]["scans_per_s"].get<double>(), 1e-300);
+  EXPECT_EQ(j["methods"]["gnss_ins"]["peak_rss_mb"].get<double>(), 123456789.123456789);
+  // Unset: null kind/total/options/georef, complete, no skipped scans, no "outputs" key.
+  EXPECT_TRUE(j["input"]["kind"].is_null());
+  EXPECT_TRUE(j["input"]["scans_total"].is_null());
+  EXPECT_EQ(j["input"]["skipped_scans"]["count"], 0);
+  EXPECT_TRUE(j["input"]["skipped_scans"]["scans"].empty());
+  EXPECT_TRUE(j["options"].is_null());
+  EXPECT_TRUE(j["georef"].is_null());
+  EXPECT_EQ(j["complete"], true);
+  EXPECT_TRUE(j["command_line"].is_array());
+  EXPECT_FALSE(j.contains("outputs"));
 }
 
 TEST(ReportTest, WritesFileAndValidatesNames) {
@@ -245,17 +170,33 @@ TEST(ReportTest, WritesFileAndValidatesNames) {
   std::stringstream ss;
   ss << in.rdbuf();
   const Json j = ParseOrFail(ss.str());
-  EXPECT_NE(j.Get("methods"), nullptr);
+  EXPECT_TRUE(j.contains("methods"));
+  EXPECT_EQ(ss.str(), *ReportToJson(SampleReport()));
 
   EvalReport bad = SampleReport();
   bad.input.ground_truth = "gps";
   EXPECT_EQ(ReportToJson(bad).status().code(), StatusCode::kInvalidArgument);
+  bad = SampleReport();
+  bad.input.kind = "pcap";
+  EXPECT_NE(ReportToJson(bad).status().message().find("pcap"), std::string::npos);
   bad = SampleReport();
   bad.methods.emplace_back("suma", MethodReport());
   EXPECT_NE(ReportToJson(bad).status().message().find("suma"), std::string::npos);
   bad = SampleReport();
   bad.methods.emplace_back("full", MethodReport());
   EXPECT_FALSE(ReportToJson(bad).ok());
+  // Embedded texts must be JSON objects.
+  bad = SampleReport();
+  bad.options_json = "{\"localizer\": ";
+  StatusOr<std::string> t = ReportToJson(bad);
+  ASSERT_FALSE(t.ok());
+  EXPECT_EQ(t.status().code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(t.status().message().find("options_json"), std::string::npos);
+  bad = SampleReport();
+  bad.georef_json = "[1, 2]";
+  t = ReportToJson(bad);
+  ASSERT_FALSE(t.ok());
+  EXPECT_NE(t.status().message().find("georef_json"), std::string::npos);
   EXPECT_FALSE(WriteReportJson(SampleReport(), dir / "no_such_dir" / "r.json").ok());
   std::filesystem::remove_all(dir);
 }
@@ -285,55 +226,6 @@ TEST(ReportTest, MakeMethodReportFromResults) {
   EXPECT_FALSE(empty.ate_rmse_m.has_value());
   EXPECT_TRUE(PeakRssMb().has_value());
   EXPECT_GT(*PeakRssMb(), 0.0);
-}
-
-TEST(JsonWriterTest, EscapesNestsAndRejectsMisuse) {
-  JsonWriter w;
-  w.BeginObject()
-      .Key("s")
-      .String("a\"b\\c\n\x01")
-      .Key("n")
-      .Number(0.1)
-      .Key("inf")
-      .Number(std::numeric_limits<double>::infinity())
-      .Key("i")
-      .Int(-7)
-      .Key("b")
-      .Bool(true)
-      .Key("nested")
-      .BeginArray()
-      .BeginObject()
-      .Key("x")
-      .Number(1e-300)
-      .EndObject()
-      .BeginArray()
-      .EndArray()
-      .EndArray()
-      .Key("empty")
-      .BeginObject()
-      .EndObject()
-      .EndObject();
-  const StatusOr<std::string> text = w.Finish();
-  ASSERT_TRUE(text.ok()) << text.status().ToString();
-  const Json j = ParseOrFail(*text);
-  EXPECT_EQ(j.Get("s")->str, std::string("a\"b\\c\n\x01"));
-  EXPECT_EQ(j.Get("n")->num, 0.1);  // shortest round-trip text
-  EXPECT_EQ(j.Get("inf")->type, Json::Type::kNull);
-  EXPECT_EQ(j.Get("i")->num, -7.0);
-  EXPECT_EQ(j.Get("nested")->arr[0].Get("x")->num, 1e-300);
-  EXPECT_EQ(j.Get("empty")->type, Json::Type::kObject);
-
-  JsonWriter bad1;
-  bad1.BeginObject().Number(1.0).EndObject();  // value without key
-  EXPECT_EQ(bad1.Finish().status().code(), StatusCode::kFailedPrecondition);
-  JsonWriter bad2;
-  bad2.BeginArray();
-  EXPECT_FALSE(bad2.Finish().ok());
-  JsonWriter bad3;
-  bad3.BeginArray().Key("k");
-  EXPECT_FALSE(bad3.Finish().ok());
-  JsonWriter bad4;
-  EXPECT_FALSE(bad4.Finish().ok());
 }
 
 }  // namespace

@@ -1,8 +1,11 @@
 #include "slam_mms_run/cli.hpp"
 
+#include <CLI/CLI.hpp>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+
+#include "slam_mms/version.hpp"
 
 namespace slam_mms::app {
 namespace {
@@ -53,6 +56,15 @@ Status ParseOutage(const std::string& text, RunArgs* args) {
   return OkStatus();
 }
 
+// EPSG:nnnn (what --crs takes; PROJ checks that the code exists when the outputs are written).
+bool ValidCrsText(const std::string& text) {
+  if (text.size() < 6 || text.compare(0, 5, "EPSG:") != 0) return false;
+  for (size_t i = 5; i < text.size(); ++i) {
+    if (text[i] < '0' || text[i] > '9') return false;
+  }
+  return text.size() <= 15;
+}
+
 }  // namespace
 
 std::string RunUsage() {
@@ -96,15 +108,28 @@ Options:
   --frames A:B            only frames A..B (inclusive file numbers); A: = from A to the end.
   --gnss-outage S:D       withhold GNSS fixes for D seconds from S seconds after the first scan's
                           start; repeat the flag or list several windows after it.
-  --config FILE           "key = value" lines overriding MappingSystem options (keys in
-                          docs/user_guide.md, "Options"); unknown keys and bad values are errors.
+  --config FILE           a YAML file overriding MappingSystem options (nested or dotted keys:
+                          `localizer: {submap_duration_s: 2.0}` or `level2.use_loops: false`;
+                          keys in docs/user_guide.md, "Options"); unknown keys, values of the
+                          wrong type and keys given twice are errors naming file:line and key.
+  --dump-config FILE      write the effective options (defaults + --config) as YAML, every key
+                          commented with its type and default, then exit (--config reads it back).
+  --crs EPSG:nnnn         output CRS of the LAS maps and the <method>_<crs>.csv trajectories
+                          (default: WGS 84 / UTM zone of the world origin).
+  --las-tile-size M       split LAS maps into square tiles of M metres (default 0 = one file).
+  --resume                continue a killed run from the checkpoint in --out.
+  --checkpoint-every N    write a checkpoint every N finished submaps (default 10; 0 = never).
   --sim-duration S        seconds of the default drive to simulate (default 30; 0 = all ~3 min).
   --sim-seed N            simulator seed (default 1).
+  --keep-sim              keep the simulated default drive in DIR/sim (default: removed at the end).
   --log-level L           debug | info | warning | error: the library's messages on stderr from
                           this level (default warning; info adds GNSS loss/return, POS jumps,
                           level-2 solves; debug adds loop candidates and per-submap events).
-  --config-keys           print every --config key with its type and default, then exit.
+  --config-keys           print every --config key with its default value as YAML (a --config
+                          file; each key commented with its type), then exit.
+  --version               print "slam_mms_run <version>" and exit.
   --help                  this text.
+Values go after the flag or after '=': --out DIR or --out=DIR.
 
 Outputs in DIR: <method>.tum, <method>.kitti, <method>_cov.csv per method; <method>_scans.csv
 (per-scan level-1 results and stage times) and <method>_level1.tum (level 1 before level 2) for
@@ -116,106 +141,127 @@ Exit status: 0 done; 1 input or processing error (outputs computed so far are wr
 )";
 }
 
+std::string RunVersion() { return std::string("slam_mms_run ") + SLAM_MMS_VERSION_STRING; }
+
 StatusOr<RunArgs> ParseRunArgs(int argc, const char* const* argv) {
   RunArgs args;
-  bool mode_given = false;
-  for (int i = 1; i < argc; ++i) {
-    const std::string flag = argv[i];
-    auto value = [&](std::string* out) -> Status {
-      if (i + 1 >= argc) return InvalidArgumentError(flag + ": missing value");
-      *out = argv[++i];
-      return OkStatus();
-    };
-    std::string v;
-    if (flag == "--help" || flag == "-h") {
-      args.help = true;
-    } else if (flag == "--config-keys") {
-      args.list_config_keys = true;
-    } else if (flag == "--kitti-raw") {
-      SLAM_MMS_RETURN_IF_ERROR(value(&v));
-      args.kitti_raw = v;
-    } else if (flag == "--folder") {
-      SLAM_MMS_RETURN_IF_ERROR(value(&v));
-      args.folder = v;
-    } else if (flag == "--rosbag") {
-      SLAM_MMS_RETURN_IF_ERROR(value(&v));
-      args.rosbag = v;
-    } else if (flag == "--lidar-topic") {
-      SLAM_MMS_RETURN_IF_ERROR(value(&args.lidar_topic));
-    } else if (flag == "--imu-topic") {
-      SLAM_MMS_RETURN_IF_ERROR(value(&args.imu_topic));
-    } else if (flag == "--gnss-topic") {
-      SLAM_MMS_RETURN_IF_ERROR(value(&args.gnss_topic));
-    } else if (flag == "--extrinsics") {
-      SLAM_MMS_RETURN_IF_ERROR(value(&v));
-      args.extrinsics = v;
-    } else if (flag == "--out") {
-      SLAM_MMS_RETURN_IF_ERROR(value(&v));
-      args.out_dir = v;
-    } else if (flag == "--mode") {
-      SLAM_MMS_RETURN_IF_ERROR(value(&v));
-      if (mode_given) return InvalidArgumentError("--mode given twice");
-      mode_given = true;
-      MappingMode mode;
-      if (v == "all") {
-        args.modes = {MappingMode::kFull, MappingMode::kGnssIns, MappingMode::kGnssInsSmoothed,
-                      MappingMode::kLidarOnly};
-      } else if (ParseMappingMode(v, &mode)) {
-        args.modes = {mode};
-      } else {
-        return InvalidArgumentError("--mode " + v +
-                                    ": expected full, gnss_ins, gnss_ins_smoothed, lidar_only or "
-                                    "all");
-      }
-    } else if (flag == "--pos") {
-      SLAM_MMS_RETURN_IF_ERROR(value(&v));
-      if (!ParsePosWorkflow(v, &args.pos)) {
-        return InvalidArgumentError("--pos " + v + ": expected smoothed or forward");
-      }
-    } else if (flag == "--frames") {
-      SLAM_MMS_RETURN_IF_ERROR(value(&v));
-      SLAM_MMS_RETURN_IF_ERROR(ParseFrames(v, &args));
-    } else if (flag == "--gnss-outage") {
-      SLAM_MMS_RETURN_IF_ERROR(value(&v));
-      SLAM_MMS_RETURN_IF_ERROR(ParseOutage(v, &args));
-      while (i + 1 < argc && std::string(argv[i + 1]).rfind("--", 0) != 0) {
-        SLAM_MMS_RETURN_IF_ERROR(ParseOutage(argv[++i], &args));
-      }
-    } else if (flag == "--config") {
-      SLAM_MMS_RETURN_IF_ERROR(value(&v));
-      args.config = v;
-    } else if (flag == "--sim-duration") {
-      SLAM_MMS_RETURN_IF_ERROR(value(&v));
-      if (!ParseDouble(v, &args.sim_duration_s) || args.sim_duration_s < 0.0) {
-        return InvalidArgumentError("--sim-duration " + v + ": expected seconds >= 0");
-      }
-    } else if (flag == "--log-level") {
-      SLAM_MMS_RETURN_IF_ERROR(value(&v));
-      if (v == "debug") {
-        args.log_level = LogLevel::kDebug;
-      } else if (v == "info") {
-        args.log_level = LogLevel::kInfo;
-      } else if (v == "warning") {
-        args.log_level = LogLevel::kWarning;
-      } else if (v == "error") {
-        args.log_level = LogLevel::kError;
-      } else {
-        return InvalidArgumentError("--log-level " + v +
-                                    ": expected debug, info, warning or error");
-      }
-    } else if (flag == "--sim-seed") {
-      SLAM_MMS_RETURN_IF_ERROR(value(&v));
-      int64_t seed = 0;
-      if (!ParseInt(v, &seed) || seed < 0) {
-        return InvalidArgumentError("--sim-seed " + v + ": expected an integer >= 0");
-      }
-      args.sim_seed = static_cast<uint64_t>(seed);
+  for (int i = 0; i < argc; ++i) args.command_line.emplace_back(argv[i]);
+  // Every value is taken as text and checked below, so that the messages say what was expected.
+  CLI::App app("slam_mms_run", "slam_mms_run");
+  app.set_help_flag();  // --help is a flag of RunArgs (main prints RunUsage()).
+  app.allow_windows_style_options(false);
+  std::string kitti_raw, folder, rosbag, extrinsics, out, mode, pos, frames, config, sim_duration,
+      sim_seed, log_level, dump_config, las_tile_size, checkpoint_every;
+  std::vector<std::string> outages;
+  app.add_flag("-h,--help", args.help);
+  app.add_flag("--version", args.version);
+  app.add_flag("--config-keys", args.list_config_keys);
+  app.add_option("--kitti-raw", kitti_raw);
+  app.add_option("--folder", folder);
+  app.add_option("--rosbag", rosbag);
+  app.add_option("--lidar-topic", args.lidar_topic);
+  app.add_option("--imu-topic", args.imu_topic);
+  app.add_option("--gnss-topic", args.gnss_topic);
+  app.add_option("--extrinsics", extrinsics);
+  app.add_option("--out", out);
+  app.add_option("--mode", mode);
+  app.add_option("--pos", pos);
+  app.add_option("--frames", frames);
+  // Repeatable, and several windows may follow one flag.
+  app.add_option("--gnss-outage", outages)->expected(1, CLI::detail::expected_max_vector_size);
+  app.add_option("--config", config);
+  app.add_option("--dump-config", dump_config);
+  app.add_option("--sim-duration", sim_duration);
+  app.add_option("--sim-seed", sim_seed);
+  app.add_flag("--keep-sim", args.keep_sim);
+  app.add_option("--log-level", log_level);
+  app.add_option("--crs", args.crs);
+  app.add_option("--las-tile-size", las_tile_size);
+  app.add_flag("--resume", args.resume);
+  app.add_option("--checkpoint-every", checkpoint_every);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ExtrasError& e) {
+    return InvalidArgumentError(std::string(e.what()) + " (unknown argument; see --help)");
+  } catch (const CLI::ParseError& e) {
+    std::string message = e.what();
+    if (message.find("At Most 1 required but received") != std::string::npos) {
+      message = message.substr(0, message.find(':')) + " given twice";
+    }
+    return InvalidArgumentError(message + " (see --help)");
+  }
+  const auto given = [&app](const char* flag) { return app.count(flag) > 0; };
+  args.kitti_raw = kitti_raw;
+  args.folder = folder;
+  args.rosbag = rosbag;
+  args.extrinsics = extrinsics;
+  args.out_dir = out;
+  args.config = config;
+  args.dump_config = dump_config;
+  if (given("--mode")) {
+    MappingMode m;
+    if (mode == "all") {
+      args.modes = {MappingMode::kFull, MappingMode::kGnssIns, MappingMode::kGnssInsSmoothed,
+                    MappingMode::kLidarOnly};
+    } else if (ParseMappingMode(mode, &m)) {
+      args.modes = {m};
     } else {
-      return InvalidArgumentError("unknown argument '" + flag + "' (see --help)");
+      return InvalidArgumentError("--mode " + mode +
+                                  ": expected full, gnss_ins, gnss_ins_smoothed, lidar_only or "
+                                  "all");
     }
   }
-  if (args.help || args.list_config_keys) return args;
-  if (args.out_dir.empty()) return InvalidArgumentError("--out DIR is required (see --help)");
+  if (given("--pos") && !ParsePosWorkflow(pos, &args.pos)) {
+    return InvalidArgumentError("--pos " + pos + ": expected smoothed or forward");
+  }
+  if (given("--frames")) SLAM_MMS_RETURN_IF_ERROR(ParseFrames(frames, &args));
+  for (const std::string& o : outages) SLAM_MMS_RETURN_IF_ERROR(ParseOutage(o, &args));
+  if (given("--sim-duration") &&
+      (!ParseDouble(sim_duration, &args.sim_duration_s) || args.sim_duration_s < 0.0)) {
+    return InvalidArgumentError("--sim-duration " + sim_duration + ": expected seconds >= 0");
+  }
+  if (given("--sim-seed")) {
+    int64_t seed = 0;
+    if (!ParseInt(sim_seed, &seed) || seed < 0) {
+      return InvalidArgumentError("--sim-seed " + sim_seed + ": expected an integer >= 0");
+    }
+    args.sim_seed = static_cast<uint64_t>(seed);
+  }
+  if (given("--log-level")) {
+    if (log_level == "debug") {
+      args.log_level = LogLevel::kDebug;
+    } else if (log_level == "info") {
+      args.log_level = LogLevel::kInfo;
+    } else if (log_level == "warning") {
+      args.log_level = LogLevel::kWarning;
+    } else if (log_level == "error") {
+      args.log_level = LogLevel::kError;
+    } else {
+      return InvalidArgumentError("--log-level " + log_level +
+                                  ": expected debug, info, warning or error");
+    }
+  }
+  if (given("--las-tile-size") &&
+      (!ParseDouble(las_tile_size, &args.las_tile_size_m) || args.las_tile_size_m < 0.0)) {
+    return InvalidArgumentError("--las-tile-size " + las_tile_size +
+                                ": expected metres >= 0 (0 = one LAS file per map)");
+  }
+  if (given("--checkpoint-every")) {
+    int64_t n = 0;
+    if (!ParseInt(checkpoint_every, &n) || n < 0 || n > 1000000) {
+      return InvalidArgumentError("--checkpoint-every " + checkpoint_every +
+                                  ": expected a number of submaps >= 0 (0 = no checkpoints)");
+    }
+    args.checkpoint_every_submaps = static_cast<int>(n);
+  }
+  if (given("--crs") && !ValidCrsText(args.crs)) {
+    return InvalidArgumentError("--crs " + args.crs + ": expected EPSG:nnnn (e.g. EPSG:25832)");
+  }
+  if (!given("--mode")) {
+    args.modes = {MappingMode::kFull, MappingMode::kGnssIns, MappingMode::kGnssInsSmoothed,
+                  MappingMode::kLidarOnly};
+  }
+  if (args.help || args.version || args.list_config_keys) return args;
   const int inputs = !args.kitti_raw.empty() + !args.folder.empty() + !args.rosbag.empty();
   if (inputs > 1) {
     return InvalidArgumentError("--kitti-raw, --folder and --rosbag exclude each other");
@@ -224,10 +270,9 @@ StatusOr<RunArgs> ParseRunArgs(int argc, const char* const* argv) {
       !(args.lidar_topic.empty() && args.imu_topic.empty() && args.gnss_topic.empty())) {
     return InvalidArgumentError("--lidar-topic/--imu-topic/--gnss-topic go with --rosbag");
   }
-  if (!mode_given) {
-    args.modes = {MappingMode::kFull, MappingMode::kGnssIns, MappingMode::kGnssInsSmoothed,
-                  MappingMode::kLidarOnly};
-  }
+  // --dump-config only writes the options: no run, so no --out needed.
+  if (!args.dump_config.empty()) return args;
+  if (args.out_dir.empty()) return InvalidArgumentError("--out DIR is required (see --help)");
   return args;
 }
 

@@ -4,7 +4,9 @@
 //                [--mode full|gnss_ins|gnss_ins_smoothed|lidar_only|all] [--pos forward|smoothed]
 //                [--frames A:B] [--gnss-outage START_S:DURATION_S ...] [--config FILE]
 //   slam_mms_run --out DIR      (no data: simulates the embedded default drive into DIR/sim first)
-// plus --sim-duration S and --sim-seed N for the simulated drive, --log-level, and --help.
+// plus --sim-duration S, --sim-seed N and --keep-sim for the simulated drive, --dump-config FILE,
+// --crs EPSG:nnnn, --las-tile-size M, --resume, --checkpoint-every N, --log-level, --config-keys,
+// --version and --help (RunUsage()).
 
 #include <cstdint>
 #include <filesystem>
@@ -37,7 +39,10 @@ struct RunArgs {
   /// --gnss-outage windows [start_s, duration_s] relative to the first scan's start.
   std::vector<std::pair<double, double>> gnss_outages;
   std::filesystem::path config;  ///< Empty: none.
-  double sim_duration_s = 30.0;  ///< Seconds of the default drive to simulate (0 = all).
+  /// --sim-scenario: the drive simulated when no input is given (sim::DriveSimulator scenarios:
+  /// "demo", about 60 s with four turns and a revisit; "default", 190 s; "long").
+  std::string sim_scenario = "demo";
+  double sim_duration_s = 0.0;  ///< --sim-duration: seconds of it to simulate (0 = all).
   uint64_t sim_seed = 1;
   LogLevel log_level =
       LogLevel::kWarning;  ///< --log-level: the library's messages from this level.
@@ -57,10 +62,15 @@ struct RunArgs {
   std::vector<std::string> command_line;  ///< argv as given (report.json).
 };
 
-/// Parses argv; errors name the flag and what was expected (exit code 2 in main).
+/// Parses argv (CLI11: `--flag value` and `--flag=value`); errors name the flag and what was
+/// expected (exit code 2 in main). Fills command_line with argv. With --help, --version or
+/// --config-keys nothing else is required; with --dump-config no --out is required.
 StatusOr<RunArgs> ParseRunArgs(int argc, const char* const* argv);
 
 /// The --help text.
 std::string RunUsage();
+
+/// The --version line: "slam_mms_run <SLAM_MMS_VERSION_STRING>".
+std::string RunVersion();
 
 }  // namespace slam_mms::app

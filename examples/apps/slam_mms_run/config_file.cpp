@@ -1,32 +1,38 @@
 #include "slam_mms_run/config_file.hpp"
 
+#include <yaml-cpp/yaml.h>
+
 #include <cerrno>
+#include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <functional>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
+
+#include "slam_mms/version.hpp"
 
 namespace slam_mms::app {
 namespace {
 
 using Options = MappingSystem::Options;
+using Json = nlohmann::ordered_json;
 
-// One accepted key: how to parse a value into the options and how to print the current value.
+// One accepted key: how to parse a YAML value into the options, and how to write the current value
+// as YAML text and as JSON.
 struct KeyHandler {
   std::string type;
-  std::function<bool(const std::string& value, Options* o)> set;
-  std::function<std::string(const Options& o)> get;
+  /// Sets the field from a scalar (or, for vector3, a sequence or scalar); false: bad value.
+  std::function<bool(const YAML::Node& value, Options* o)> set;
+  std::function<std::string(const Options& o)> yaml;
+  std::function<Json(const Options& o)> json;
+  bool nullable = false;  ///< `~` is a value (unset origin, no path).
+  bool sequence = false;  ///< Takes a list (vector3).
 };
-
-std::string Trim(const std::string& s) {
-  const size_t a = s.find_first_not_of(" \t\r\n");
-  if (a == std::string::npos) return "";
-  const size_t b = s.find_last_not_of(" \t\r\n");
-  return s.substr(a, b - a + 1);
-}
 
 bool ToDouble(const std::string& text, double* v) {
   if (text.empty()) return false;
@@ -50,7 +56,8 @@ bool ToInt(const std::string& text, int* v) {
   return true;
 }
 
-bool ToBool(const std::string& text, bool* v) {
+bool ToBool(std::string text, bool* v) {
+  for (char& c : text) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   static const std::map<std::string, bool> kWords = {
       {"true", true}, {"false", false}, {"1", true},  {"0", false},
       {"yes", true},  {"no", false},    {"on", true}, {"off", false}};
@@ -60,101 +67,189 @@ bool ToBool(const std::string& text, bool* v) {
   return true;
 }
 
-bool ToVector3(const std::string& text, Eigen::Vector3d* v) {
-  std::string t = text;
-  for (char& c : t) {
-    if (c == ',') c = ' ';
+// [x, y, z] (a YAML sequence of three numbers) or "x y z" / "x, y, z" in one scalar.
+bool ToVector3(const YAML::Node& node, Eigen::Vector3d* v) {
+  std::vector<std::string> parts;
+  if (node.IsSequence()) {
+    for (const YAML::Node& e : node) {
+      if (!e.IsScalar()) return false;
+      parts.push_back(e.Scalar());
+    }
+  } else if (node.IsScalar()) {
+    std::string t = node.Scalar();
+    for (char& c : t) {
+      if (c == ',') c = ' ';
+    }
+    std::istringstream in(t);
+    std::string p;
+    while (in >> p) parts.push_back(p);
   }
-  std::istringstream in(t);
-  std::string a, b, c, extra;
-  if (!(in >> a >> b >> c) || (in >> extra)) return false;
+  if (parts.size() != 3) return false;
   Eigen::Vector3d x;
-  if (!ToDouble(a, &x.x()) || !ToDouble(b, &x.y()) || !ToDouble(c, &x.z())) return false;
+  for (int k = 0; k < 3; ++k) {
+    if (!ToDouble(parts[k], &x(k))) return false;
+  }
   *v = x;
   return true;
 }
 
-std::string FormatDouble(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
+// The shortest text that reads back to the same double (float: to the same float).
+template <typename T>
+std::string ShortestText(T v) {
+  char buf[64];
+  const std::to_chars_result r = std::to_chars(buf, buf + sizeof(buf), v);
+  return std::string(buf, r.ptr);
+}
+std::string FormatDouble(double v) { return ShortestText(v); }
+std::string FormatFloat(float v) { return ShortestText(v); }
+
+// A YAML double-quoted string.
+std::string Quote(const std::string& s) {
+  std::string out = "\"";
+  for (const char c : s) {
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += c;
+    } else if (static_cast<unsigned char>(c) < 0x20) {
+      char buf[8];
+      std::snprintf(buf, sizeof(buf), "\\x%02x", static_cast<unsigned char>(c));
+      out += buf;
+    } else {
+      out += c;
+    }
+  }
+  return out + "\"";
+}
+
+template <typename T>
+T& Field(const std::function<T*(Options*)>& field, const Options& o) {
+  return *field(const_cast<Options*>(&o));
 }
 
 KeyHandler Double(std::function<double*(Options*)> field) {
-  return {"double", [field](const std::string& v, Options* o) { return ToDouble(v, field(o)); },
-          [field](const Options& o) { return FormatDouble(*field(const_cast<Options*>(&o))); }};
+  KeyHandler h;
+  h.type = "double";
+  h.set = [field](const YAML::Node& v, Options* o) { return ToDouble(v.Scalar(), field(o)); };
+  h.yaml = [field](const Options& o) { return FormatDouble(Field(field, o)); };
+  h.json = [field](const Options& o) { return Json(Field(field, o)); };
+  return h;
 }
 KeyHandler Float(std::function<float*(Options*)> field) {
-  return {"double",
-          [field](const std::string& v, Options* o) {
-            double x = 0.0;
-            if (!ToDouble(v, &x)) return false;
-            *field(o) = static_cast<float>(x);
-            return true;
-          },
-          [field](const Options& o) { return FormatDouble(*field(const_cast<Options*>(&o))); }};
+  KeyHandler h;
+  h.type = "double";
+  h.set = [field](const YAML::Node& v, Options* o) {
+    double x = 0.0;
+    if (!ToDouble(v.Scalar(), &x)) return false;
+    *field(o) = static_cast<float>(x);
+    return true;
+  };
+  h.yaml = [field](const Options& o) { return FormatFloat(Field(field, o)); };
+  // Through the shortest text, so that JSON shows 0.3 rather than 0.30000001192092896.
+  h.json = [field](const Options& o) {
+    return Json(std::strtod(FormatFloat(Field(field, o)).c_str(), nullptr));
+  };
+  return h;
 }
 KeyHandler Int(std::function<int*(Options*)> field) {
-  return {"int", [field](const std::string& v, Options* o) { return ToInt(v, field(o)); },
-          [field](const Options& o) { return std::to_string(*field(const_cast<Options*>(&o))); }};
+  KeyHandler h;
+  h.type = "int";
+  h.set = [field](const YAML::Node& v, Options* o) { return ToInt(v.Scalar(), field(o)); };
+  h.yaml = [field](const Options& o) { return std::to_string(Field(field, o)); };
+  h.json = [field](const Options& o) { return Json(Field(field, o)); };
+  return h;
 }
 KeyHandler Bool(std::function<bool*(Options*)> field) {
-  return {"bool", [field](const std::string& v, Options* o) { return ToBool(v, field(o)); },
-          [field](const Options& o) {
-            return std::string(*field(const_cast<Options*>(&o)) ? "true" : "false");
-          }};
+  KeyHandler h;
+  h.type = "bool";
+  h.set = [field](const YAML::Node& v, Options* o) { return ToBool(v.Scalar(), field(o)); };
+  h.yaml = [field](const Options& o) { return std::string(Field(field, o) ? "true" : "false"); };
+  h.json = [field](const Options& o) { return Json(Field(field, o)); };
+  return h;
 }
 KeyHandler Vector3(std::function<Eigen::Vector3d*(Options*)> field) {
-  return {"vector3", [field](const std::string& v, Options* o) { return ToVector3(v, field(o)); },
-          [field](const Options& o) {
-            const Eigen::Vector3d& x = *field(const_cast<Options*>(&o));
-            return FormatDouble(x.x()) + " " + FormatDouble(x.y()) + " " + FormatDouble(x.z());
-          }};
+  KeyHandler h;
+  h.type = "vector3";
+  h.sequence = true;
+  h.set = [field](const YAML::Node& v, Options* o) { return ToVector3(v, field(o)); };
+  h.yaml = [field](const Options& o) {
+    const Eigen::Vector3d& x = Field(field, o);
+    return "[" + FormatDouble(x.x()) + ", " + FormatDouble(x.y()) + ", " + FormatDouble(x.z()) +
+           "]";
+  };
+  h.json = [field](const Options& o) {
+    const Eigen::Vector3d& x = Field(field, o);
+    return Json::array({x.x(), x.y(), x.z()});
+  };
+  return h;
 }
 template <typename E>
 KeyHandler Enum(std::function<E*(Options*)> field, std::vector<std::pair<std::string, E>> names) {
-  std::string type = "enum:";
-  for (size_t i = 0; i < names.size(); ++i) type += (i ? "|" : " ") + names[i].first;
-  return {type,
-          [field, names](const std::string& v, Options* o) {
-            for (const auto& [name, value] : names) {
-              if (name == v) {
-                *field(o) = value;
-                return true;
-              }
-            }
-            return false;
-          },
-          [field, names](const Options& o) {
-            for (const auto& [name, value] : names) {
-              if (*field(const_cast<Options*>(&o)) == value) return name;
-            }
-            return std::string("?");
-          }};
+  KeyHandler h;
+  h.type = "enum:";
+  for (size_t i = 0; i < names.size(); ++i) h.type += (i ? "|" : " ") + names[i].first;
+  auto name_of = [field, names](const Options& o) {
+    for (const auto& [name, value] : names) {
+      if (Field(field, o) == value) return name;
+    }
+    return std::string("?");
+  };
+  h.set = [field, names](const YAML::Node& v, Options* o) {
+    for (const auto& [name, value] : names) {
+      if (name == v.Scalar()) {
+        *field(o) = value;
+        return true;
+      }
+    }
+    return false;
+  };
+  h.yaml = name_of;
+  h.json = [name_of](const Options& o) { return Json(name_of(o)); };
+  return h;
 }
-// A folder; "none" = empty (the option's "not used").
+// A folder; ~ or "none" = empty (the option's "not used").
 KeyHandler Path(std::function<std::filesystem::path*(Options*)> field) {
-  return {"path",
-          [field](const std::string& v, Options* o) {
-            *field(o) = v == "none" ? std::filesystem::path() : std::filesystem::path(v);
-            return true;
-          },
-          [field](const Options& o) {
-            const std::filesystem::path& p = *field(const_cast<Options*>(&o));
-            return p.empty() ? std::string("none") : p.string();
-          }};
+  KeyHandler h;
+  h.type = "path";
+  h.nullable = true;
+  h.set = [field](const YAML::Node& v, Options* o) {
+    if (v.IsNull() || v.Scalar() == "none") {
+      *field(o) = std::filesystem::path();
+    } else {
+      *field(o) = std::filesystem::path(v.Scalar());
+    }
+    return true;
+  };
+  h.yaml = [field](const Options& o) {
+    const std::filesystem::path& p = Field(field, o);
+    return p.empty() ? std::string("~") : Quote(p.string());
+  };
+  h.json = [field](const Options& o) {
+    const std::filesystem::path& p = Field(field, o);
+    return p.empty() ? Json(nullptr) : Json(p.string());
+  };
+  return h;
 }
-// The origin is optional in the options: the three keys together set it.
+// The origin is optional in the options: the three keys together set it, ~ for all three unsets it
+// (ApplyConfigText checks that they come together).
 KeyHandler OriginField(double GeodeticPoint::*member) {
-  return {"double",
-          [member](const std::string& v, Options* o) {
-            double x = 0.0;
-            if (!ToDouble(v, &x)) return false;
-            if (!o->origin) o->origin = GeodeticPoint();
-            (*o->origin).*member = x;
-            return true;
-          },
-          [](const Options& o) { return std::string("(unset: the first valid GNSS fix)"); }};
+  KeyHandler h;
+  h.type = "double";
+  h.nullable = true;
+  h.set = [member](const YAML::Node& v, Options* o) {
+    if (v.IsNull()) return true;
+    double x = 0.0;
+    if (!ToDouble(v.Scalar(), &x)) return false;
+    if (!o->origin) o->origin = GeodeticPoint();
+    (*o->origin).*member = x;
+    return true;
+  };
+  h.yaml = [member](const Options& o) {
+    return o.origin ? FormatDouble((*o.origin).*member) : std::string("~");
+  };
+  h.json = [member](const Options& o) {
+    return o.origin ? Json((*o.origin).*member) : Json(nullptr);
+  };
+  return h;
 }
 
 const std::vector<std::pair<std::string, GnssFixType>>& FixTypeNames() {
@@ -291,67 +386,214 @@ const KeyHandler* FindHandler(const std::string& key) {
   return nullptr;
 }
 
+// True where `prefix` is a group of keys ("localizer", "ins.gnss"): some key starts with "prefix.".
+bool IsGroup(const std::string& prefix) {
+  const std::string dotted = prefix + ".";
+  for (const auto& [name, handler] : Handlers()) {
+    if (name.compare(0, dotted.size(), dotted) == 0) return true;
+  }
+  return false;
+}
+
+std::string NodeKind(const YAML::Node& n) {
+  if (n.IsMap()) return "a mapping";
+  if (n.IsSequence()) return "a list";
+  if (n.IsNull()) return "no value";
+  return "'" + n.Scalar() + "'";
+}
+
+struct ParseState {
+  std::string file_name;
+  std::set<std::string> seen;
+  int origin_numbers = 0;
+  int origin_nulls = 0;
+};
+
+std::string Where(const ParseState& s, const YAML::Node& node) {
+  return s.file_name + ":" + std::to_string(node.Mark().line + 1) + ": ";
+}
+
+// Applies one mapping whose keys are relative to `prefix` ("" at the top).
+Status ApplyMapping(const YAML::Node& map, const std::string& prefix, ParseState* state,
+                    Options* options) {
+  for (auto it = map.begin(); it != map.end(); ++it) {
+    const YAML::Node& key_node = it->first;
+    const YAML::Node& value = it->second;
+    const std::string where = Where(*state, key_node);
+    if (!key_node.IsScalar() || key_node.Scalar().empty()) {
+      return InvalidArgumentError(where + "expected a key name, got " + NodeKind(key_node));
+    }
+    const std::string key = prefix.empty() ? key_node.Scalar() : prefix + "." + key_node.Scalar();
+    const KeyHandler* handler = FindHandler(key);
+    if (handler == nullptr) {
+      if (IsGroup(key)) {
+        if (!value.IsMap()) {
+          return InvalidArgumentError(where + "'" + key +
+                                      "' is a group of keys: expected a mapping, got " +
+                                      NodeKind(value));
+        }
+        SLAM_MMS_RETURN_IF_ERROR(ApplyMapping(value, key, state, options));
+        continue;
+      }
+      return InvalidArgumentError(where + "unknown key '" + key +
+                                  "' (slam_mms_run --config-keys lists them; docs/user_guide.md, "
+                                  "\"Options\")");
+    }
+    if (!state->seen.insert(key).second) {
+      return InvalidArgumentError(where + "key '" + key + "' given twice");
+    }
+    if (value.IsMap() || (value.IsSequence() && !handler->sequence) ||
+        (value.IsNull() && !handler->nullable)) {
+      return InvalidArgumentError(where + "key '" + key + "': expected " + handler->type +
+                                  ", got " + NodeKind(value));
+    }
+    if (!handler->set(value, options)) {
+      std::string text = value.IsScalar() ? value.Scalar() : "";
+      if (value.IsSequence()) {
+        YAML::Emitter e;
+        e << YAML::Flow << value;
+        text = e.c_str();
+      }
+      return InvalidArgumentError(where + "key '" + key + "': bad value '" + text + "' (expected " +
+                                  handler->type + ")");
+    }
+    if (key.rfind("origin_", 0) == 0)
+      ++(value.IsNull() ? state->origin_nulls : state->origin_numbers);
+  }
+  return OkStatus();
+}
+
+// The keys as a tree, children in first-appearance order of ConfigKeys(): what OptionsToYaml and
+// OptionsToJson walk.
+struct KeyTree {
+  std::string name;
+  const KeyHandler* handler = nullptr;  ///< Leaves only.
+  std::string full_key;
+  std::vector<KeyTree> children;
+  KeyTree* Child(const std::string& child_name) {
+    for (KeyTree& c : children) {
+      if (c.name == child_name && c.handler == nullptr) return &c;
+    }
+    children.push_back({child_name, nullptr, "", {}});
+    return &children.back();
+  }
+};
+
+const KeyTree& Tree() {
+  static const KeyTree kTree = [] {
+    KeyTree root;
+    for (const auto& [name, handler] : Handlers()) {
+      KeyTree* node = &root;
+      size_t begin = 0;
+      for (size_t dot = name.find('.'); dot != std::string::npos; dot = name.find('.', begin)) {
+        node = node->Child(name.substr(begin, dot - begin));
+        begin = dot + 1;
+      }
+      node->children.push_back({name.substr(begin), &handler, name, {}});
+    }
+    return root;
+  }();
+  return kTree;
+}
+
+void WriteYaml(const KeyTree& node, const Options& options, const Options& defaults, int depth,
+               std::string* out) {
+  const std::string indent(static_cast<size_t>(2 * depth), ' ');
+  for (const KeyTree& c : node.children) {
+    if (c.handler == nullptr) {
+      *out += indent + c.name + ":\n";
+      WriteYaml(c, options, defaults, depth + 1, out);
+      continue;
+    }
+    std::string type = c.handler->type;
+    if (c.handler->nullable && c.full_key.rfind("origin_", 0) == 0) {
+      type += " or ~ (unset: the first valid GNSS fix; the three origin keys go together)";
+    } else if (c.handler->nullable) {
+      type += " or ~ (unset)";
+    }
+    *out += indent + c.name + ": " + c.handler->yaml(options) + "  # " + type + "; default " +
+            c.handler->yaml(defaults) + "\n";
+  }
+}
+
+Json ToJson(const KeyTree& node, const Options& options) {
+  Json object = Json::object();
+  for (const KeyTree& c : node.children) {
+    object[c.name] = c.handler == nullptr ? ToJson(c, options) : c.handler->json(options);
+  }
+  return object;
+}
+
 }  // namespace
 
 std::vector<ConfigKeyInfo> ConfigKeys() {
   const Options defaults;
   std::vector<ConfigKeyInfo> keys;
   for (const auto& [name, handler] : Handlers()) {
-    keys.push_back({name, handler.type, handler.get(defaults)});
+    keys.push_back({name, handler.type, handler.yaml(defaults)});
   }
   return keys;
 }
 
 Status ApplyConfigText(const std::string& text, const std::string& file_name, Options* options) {
-  std::istringstream in(text);
-  std::string line;
-  int line_number = 0;
-  std::set<std::string> seen;
-  int origin_keys = 0;
-  while (std::getline(in, line)) {
-    ++line_number;
-    const size_t hash = line.find('#');
-    if (hash != std::string::npos) line.resize(hash);
-    line = Trim(line);
-    if (line.empty()) continue;
-    const std::string where = file_name + ":" + std::to_string(line_number) + ": ";
-    const size_t eq = line.find('=');
-    if (eq == std::string::npos) {
-      return InvalidArgumentError(where + "expected 'key = value', got '" + line + "'");
-    }
-    const std::string key = Trim(line.substr(0, eq));
-    const std::string value = Trim(line.substr(eq + 1));
-    if (key.empty()) return InvalidArgumentError(where + "missing key before '='");
-    const KeyHandler* handler = FindHandler(key);
-    if (handler == nullptr) {
-      return InvalidArgumentError(where + "unknown key '" + key +
-                                  "' (the keys are listed in docs/user_guide.md, \"Options\")");
-    }
-    if (!seen.insert(key).second) {
-      return InvalidArgumentError(where + "key '" + key + "' given twice");
-    }
-    if (!handler->set(value, options)) {
-      return InvalidArgumentError(where + "key '" + key + "': bad value '" + value +
-                                  "' (expected " + handler->type + ")");
-    }
-    if (key.rfind("origin_", 0) == 0) ++origin_keys;
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::ParserException& e) {
+    return InvalidArgumentError(file_name + ":" + std::to_string(e.mark.line + 1) +
+                                ": not valid YAML: " + e.msg);
   }
-  if (origin_keys != 0 && origin_keys != 3) {
+  ParseState state;
+  state.file_name = file_name;
+  if (root.IsMap()) {
+    try {
+      SLAM_MMS_RETURN_IF_ERROR(ApplyMapping(root, "", &state, options));
+    } catch (const YAML::Exception& e) {
+      return InvalidArgumentError(file_name + ":" + std::to_string(e.mark.line + 1) + ": " + e.msg);
+    }
+  } else if (!root.IsNull()) {  // An empty file (or only comments) overrides nothing.
+    return InvalidArgumentError(Where(state, root) +
+                                "expected a mapping of option keys to values (key: value), got " +
+                                NodeKind(root));
+  }
+  if (state.origin_numbers != 0 && state.origin_numbers != 3) {
     return InvalidArgumentError(file_name +
                                 ": origin_latitude_deg, origin_longitude_deg and origin_height_m "
-                                "must be given together");
+                                "must be given together (three numbers, or ~ for all three)");
   }
+  if (state.origin_numbers == 0 && state.origin_nulls > 0) options->origin.reset();
   const Status valid = options->Validate();
   if (!valid.ok()) return InvalidArgumentError(file_name + ": " + valid.message());
   return OkStatus();
 }
 
 Status ApplyConfigFile(const std::filesystem::path& file, Options* options) {
-  std::ifstream in(file);
+  std::ifstream in(file, std::ios::binary);
   if (!in) return NotFoundError(file.string() + ": cannot open the config file");
   std::ostringstream text;
   text << in.rdbuf();
   return ApplyConfigText(text.str(), file.string(), options);
 }
+
+std::string OptionsToYaml(const Options& options) {
+  std::string out =
+      "# slam_mms_run options (slam_mms " SLAM_MMS_VERSION_STRING
+      "): every --config key with its value.\n"
+      "# `slam_mms_run --config FILE` reads this file back; keep only the keys you change.\n"
+      "# Nested keys may also be written dotted (localizer.submap_duration_s: 2.0).\n";
+  WriteYaml(Tree(), options, Options(), 0, &out);
+  return out;
+}
+
+Status WriteConfigFile(const Options& options, const std::filesystem::path& file) {
+  std::ofstream out(file, std::ios::binary | std::ios::trunc);
+  if (!out) return NotFoundError(file.string() + ": cannot open for writing");
+  out << OptionsToYaml(options);
+  out.close();
+  if (!out) return DataLossError(file.string() + ": failed writing");
+  return OkStatus();
+}
+
+std::string OptionsToJson(const Options& options) { return ToJson(Tree(), options).dump(); }
 
 }  // namespace slam_mms::app

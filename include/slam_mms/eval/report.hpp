@@ -1,16 +1,29 @@
 #pragma once
-// EvalReport: the contents of slam_mms_run's report.json, written with EXACTLY the keys of the
-// schema in issue 8 (other tools parse them); every metric not computed is written as null.
+// EvalReport: the contents of slam_mms_run's report.json (nlohmann-json, 2-space indent, doubles
+// written so that they read back exactly, every metric not computed written as null). The issue-8
+// keys stay as they were (other tools parse them); issue 22 added the others (marked +):
 //
-//   {"input": {"drive": str, "scans": int, "duration_s": float, "ground_truth":
-//   "simulator"|"oxts"|"none"},
+//   {"version": str,                        + library version (SLAM_MMS_VERSION_STRING)
+//    "complete": bool,                      + false: the run stopped early (error, SIGINT)
+//    "command_line": [str, ...],            + argv as given
+//    "input": {"drive": str, "kind": "kitti_raw"|"folder"|"rosbag"|"simulated"|null (+),
+//              "scans": int (= scans_processed), "scans_total": int|null (+),
+//              "scans_processed": int (+), "duration_s": float,
+//              "ground_truth": "simulator"|"oxts"|"none",
+//              "skipped_scans": {"count": int, "scans": [{"source": str, "reason": str}]} (+)},
 //    "gnss_outages": [[start_s, duration_s], ...],
 //    "methods": {"full"|"gnss_ins"|"gnss_ins_smoothed"|"lidar_only": {
 //        "ate_rmse_m": f, "ate_rmse_xyz_m": [f,f,f], "rot_rmse_deg": f, "rot_rmse_rpy_deg":
 //        [f,f,f], "t_rel_pct": f|null, "r_rel_deg_per_100m": f|null, "max_pos_err_in_outage_m":
 //        f|null, "max_rot_err_in_outage_deg": f|null, "mme": f, "scans_per_s": f, "peak_rss_mb":
 //        f}},
-//    "ground_truth_map": {"mme": f|null}}
+//    "ground_truth_map": {"mme": f|null},
+//    "options": {...}|null,                 + the effective MappingSystem options (config tree)
+//    "georef": {...}|null,                  + the output CRS and origin (georef.json's object)
+//    "outputs": {"files": [str, ...]}}      + files written (only when the caller lists some)
+//
+// "options" and "georef" are JSON object texts the caller passes (EvalReport::options_json,
+// georef_json) and that are parsed and embedded; text that is not a JSON object is an error.
 //
 // Thread safety: value types and free functions; safe to call concurrently on distinct objects.
 
@@ -30,12 +43,23 @@
 
 namespace slam_mms::eval {
 
+/// A scan the run did not use (unreadable file, bad stamp, ...): written in
+/// input.skipped_scans.scans.
+struct SkippedScan {
+  std::string source;  ///< The file or bag message (e.g. ".../0000000005.bin").
+  std::string reason;  ///< Why (the reader's message).
+};
+
 struct ReportInput {
-  std::string drive;        ///< Drive folder or name.
-  int64_t scans = 0;        ///< Scans processed.
-  double duration_s = 0.0;  ///< Drive duration covered [s].
+  std::string drive;  ///< Drive folder or name.
+  /// "kitti_raw", "folder", "rosbag" or "simulated"; empty = unknown (null).
+  std::string kind;
+  int64_t scans = 0;         ///< Scans processed ("scans" and "scans_processed").
+  int64_t scans_total = -1;  ///< Scans in the input's frame range; < 0 = unknown (null).
+  double duration_s = 0.0;   ///< Drive duration covered [s].
   /// "simulator", "oxts" or "none" (a folder or bag without ground truth: metrics are null).
   std::string ground_truth = "simulator";
+  std::vector<SkippedScan> skipped_scans;
 };
 
 /// One method's numbers; nullopt is written as null.
@@ -65,13 +89,25 @@ struct EvalReport {
   /// written in this order.
   std::vector<std::pair<std::string, MethodReport>> methods;
   std::optional<double> ground_truth_map_mme;
+  /// argv as given ("command_line").
+  std::vector<std::string> command_line;
+  /// The effective options as a JSON object text (slam_mms_run: app::OptionsToJson); empty = null.
+  std::string options_json;
+  /// The geo-reference as a JSON object text (georef.json's); empty = null.
+  std::string georef_json;
+  /// False where the run stopped before the end of the drive (error, interrupt).
+  bool complete = true;
+  /// Files written, relative to the output folder ("outputs": {"files": [...]}); empty = no
+  /// "outputs" key.
+  std::vector<std::string> outputs;
 };
 
 /// The method names report.json allows.
 bool IsReportMethodName(const std::string& name);
 
-/// report.json text. Fails where ground_truth is not "simulator"/"oxts", a method name is not one
-/// of the allowed three or appears twice.
+/// report.json text. Fails where ground_truth is not "simulator"/"oxts"/"none", input.kind is not
+/// one of the four kinds (or empty), a method name is not one of the allowed four or appears
+/// twice, or options_json/georef_json is not empty and not a JSON object.
 StatusOr<std::string> ReportToJson(const EvalReport& report);
 
 /// Writes ReportToJson(report) to `path` (fails naming the path when it cannot be written).

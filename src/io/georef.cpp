@@ -203,6 +203,26 @@ StatusOr<GeoReference> GeoReference::Create(const GeoOrigin& origin, const std::
   return g;
 }
 
+Status GeoReference::CheckCrs(const std::string& crs) {
+  if (crs.empty()) return OkStatus();
+  GeoOrigin probe;
+  PJ_CONTEXT* ctx = proj_context_create();
+  if (ctx != nullptr) {
+    proj_log_func(ctx, nullptr, NoLog);
+    if (PJ* pj = proj_create(ctx, crs.c_str())) {
+      double west = 0, south = 0, east = 0, north = 0;
+      if (proj_get_area_of_use(ctx, pj, &west, &south, &east, &north, nullptr) && west > -1000.0) {
+        if (east < west) east += 360.0;  // across the antimeridian
+        probe.latitude_deg = 0.5 * (south + north);
+        probe.longitude_deg = std::remainder(0.5 * (west + east), 360.0);
+      }
+      proj_destroy(pj);
+    }
+    proj_context_destroy(ctx);
+  }
+  return Create(probe, crs).status();
+}
+
 GeodeticCoordinates GeoReference::EnuToGeodetic(const Eigen::Vector3d& p_world) const {
   GeodeticCoordinates g;
   proj_->enu->Reverse(p_world.x(), p_world.y(), p_world.z(), g.latitude_deg, g.longitude_deg,

@@ -59,13 +59,7 @@ Status WriteMethodFiles(const ModeRun& run, const std::filesystem::path& out_dir
     const std::string base = "map_" + run.name;
     KeepFirst(&first, WritePly(map, out_dir / (base + ".ply")));
     KeepFirst(&first, WritePcd(map, out_dir / (base + ".pcd")));
-    if (run.origin) {
-      GeoOrigin origin{run.origin->latitude_deg, run.origin->longitude_deg, run.origin->height_m};
-      KeepFirst(&first, WriteLas(map, origin, out_dir / (base + ".las")));
-    } else {
-      SLAM_MMS_LOG(kWarning) << run.name << ": world origin unknown, " << base
-                             << ".las not written";
-    }
+    // map_<name>.las (or its tiles): WriteGeoOutputs (geo_outputs.hpp).
   } else if (map_wanted) {
     SLAM_MMS_LOG(kWarning) << run.name << ": empty map, map files not written";
   }

@@ -17,8 +17,9 @@
 
 namespace slam_mms::app {
 
-/// <name>.tum, <name>.kitti, <name>_cov.csv; for full and gnss_ins also map_<name>.ply/.pcd/.las
-/// (the LAS geo-referenced with the run's origin). Returns the first failure (all are attempted).
+/// <name>.tum, <name>.kitti, <name>_cov.csv, <name>_scans.csv, <name>_level1.tum; for the methods
+/// with a map also map_<name>.ply/.pcd (local ENU). The geo-referenced files (WGS-84/projected CSV,
+/// LAS) are WriteGeoOutputs' (geo_outputs.hpp). Returns the first failure (all are attempted).
 Status WriteMethodFiles(const ModeRun& run, const std::filesystem::path& out_dir);
 
 /// One method's metrics plus what the plots and the table need.

@@ -73,6 +73,9 @@ class GeoReference {
   /// outside UTM's -80..84 deg when crs is ""), an unknown CRS, or one that is not projected with
   /// east/north metre axes; the message names the CRS string and PROJ's reason.
   static StatusOr<GeoReference> Create(const GeoOrigin& origin, const std::string& crs = "");
+  /// Checks `crs` as Create would, before the origin is known (at the centre of the CRS's area of
+  /// use): lets an app refuse a bad --crs before any processing. OK for "".
+  [[nodiscard]] static Status CheckCrs(const std::string& crs);
 
   GeoReference(GeoReference&& other) noexcept;
   GeoReference& operator=(GeoReference&& other) noexcept;

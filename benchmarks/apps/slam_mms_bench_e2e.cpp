@@ -8,6 +8,7 @@
 //   slam_mms_bench_e2e --folder DIR | --rosbag FILE.bag [--extrinsics FILE.yaml] [--frames A:B]
 //                                                    a plain drive folder or a ROS 1 bag
 //   common: [--mode full|gnss_ins|lidar_only] [--out FILE.json] [--rss-samples N]
+//   slam_mms_bench_e2e --version | --help        (values: `--flag value` or `--flag=value`)
 //
 // The simulated drive is written to --sim-dir (kept, and reused when it already holds the same
 // seed and duration) or to a temporary folder removed at exit. Prints a table to stdout and, with
@@ -16,6 +17,7 @@
 
 #include <unistd.h>
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
 #include <cinttypes>
@@ -23,6 +25,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -33,6 +36,7 @@
 #include "slam_mms/pipeline/mapping_system.hpp"
 #include "slam_mms/pipeline/open_drive.hpp"
 #include "slam_mms/sim/drive_simulator.hpp"
+#include "slam_mms/version.hpp"
 
 namespace fs = std::filesystem;
 using slam_mms::MappingMode;
@@ -73,78 +77,98 @@ constexpr const char* kUsage =
     "  common: [--mode full|gnss_ins|lidar_only] [--out FILE.json] [--rss-samples N]\n"
     "          [--spill-dir DIR|none]   finished submaps' clouds (default: the temp folder)\n";
 
+// The command line (CLI11: `--flag value` and `--flag=value`); values are checked here so that the
+// messages say what was expected. --help prints the usage and exits 0, --version the version.
 bool ParseArgs(int argc, char** argv, Args* a, std::string* error) {
-  for (int i = 1; i < argc; ++i) {
-    const std::string k = argv[i];
-    if (k == "--help" || k == "-h") {
-      std::fputs(kUsage, stdout);
-      std::exit(0);
-    }
-    if (i + 1 >= argc) {
-      *error = k + " needs a value (or is unknown)";
+  CLI::App app("slam_mms_bench_e2e", "slam_mms_bench_e2e");
+  app.set_help_flag();
+  bool help = false, version = false;
+  std::string duration, seed, mode, kitti_raw, folder, rosbag, frames, spill_dir, rss_samples;
+  app.add_flag("-h,--help", help);
+  app.add_flag("--version", version);
+  app.add_option("--duration-s", duration);
+  app.add_option("--scenario", a->scenario);
+  app.add_option("--seed", seed);
+  app.add_option("--mode", mode);
+  app.add_option("--kitti-raw", kitti_raw);
+  app.add_option("--folder", folder);
+  app.add_option("--rosbag", rosbag);
+  app.add_option("--extrinsics", a->extrinsics);
+  app.add_option("--frames", frames);
+  app.add_option("--out", a->out);
+  app.add_option("--spill-dir", spill_dir);
+  app.add_option("--sim-dir", a->sim_dir);
+  app.add_option("--rss-samples", rss_samples);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    *error = e.what();
+    return false;
+  }
+  if (help) {
+    std::fputs(kUsage, stdout);
+    std::exit(0);
+  }
+  if (version) {
+    std::printf("slam_mms_bench_e2e %s\n", SLAM_MMS_VERSION_STRING);
+    std::exit(0);
+  }
+  const auto given = [&app](const char* flag) { return app.count(flag) > 0; };
+  char* end = nullptr;
+  if (given("--duration-s")) {
+    a->duration_s = std::strtod(duration.c_str(), &end);
+    if (duration.empty() || *end != '\0' || !(a->duration_s > 0.0)) {
+      *error = "--duration-s " + duration + ": must be a number > 0";
       return false;
     }
-    const std::string v = argv[++i];
-    char* end = nullptr;
-    if (k == "--duration-s") {
-      a->duration_s = std::strtod(v.c_str(), &end);
-      if (*end != '\0' || !(a->duration_s > 0.0)) {
-        *error = "--duration-s " + v + ": must be a number > 0";
-        return false;
-      }
-    } else if (k == "--scenario") {
-      if (v != "default" && v != "long") {
-        *error = "--scenario " + v + ": must be default or long";
-        return false;
-      }
-      a->scenario = v;
-    } else if (k == "--seed") {
-      a->seed = std::strtoull(v.c_str(), &end, 10);
-      if (*end != '\0' || v.empty()) {
-        *error = "--seed " + v + ": must be a non-negative integer";
-        return false;
-      }
-    } else if (k == "--mode") {
-      MappingMode m;
-      if (!slam_mms::ParseMappingMode(v, &m)) {
-        *error = "--mode " + v + ": must be full, gnss_ins or lidar_only";
-        return false;
-      }
-      a->mode = v;
-    } else if (k == "--kitti-raw" || k == "--folder" || k == "--rosbag") {
-      if (!a->input.empty()) {
-        *error = "--kitti-raw, --folder and --rosbag exclude each other";
-        return false;
-      }
-      a->input = v;
-      a->kind = k == "--folder"   ? slam_mms::DriveSourceKind::kFolder
-                : k == "--rosbag" ? slam_mms::DriveSourceKind::kRosbag
-                                  : slam_mms::DriveSourceKind::kKittiRaw;
-    } else if (k == "--extrinsics") {
-      a->extrinsics = v;
-    } else if (k == "--frames") {
-      long long f0 = 0, f1 = 0;
-      char tail = 0;
-      if (std::sscanf(v.c_str(), "%lld:%lld%c", &f0, &f1, &tail) != 2 || f0 < 0 || f1 < f0) {
-        *error = "--frames " + v + ": must be A:B with 0 <= A <= B";
-        return false;
-      }
-      a->first_frame = f0;
-      a->last_frame = f1;
-    } else if (k == "--out") {
-      a->out = v;
-    } else if (k == "--spill-dir") {
-      a->spill_dir = v == "none" ? fs::path() : fs::path(v);
-    } else if (k == "--sim-dir") {
-      a->sim_dir = v;
-    } else if (k == "--rss-samples") {
-      a->rss_samples = std::atoi(v.c_str());
-      if (a->rss_samples < 2) {
-        *error = "--rss-samples " + v + ": must be >= 2";
-        return false;
-      }
-    } else {
-      *error = "unknown option " + k;
+  }
+  if (a->scenario != "default" && a->scenario != "long") {
+    *error = "--scenario " + a->scenario + ": must be default or long";
+    return false;
+  }
+  if (given("--seed")) {
+    a->seed = std::strtoull(seed.c_str(), &end, 10);
+    if (*end != '\0' || seed.empty() || seed[0] == '-') {
+      *error = "--seed " + seed + ": must be a non-negative integer";
+      return false;
+    }
+  }
+  if (given("--mode")) {
+    MappingMode m;
+    if (!slam_mms::ParseMappingMode(mode, &m)) {
+      *error = "--mode " + mode + ": must be full, gnss_ins or lidar_only";
+      return false;
+    }
+    a->mode = mode;
+  }
+  if (given("--kitti-raw") + given("--folder") + given("--rosbag") > 1) {
+    *error = "--kitti-raw, --folder and --rosbag exclude each other";
+    return false;
+  }
+  if (given("--kitti-raw")) a->input = kitti_raw;
+  if (given("--folder")) {
+    a->input = folder;
+    a->kind = slam_mms::DriveSourceKind::kFolder;
+  }
+  if (given("--rosbag")) {
+    a->input = rosbag;
+    a->kind = slam_mms::DriveSourceKind::kRosbag;
+  }
+  if (given("--frames")) {
+    long long f0 = 0, f1 = 0;
+    char tail = 0;
+    if (std::sscanf(frames.c_str(), "%lld:%lld%c", &f0, &f1, &tail) != 2 || f0 < 0 || f1 < f0) {
+      *error = "--frames " + frames + ": must be A:B with 0 <= A <= B";
+      return false;
+    }
+    a->first_frame = f0;
+    a->last_frame = f1;
+  }
+  if (given("--spill-dir")) a->spill_dir = spill_dir == "none" ? fs::path() : fs::path(spill_dir);
+  if (given("--rss-samples")) {
+    a->rss_samples = static_cast<int>(std::strtol(rss_samples.c_str(), &end, 10));
+    if (rss_samples.empty() || *end != '\0' || a->rss_samples < 2) {
+      *error = "--rss-samples " + rss_samples + ": must be an integer >= 2";
       return false;
     }
   }
@@ -278,64 +302,48 @@ void PrintTable(const Report& r) {
   }
 }
 
-std::string JsonString(const std::string& s) {
-  std::string o = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') o += '\\';
-    o += c;
-  }
-  return o + "\"";
-}
-
 bool WriteJson(const Report& r, const fs::path& path) {
-  std::ofstream f(path);
+  using Json = nlohmann::ordered_json;
+  Json j = Json::object();
+  j["version"] = SLAM_MMS_VERSION_STRING;
+  j["input"] = r.input;
+  j["mode"] = r.mode;
+  j["scans_total"] = r.scans_total;
+  j["scans_processed"] = r.scans_processed;
+  j["scans_skipped"] = r.scans_skipped;
+  j["drive_s"] = r.drive_s;
+  j["wall_s"] = r.wall_s;
+  j["read_s"] = r.read_s;
+  j["finish_s"] = r.finish_s;
+  j["scans_per_s"] = r.scans_per_s;
+  j["scans_per_s_without_reading"] = r.scans_per_s_no_io;
+  j["level1_total_s"] = r.level1_sum_s;
+  j["outside_level1_s"] = r.outside_level1_s;
+  j["level2"] = Json{{"solves", r.level2.solves},
+                     {"loops_tested", r.level2.loops_tested},
+                     {"loops_accepted", r.level2.loops_accepted},
+                     {"map_to_map_accepted", r.level2.map_to_map_accepted},
+                     {"gnss_factors", r.level2.gnss_factors},
+                     {"last_solve_ms", r.level2.last_solve_ms}};
+  Json stages = Json::object();
+  for (const auto& [name, p] : r.stages) {
+    stages[name] = Json{{"median", p.median}, {"p90", p.p90}, {"max", p.max}, {"mean", p.mean}};
+  }
+  j["stages_ms"] = std::move(stages);
+  j["peak_rss_mb"] = r.peak_rss_mb;
+  j["peak_rss_before_finish_mb"] = r.peak_rss_before_finish_mb;
+  j["peak_rss_reset_after_simulation"] = r.peak_reset;
+  j["final_surfels"] = r.final_surfels;
+  Json samples = Json::array();
+  for (const RssSample& s : r.rss) {
+    samples.push_back(Json{
+        {"scans", s.scans}, {"wall_s", s.seconds}, {"rss_mb", s.rss_mb}, {"hwm_mb", s.hwm_mb}});
+  }
+  j["rss_samples"] = std::move(samples);
+  std::ofstream f(path, std::ios::binary | std::ios::trunc);
   if (!f) return false;
-  char buf[256];
-  f << "{\n  \"input\": " << JsonString(r.input) << ",\n  \"mode\": " << JsonString(r.mode)
-    << ",\n";
-  std::snprintf(buf, sizeof(buf),
-                "  \"scans_total\": %zu,\n  \"scans_processed\": %zu,\n  \"scans_skipped\": %d,\n",
-                r.scans_total, r.scans_processed, r.scans_skipped);
-  f << buf;
-  std::snprintf(buf, sizeof(buf),
-                "  \"drive_s\": %.3f,\n  \"wall_s\": %.3f,\n  \"read_s\": %.3f,\n  \"finish_s\": "
-                "%.3f,\n",
-                r.drive_s, r.wall_s, r.read_s, r.finish_s);
-  f << buf;
-  std::snprintf(buf, sizeof(buf),
-                "  \"scans_per_s\": %.3f,\n  \"scans_per_s_without_reading\": %.3f,\n"
-                "  \"level1_total_s\": %.3f,\n  \"outside_level1_s\": %.3f,\n",
-                r.scans_per_s, r.scans_per_s_no_io, r.level1_sum_s, r.outside_level1_s);
-  f << buf;
-  std::snprintf(buf, sizeof(buf),
-                "  \"level2\": {\"solves\": %d, \"loops_tested\": %d, \"loops_accepted\": %d, "
-                "\"map_to_map_accepted\": %d, \"gnss_factors\": %d, \"last_solve_ms\": %.3f},\n",
-                r.level2.solves, r.level2.loops_tested, r.level2.loops_accepted,
-                r.level2.map_to_map_accepted, r.level2.gnss_factors, r.level2.last_solve_ms);
-  f << buf;
-  f << "  \"stages_ms\": {\n";
-  for (size_t i = 0; i < r.stages.size(); ++i) {
-    const Percentiles& p = r.stages[i].second;
-    std::snprintf(buf, sizeof(buf),
-                  "    %s: {\"median\": %.4f, \"p90\": %.4f, \"max\": %.4f, \"mean\": %.4f}%s\n",
-                  JsonString(r.stages[i].first).c_str(), p.median, p.p90, p.max, p.mean,
-                  i + 1 < r.stages.size() ? "," : "");
-    f << buf;
-  }
-  f << "  },\n";
-  std::snprintf(buf, sizeof(buf),
-                "  \"peak_rss_mb\": %.2f,\n  \"peak_rss_before_finish_mb\": %.2f,\n"
-                "  \"peak_rss_reset_after_simulation\": %s,\n  \"final_surfels\": %zu,\n",
-                r.peak_rss_mb, r.peak_rss_before_finish_mb, r.peak_reset ? "true" : "false",
-                r.final_surfels);
-  f << buf << "  \"rss_samples\": [";
-  for (size_t i = 0; i < r.rss.size(); ++i) {
-    std::snprintf(buf, sizeof(buf),
-                  "%s\n    {\"scans\": %zu, \"wall_s\": %.3f, \"rss_mb\": %.2f, \"hwm_mb\": %.2f}",
-                  i ? "," : "", r.rss[i].scans, r.rss[i].seconds, r.rss[i].rss_mb, r.rss[i].hwm_mb);
-    f << buf;
-  }
-  f << "\n  ]\n}\n";
+  // NaN/inf (an empty stage) are written as null.
+  f << j.dump(2, ' ', false, Json::error_handler_t::replace) << "\n";
   return static_cast<bool>(f);
 }
 

@@ -14,24 +14,29 @@
 //   --lead-in S                        IMU/POS records before the first scan (default 1)
 //   --threads N (default 2)  --no-scene-cloud  --scene-voxel M  --drive-id N  --date YYYY_MM_DD
 // --oxts also accepts a KITTI OXTS archive <drive>_sync.tar.gz (unpacked with `tar` to a temp dir).
+#include <CLI/CLI.hpp>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <string>
+#include <vector>
 
 #include "slam_mms/core/logging.hpp"
 #include "slam_mms/sim/drive_simulator.hpp"
+#include "slam_mms/version.hpp"
 
 namespace fs = std::filesystem;
 using slam_mms::sim::DriveSimulator;
 
 namespace {
 
+// Prints the usage (to stderr after an error, else to stdout); returns 2 (a bad command line).
 int Usage(const std::string& error) {
   if (!error.empty()) std::cerr << "slam_mms_sim: " << error << "\n";
-  std::cerr
+  (error.empty() ? std::cout : std::cerr)
       << "usage: slam_mms_sim (--scenario default | --oxts OXTS_DRIVE_DIR) --seed N --duration S "
          "--out DIR\n"
          "       [--gnss-outage START_S:DURATION_S]... [--imu-grade "
@@ -39,7 +44,9 @@ int Usage(const std::string& error) {
          "       [--gnss-quality fixed|float|sps] [--urban-canyon SCALE] [--origin LAT,LON,H]\n"
          "       [--elevation-bias DEG] [--lead-in S] [--threads N] [--no-scene-cloud] "
          "[--scene-voxel M]\n"
-         "       [--drive-id N] [--date YYYY_MM_DD]\n";
+         "       [--drive-id N] [--date YYYY_MM_DD]\n"
+         "       slam_mms_sim --version | --help\n"
+         "Values go after the flag or after '=' (--out=DIR).\n";
   return 2;
 }
 
@@ -61,84 +68,90 @@ bool Unpack(const fs::path& archive, fs::path* drive_dir) {
   return false;
 }
 
+// "A:B" or "A,B,C" into numbers; false where a part is not a finite number.
+bool SplitNumbers(const std::string& text, char sep, std::vector<double>* out) {
+  out->clear();
+  size_t begin = 0;
+  while (true) {
+    const size_t end = text.find(sep, begin);
+    const std::string part = text.substr(begin, end == std::string::npos ? end : end - begin);
+    char* stop = nullptr;
+    const double v = std::strtod(part.c_str(), &stop);
+    if (part.empty() || *stop != '\0' || !std::isfinite(v)) return false;
+    out->push_back(v);
+    if (end == std::string::npos) return true;
+    begin = end + 1;
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   slam_mms::SetLogSink(slam_mms::StderrLogSink());
   DriveSimulator::Options o;
   fs::path out;
-  bool origin_given = false;
   std::string imu_grade = "tactical";
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto next = [&]() -> std::string {
-      if (i + 1 >= argc) {
-        std::cerr << "slam_mms_sim: " << a << " needs a value\n";
-        std::exit(2);
-      }
-      return argv[++i];
-    };
-    try {
-      if (a == "--scenario")
-        o.scenario = next();
-      else if (a == "--oxts")
-        o.oxts_drive_dir = next();
-      else if (a == "--seed")
-        o.seed = std::stoull(next());
-      else if (a == "--duration")
-        o.duration_s = std::stod(next());
-      else if (a == "--out")
-        out = next();
-      else if (a == "--gnss-outage") {
-        const std::string v = next();
-        const size_t c = v.find(':');
-        if (c == std::string::npos)
-          return Usage("--gnss-outage wants START_S:DURATION_S, got '" + v + "'");
-        o.gnss.outages.push_back({std::stod(v.substr(0, c)), std::stod(v.substr(c + 1))});
-      } else if (a == "--imu-grade")
-        imu_grade = next();
-      else if (a == "--gnss-quality") {
-        const std::string q = next();
-        if (q == "fixed")
-          o.gnss.best_state = slam_mms::sim::GnssState::kRtkFixed;
-        else if (q == "float")
-          o.gnss.best_state = slam_mms::sim::GnssState::kRtkFloat;
-        else if (q == "sps")
-          o.gnss.best_state = slam_mms::sim::GnssState::kSps;
-        else
-          return Usage("--gnss-quality must be fixed, float or sps");
-      } else if (a == "--urban-canyon")
-        o.gnss.urban_canyon_scale = std::stod(next());
-      else if (a == "--origin") {
-        const std::string v = next();
-        double lat, lon, h;
-        if (std::sscanf(v.c_str(), "%lf,%lf,%lf", &lat, &lon, &h) != 3)
-          return Usage("--origin wants LAT,LON,H");
-        o.origin_latitude_deg = lat;
-        o.origin_longitude_deg = lon;
-        o.origin_height_m = h;
-        origin_given = true;
-      } else if (a == "--elevation-bias")
-        o.lidar.elevation_bias_deg = std::stod(next());
-      else if (a == "--lead-in")
-        o.lead_in_s = std::stod(next());
-      else if (a == "--threads")
-        o.num_threads = std::stoi(next());
-      else if (a == "--no-scene-cloud")
-        o.write_scene_cloud = false;
-      else if (a == "--scene-voxel")
-        o.scene_cloud_voxel_m = std::stod(next());
-      else if (a == "--drive-id")
-        o.drive_id = std::stoi(next());
-      else if (a == "--date")
-        o.date = next();
-      else if (a == "-h" || a == "--help")
-        return Usage("");
-      else
-        return Usage("unknown argument '" + a + "'");
-    } catch (const std::exception&) {
-      return Usage("bad value for " + a);
+  std::string gnss_quality, origin;
+  std::vector<std::string> outages;
+  bool help = false, version = false, no_scene_cloud = false;
+  // CLI11: `--flag value` and `--flag=value`; numbers are checked by CLI11 (a bad one: exit 2).
+  CLI::App app("slam_mms_sim", "slam_mms_sim");
+  app.set_help_flag();
+  app.add_flag("-h,--help", help);
+  app.add_flag("--version", version);
+  app.add_option("--scenario", o.scenario);
+  app.add_option("--oxts", o.oxts_drive_dir);
+  app.add_option("--seed", o.seed);
+  app.add_option("--duration", o.duration_s);
+  app.add_option("--out", out);
+  app.add_option("--gnss-outage", outages)->expected(1, CLI::detail::expected_max_vector_size);
+  app.add_option("--imu-grade", imu_grade);
+  app.add_option("--gnss-quality", gnss_quality)->check(CLI::IsMember({"fixed", "float", "sps"}));
+  app.add_option("--urban-canyon", o.gnss.urban_canyon_scale);
+  app.add_option("--origin", origin);
+  app.add_option("--elevation-bias", o.lidar.elevation_bias_deg);
+  app.add_option("--lead-in", o.lead_in_s);
+  app.add_option("--threads", o.num_threads);
+  app.add_flag("--no-scene-cloud", no_scene_cloud);
+  app.add_option("--scene-voxel", o.scene_cloud_voxel_m);
+  app.add_option("--drive-id", o.drive_id);
+  app.add_option("--date", o.date);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return Usage(e.what());
+  }
+  if (help) {
+    Usage("");
+    return 0;
+  }
+  if (version) {
+    std::printf("slam_mms_sim %s\n", SLAM_MMS_VERSION_STRING);
+    return 0;
+  }
+  if (no_scene_cloud) o.write_scene_cloud = false;
+  std::vector<double> numbers;
+  for (const std::string& v : outages) {
+    if (!SplitNumbers(v, ':', &numbers) || numbers.size() != 2) {
+      return Usage("--gnss-outage wants START_S:DURATION_S, got '" + v + "'");
     }
+    o.gnss.outages.push_back({numbers[0], numbers[1]});
+  }
+  if (gnss_quality == "fixed") {
+    o.gnss.best_state = slam_mms::sim::GnssState::kRtkFixed;
+  } else if (gnss_quality == "float") {
+    o.gnss.best_state = slam_mms::sim::GnssState::kRtkFloat;
+  } else if (gnss_quality == "sps") {
+    o.gnss.best_state = slam_mms::sim::GnssState::kSps;
+  }
+  const bool origin_given = app.count("--origin") > 0;
+  if (origin_given) {
+    if (!SplitNumbers(origin, ',', &numbers) || numbers.size() != 3) {
+      return Usage("--origin wants LAT,LON,H, got '" + origin + "'");
+    }
+    o.origin_latitude_deg = numbers[0];
+    o.origin_longitude_deg = numbers[1];
+    o.origin_height_m = numbers[2];
   }
   if (out.empty()) return Usage("--out DIR is required");
   auto grade = slam_mms::sim::ParseImuGrade(imu_grade);

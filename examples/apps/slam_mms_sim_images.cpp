@@ -1,9 +1,10 @@
 // slam_mms_sim_images: the pictures of docs/simulator.md.
 //
-//   slam_mms_sim_images --out docs/images [--seed N] [--at S] [--real SCAN.bin]
+//   slam_mms_sim_images --out docs/images [--seed N] [--at S] [--real SCAN.bin] [--version]
 //
 // Writes sim_vs_kitti_scan.png (a simulated scan beside a real KITTI scan: top view, range image,
 // perspective) and sim_scene.png (the procedural city along the default drive, top view).
+#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -14,6 +15,7 @@
 #include "slam_mms/sim/drive_simulator.hpp"
 #include "slam_mms/sim/hdl64_lidar.hpp"
 #include "slam_mms/sim/scan_renderer.hpp"
+#include "slam_mms/version.hpp"
 
 namespace fs = std::filesystem;
 using namespace slam_mms;
@@ -26,20 +28,25 @@ int main(int argc, char** argv) {
       "0000000020.bin";
   uint64_t seed = 1;
   double at_s = 14.0;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string a = argv[i];
-    if (a == "--out")
-      out = argv[i + 1];
-    else if (a == "--real")
-      real = argv[i + 1];
-    else if (a == "--seed")
-      seed = std::stoull(argv[i + 1]);
-    else if (a == "--at")
-      at_s = std::stod(argv[i + 1]);
-    else {
-      std::cerr << "usage: slam_mms_sim_images --out DIR [--seed N] [--at S] [--real SCAN.bin]\n";
-      return 2;
-    }
+  bool version = false;
+  CLI::App app("slam_mms_sim_images: the pictures of docs/simulator.md", "slam_mms_sim_images");
+  app.add_option("--out", out, "output folder (default docs/images)");
+  app.add_option("--real", real, "a real KITTI scan (.bin) shown beside the simulated one");
+  app.add_option("--seed", seed, "simulator seed (default 1)");
+  app.add_option("--at", at_s, "seconds into the drive of the simulated scan (default 14)");
+  app.add_flag("--version", version, "print the version and exit");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp&) {
+    std::fputs(app.help().c_str(), stdout);
+    return 0;
+  } catch (const CLI::ParseError& e) {
+    std::cerr << "slam_mms_sim_images: " << e.what() << "\n" << app.help();
+    return 2;
+  }
+  if (version) {
+    std::printf("slam_mms_sim_images %s\n", SLAM_MMS_VERSION_STRING);
+    return 0;
   }
   // The whole default drive (for the scene picture) and one scan at `at_s`.
   sim::DriveSimulator::Options o;

@@ -90,13 +90,13 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("--frames", help="A:B inclusive (A: = from A to the end)")
     r.add_argument("--gnss-outage", type=_outage, nargs="+", action="extend", default=[],
                    metavar="START_S:DURATION_S")
-    r.add_argument("--config", type=pathlib.Path, help="'key = value' option overrides")
+    r.add_argument("--config", type=pathlib.Path, help="YAML file of option overrides (slam_mms_run --config)")
     r.add_argument("--sim-duration", type=float, default=30.0,
                    help="seconds of the default drive to simulate (0 = all)")
     r.add_argument("--sim-seed", type=int, default=1)
     r.add_argument("--log-level", choices=list(_LEVELS), default="warning")
     r.add_argument("--config-keys", action="store_true",
-                   help="print every --config key with its type and default, then exit")
+                   help="print every --config key with its default as YAML, then exit")
     sub.add_parser("version", help="print the version")
     return p
 
@@ -207,9 +207,8 @@ def _summary_table(results: List[DriveResult], report: dict) -> str:
 
 def _run(args) -> int:
     if args.config_keys:
-        print("| key | type | default |\n|---|---|---|")
-        for key, typ, default in _C.config_keys():
-            print(f"| `{key}` | {typ} | {default} |")
+        # The same YAML as slam_mms_run --config-keys: a --config file of the defaults.
+        sys.stdout.write(_C.options_to_yaml(_C.Options()))
         return 0
     if args.out is None:
         raise _UsageError("--out DIR is required (see --help)")

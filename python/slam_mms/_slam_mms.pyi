@@ -2054,7 +2054,10 @@ def _simulate_drive(out_dir: os.PathLike[str], scenario: str = 'default', durati
     """Simulates a drive into out_dir (GIL released); returns the Summary as a dict."""
 
 def apply_config_file(path: os.PathLike[str], options: Options) -> None:
-    """Applies a slam_mms_run --config file to options in place (ValueError naming the key)."""
+    """Applies a slam_mms_run --config file (YAML) to options in place (ValueError naming the file, line and key)."""
+
+def apply_config_text(text: str, options: Options, name: str = '<config>') -> None:
+    """apply_config_file on YAML text already read; `name` is used in messages."""
 
 def compute_ate(estimate: Trajectory, ground_truth: Trajectory, alignment: Alignment = ..., max_ground_truth_gap_s: float = 1.0) -> AteResult:
     """ATE of estimate against ground_truth interpolated at each estimated stamp (no alignment by default). Trajectories: Trajectory objects or N x 8 TUM arrays."""
@@ -2069,7 +2072,7 @@ def compute_relative_error(estimate: Trajectory, ground_truth: Trajectory, segme
     """KITTI relative error; segment_lengths_m: 'kitti' (100..800 m), 'short' (10..80 m) or a list of lengths [m]. t_rel_pct / r_rel_deg_per_100m are None without any segment."""
 
 def config_keys() -> list:
-    """Every --config key as (key, type, default), as slam_mms_run --config-keys prints them."""
+    """Every --config key as (key, type, default); slam_mms_run --config-keys prints them as YAML."""
 
 def flush_log() -> None:
     """Delivers the library messages logged so far by other threads to the Python handler now."""
@@ -2088,6 +2091,12 @@ def mapping_mode_name(arg0: MappingMode) -> str:
 
 def min_log_level() -> LogLevel:
     ...
+
+def options_to_json(options: Options) -> str:
+    """The same keys and values as a JSON object text (report.json's options)."""
+
+def options_to_yaml(options: Options) -> str:
+    """Every --config key of options as YAML with a type/default comment each, as slam_mms_run --dump-config writes it (apply_config_text reads it back unchanged)."""
 
 def parse_mapping_mode(name: str) -> MappingMode:
     ...

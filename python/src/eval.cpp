@@ -417,7 +417,24 @@ void RegisterEval(py::module_& m) {
         ThrowIfError(app::ApplyConfigFile(f, &options));
       },
       py::arg("path"), py::arg("options"),
-      "Applies a slam_mms_run --config file to options in place (ValueError naming the key).");
+      "Applies a slam_mms_run --config file (YAML) to options in place (ValueError naming the "
+      "file, line and key).");
+  m.def(
+      "apply_config_text",
+      [](const std::string& text, MappingSystem::Options& options, const std::string& name) {
+        ThrowIfError(app::ApplyConfigText(text, name, &options));
+      },
+      py::arg("text"), py::arg("options"), py::arg("name") = "<config>",
+      "apply_config_file on YAML text already read; `name` is used in messages.");
+  m.def(
+      "options_to_yaml", [](const MappingSystem::Options& o) { return app::OptionsToYaml(o); },
+      py::arg("options"),
+      "Every --config key of options as YAML with a type/default comment each, as slam_mms_run "
+      "--dump-config writes it (apply_config_text reads it back unchanged).");
+  m.def(
+      "options_to_json", [](const MappingSystem::Options& o) { return app::OptionsToJson(o); },
+      py::arg("options"),
+      "The same keys and values as a JSON object text (report.json's options).");
   m.def(
       "config_keys",
       [] {
@@ -427,7 +444,8 @@ void RegisterEval(py::module_& m) {
         }
         return out;
       },
-      "Every --config key as (key, type, default), as slam_mms_run --config-keys prints them.");
+      "Every --config key as (key, type, default); slam_mms_run --config-keys prints them as "
+      "YAML.");
 }
 
 }  // namespace slam_mms::python

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <vector>
 
@@ -14,40 +15,32 @@
 #include "slam_mms/io/trajectory_io.hpp"
 
 namespace slam_mms::eval {
-namespace {
-
-// The number after "key": inside `text` from `from` on (a tiny reader for scenario.json).
-StatusOr<double> JsonNumberAfter(const std::string& text, size_t from, const std::string& key,
-                                 const std::string& file) {
-  const std::string quoted = "\"" + key + "\"";
-  const size_t k = text.find(quoted, from);
-  if (k == std::string::npos) return DataLossError(file + ": no field '" + key + "'");
-  const size_t colon = text.find(':', k + quoted.size());
-  if (colon == std::string::npos) return DataLossError(file + ": field '" + key + "' has no value");
-  const char* begin = text.c_str() + colon + 1;
-  char* end = nullptr;
-  const double v = std::strtod(begin, &end);
-  if (end == begin || !std::isfinite(v)) {
-    return DataLossError(file + ": field '" + key + "' is not a finite number");
-  }
-  return v;
-}
-
-}  // namespace
 
 StatusOr<GeodeticPoint> ReadScenarioOrigin(const std::filesystem::path& scenario_json) {
   std::ifstream in(scenario_json);
   if (!in) return NotFoundError(scenario_json.string() + ": cannot open");
-  std::ostringstream s;
-  s << in.rdbuf();
-  const std::string text = s.str();
   const std::string file = scenario_json.string();
-  const size_t at = text.find("\"origin_wgs84\"");
-  if (at == std::string::npos) return DataLossError(file + ": no field 'origin_wgs84'");
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::parse_error& e) {
+    return DataLossError(file + ": not valid JSON: " + e.what());  // names the byte and token
+  }
+  if (!j.is_object() || !j.contains("origin_wgs84") || !j["origin_wgs84"].is_object()) {
+    return DataLossError(file + ": no object 'origin_wgs84'");
+  }
+  const nlohmann::json& o = j["origin_wgs84"];
   GeodeticPoint origin;
-  SLAM_MMS_ASSIGN_OR_RETURN(origin.latitude_deg, JsonNumberAfter(text, at, "latitude_deg", file));
-  SLAM_MMS_ASSIGN_OR_RETURN(origin.longitude_deg, JsonNumberAfter(text, at, "longitude_deg", file));
-  SLAM_MMS_ASSIGN_OR_RETURN(origin.height_m, JsonNumberAfter(text, at, "height_m", file));
+  for (const auto& [key, value] :
+       {std::pair<const char*, double*>{"latitude_deg", &origin.latitude_deg},
+        {"longitude_deg", &origin.longitude_deg},
+        {"height_m", &origin.height_m}}) {
+    if (!o.contains(key)) return DataLossError(file + ": origin_wgs84 has no field '" + key + "'");
+    if (!o[key].is_number() || !std::isfinite(o[key].get<double>())) {
+      return DataLossError(file + ": origin_wgs84." + key + " is not a finite number");
+    }
+    *value = o[key].get<double>();
+  }
   if (std::abs(origin.latitude_deg) > 90.0 || std::abs(origin.longitude_deg) > 180.0) {
     return DataLossError(file + ": origin_wgs84 outside the WGS-84 range");
   }

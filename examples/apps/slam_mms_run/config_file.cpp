@@ -507,7 +507,7 @@ void WriteYaml(const KeyTree& node, const Options& options, const Options& defau
     }
     std::string type = c.handler->type;
     if (c.handler->nullable && c.full_key.rfind("origin_", 0) == 0) {
-      type += " or ~ (unset: the first valid GNSS fix; the three origin keys go together)";
+      type += " or ~ (all three ~: the first valid GNSS fix)";
     } else if (c.handler->nullable) {
       type += " or ~ (unset)";
     }

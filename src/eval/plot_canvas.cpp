@@ -28,6 +28,19 @@ cv::Scalar PaletteColor(size_t index) {
   return kColors[index % (sizeof(kColors) / sizeof(kColors[0]))];
 }
 
+cv::Scalar TurboColor(double u) {
+  static const cv::Mat lut = [] {
+    cv::Mat ramp(256, 1, CV_8U);
+    for (int i = 0; i < 256; ++i) ramp.at<uint8_t>(i, 0) = static_cast<uint8_t>(i);
+    cv::Mat colored;
+    cv::applyColorMap(ramp, colored, cv::COLORMAP_TURBO);
+    return colored;
+  }();
+  const double c = std::isfinite(u) ? std::clamp(u, 0.0, 1.0) : 0.0;
+  const cv::Vec3b v = lut.at<cv::Vec3b>(static_cast<int>(std::lround(c * 255.0)), 0);
+  return cv::Scalar(v[0], v[1], v[2]);
+}
+
 std::vector<double> NiceTicks(double lo, double hi, int target, double* step_out) {
   std::vector<double> ticks;
   if (!(hi > lo) || !std::isfinite(lo) || !std::isfinite(hi)) return ticks;
@@ -56,6 +69,14 @@ PlotCanvas::PlotCanvas(int width_px, int height_px, int right_px)
   area_ = cv::Rect(kLeftPx, kTopPx, std::max(10, width_px - kLeftPx - right_px),
                    std::max(10, height_px - kTopPx - kBottomPx));
 }
+
+PlotCanvas::PlotCanvas(int width_px, int height_px, int right_px, int top_px, int bottom_px)
+    : image_(height_px, width_px, CV_8UC3, cv::Scalar(255, 255, 255)), top_px_(top_px) {
+  area_ = cv::Rect(kLeftPx, top_px, std::max(10, width_px - kLeftPx - right_px),
+                   std::max(10, height_px - top_px - bottom_px));
+}
+
+int PlotCanvas::YTickTarget() const { return std::clamp(area_.height / 40, 2, 7); }
 
 cv::Size PlotCanvas::FitEqualAspect(double dx, double dy, int max_width_px, int max_height_px,
                                     int right_px) {
@@ -112,7 +133,7 @@ void PlotCanvas::DrawGrid() {
     cv::line(roi, cv::Point(static_cast<int>(std::lround(px)), 0),
              cv::Point(static_cast<int>(std::lround(px)), area_.height), kGridGray, 1, cv::LINE_8);
   }
-  for (double y : NiceTicks(y_lo_, y_hi_, 7)) {
+  for (double y : y_ticks_ ? NiceTicks(y_lo_, y_hi_, YTickTarget()) : std::vector<double>()) {
     const double py = ToPixel(0, y).y - area_.y;
     cv::line(roi, cv::Point(0, static_cast<int>(std::lround(py))),
              cv::Point(area_.width, static_cast<int>(std::lround(py))), kGridGray, 1, cv::LINE_8);
@@ -139,7 +160,8 @@ void PlotCanvas::DrawAxes(const std::string& x_label, const std::string& y_label
     Text(s, {px - sz.width / 2, area_.br().y + 10 + sz.height}, tick_scale, kDarkGray);
   }
   int max_label_w = 0;
-  for (double y : NiceTicks(y_lo_, y_hi_, 7, &step)) {
+  for (double y :
+       y_ticks_ ? NiceTicks(y_lo_, y_hi_, YTickTarget(), &step) : std::vector<double>()) {
     const int py = static_cast<int>(std::lround(ToPixel(0, y).y));
     cv::line(image_, {area_.x - 6, py}, {area_.x, py}, kDarkGray, 1);
     const std::string s = FormatTick(y, step);
@@ -152,21 +174,32 @@ void PlotCanvas::DrawAxes(const std::string& x_label, const std::string& y_label
   const double label_scale = 0.62;
   int base = 0;
   cv::Size sz = cv::getTextSize(x_label, kFont, label_scale, 1, &base);
-  Text(x_label, {area_.x + area_.width / 2 - sz.width / 2, image_.rows - 18}, label_scale, kBlack);
-  sz = cv::getTextSize(y_label, kFont, label_scale, 1, &base);
+  if (!x_label.empty()) {
+    Text(x_label, {area_.x + area_.width / 2 - sz.width / 2, image_.rows - 18}, label_scale,
+         kBlack);
+  }
+  sz = cv::getTextSize(y_label.empty() ? std::string(" ") : y_label, kFont, label_scale, 1, &base);
   cv::Mat label(sz.height + base + 4, sz.width + 4, CV_8UC3, cv::Scalar(255, 255, 255));
   cv::putText(label, y_label, {2, sz.height + 1}, kFont, label_scale, kBlack, 1, cv::LINE_AA);
   cv::Mat rotated;
   cv::rotate(label, rotated, cv::ROTATE_90_COUNTERCLOCKWISE);
   const int lx = std::max(2, area_.x - 16 - max_label_w - rotated.cols);
   const int ly = area_.y + area_.height / 2 - rotated.rows / 2;
-  if (ly >= 0 && ly + rotated.rows <= image_.rows) {
+  if (!y_label.empty() && ly >= 0 && ly + rotated.rows <= image_.rows) {
     rotated.copyTo(image_(cv::Rect(lx, ly, rotated.cols, rotated.rows)));
   }
   // Title.
-  const double title_scale = 0.8;
-  sz = cv::getTextSize(title, kFont, title_scale, 2, &base);
-  Text(title, {area_.x + area_.width / 2 - sz.width / 2, area_.y - 22}, title_scale, kBlack, 2);
+  if (title.empty()) return;
+  const bool small = top_px_ < 56;
+  double title_scale = small ? 0.6 : 0.8;
+  sz = cv::getTextSize(title, kFont, title_scale, small ? 1 : 2, &base);
+  // Shrink a title wider than the figure (down to 60 %).
+  if (sz.width > image_.cols - 8) {
+    title_scale *= std::max(0.6, static_cast<double>(image_.cols - 8) / sz.width);
+    sz = cv::getTextSize(title, kFont, title_scale, small ? 1 : 2, &base);
+  }
+  Text(title, {std::max(2, area_.x + area_.width / 2 - sz.width / 2), area_.y - (small ? 9 : 22)},
+       title_scale, kBlack, small ? 1 : 2);
 }
 
 void PlotCanvas::Polyline(const std::vector<cv::Point2d>& data_pts, const cv::Scalar& color,
@@ -193,6 +226,42 @@ void PlotCanvas::Polyline(const std::vector<cv::Point2d>& data_pts, const cv::Sc
     run.push_back(ToPixelFixed(p.x, p.y) - offset);
   }
   flush();
+}
+
+void PlotCanvas::ColoredPolyline(const std::vector<cv::Point2d>& data_pts,
+                                 const std::vector<cv::Scalar>& colors, int thickness) {
+  cv::Mat roi = image_(area_);
+  const cv::Point offset(static_cast<int>(area_.x * kShiftScale),
+                         static_cast<int>(area_.y * kShiftScale));
+  for (size_t i = 0; i + 1 < data_pts.size() && i < colors.size(); ++i) {
+    const cv::Point2d& a = data_pts[i];
+    const cv::Point2d& b = data_pts[i + 1];
+    if (!std::isfinite(a.x) || !std::isfinite(a.y) || !std::isfinite(b.x) || !std::isfinite(b.y)) {
+      continue;
+    }
+    cv::line(roi, ToPixelFixed(a.x, a.y) - offset, ToPixelFixed(b.x, b.y) - offset, colors[i],
+             thickness, cv::LINE_AA, kShift);
+  }
+}
+
+void PlotCanvas::TurboColorBar(const cv::Rect& bar, double lo, double hi,
+                               const std::string& label) {
+  const cv::Rect inside = bar & cv::Rect(0, 0, image_.cols, image_.rows);
+  if (inside.height < 2 || inside.width < 1) return;
+  for (int r = 0; r < inside.height; ++r) {
+    const double u = 1.0 - static_cast<double>(r) / (inside.height - 1);
+    image_(cv::Rect(inside.x, inside.y + r, inside.width, 1)).setTo(TurboColor(u));
+  }
+  cv::rectangle(image_, inside, kDarkGray, 1);
+  if (!(hi > lo)) hi = lo + 1.0;
+  double step = 1.0;
+  for (double v : NiceTicks(lo, hi, std::max(2, inside.height / 60), &step)) {
+    const int y =
+        inside.y + static_cast<int>(std::lround((hi - v) / (hi - lo) * (inside.height - 1)));
+    cv::line(image_, {inside.br().x, y}, {inside.br().x + 5, y}, kDarkGray, 1);
+    Text(FormatTick(v, step), {inside.br().x + 9, y + 6}, 0.5, kDarkGray);
+  }
+  Text(label, {inside.x - 4, inside.y - 10}, 0.55, kBlack);
 }
 
 void PlotCanvas::ShadeXSpan(double x0, double x1, const cv::Scalar& color, double alpha) {
@@ -285,6 +354,20 @@ void PlotCanvas::LegendAt(const std::vector<LegendEntry>& entries, int corner) {
     }
     Text(e.label, {sx + swatch_w + 10, cy + text_h / 2}, scale, kBlack);
   }
+}
+
+Status SavePng(const cv::Mat& image, const std::filesystem::path& file) {
+  bool ok = false;
+  try {
+    ok = cv::imwrite(file.string(), image);
+  } catch (const cv::Exception&) {
+    ok = false;
+  }
+  if (!ok) {
+    return NotFoundError("cannot write PNG " + file.string() +
+                         " (missing folder, no permission, or no PNG support in OpenCV)");
+  }
+  return OkStatus();
 }
 
 bool PlotCanvas::Save(const std::string& path) const {

@@ -4,14 +4,51 @@
 //
 // Thread safety: none; one canvas per thread.
 
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <limits>
 #include <opencv2/core.hpp>
 #include <string>
 #include <vector>
 
+#include "slam_mms/core/status.hpp"
+
 namespace slam_mms::eval::internal {
+
+/// GNSS outage marks (orange, BGR) and black.
+const cv::Scalar kOutageColor(0, 140, 255);
+const cv::Scalar kBlackColor(0, 0, 0);
+
+/// A bounding box of finite data points.
+struct Bounds {
+  double x_lo = std::numeric_limits<double>::infinity();
+  double x_hi = -std::numeric_limits<double>::infinity();
+  double y_lo = std::numeric_limits<double>::infinity();
+  double y_hi = -std::numeric_limits<double>::infinity();
+  void Add(double x, double y) {
+    if (!std::isfinite(x) || !std::isfinite(y)) return;
+    x_lo = std::min(x_lo, x);
+    x_hi = std::max(x_hi, x);
+    y_lo = std::min(y_lo, y);
+    y_hi = std::max(y_hi, y);
+  }
+  bool valid() const { return x_lo <= x_hi && y_lo <= y_hi; }
+  void Pad(double fraction, double min_pad) {
+    const double px = std::max(min_pad, fraction * (x_hi - x_lo));
+    const double py = std::max(min_pad, fraction * (y_hi - y_lo));
+    x_lo -= px;
+    x_hi += px;
+    y_lo -= py;
+    y_hi += py;
+  }
+};
 
 /// A colour-blind-friendly qualitative palette (Okabe-Ito), BGR.
 cv::Scalar PaletteColor(size_t index);
+
+/// The turbo colour map at u in [0, 1] (clamped), BGR.
+cv::Scalar TurboColor(double u);
 
 /// Tick positions covering [lo, hi] at a 1/2/5 x 10^k step giving about `target` ticks.
 std::vector<double> NiceTicks(double lo, double hi, int target, double* step_out = nullptr);
@@ -30,6 +67,9 @@ class PlotCanvas {
   /// A width x height figure; the axes box leaves room for labels (right margin `right_px` for a
   /// colour bar, if any).
   PlotCanvas(int width_px, int height_px, int right_px = 40);
+  /// The same with explicit top and bottom margins (small multiples). Under 56 px of top margin
+  /// the title is smaller; under 70 px of bottom margin there is no room for the x label.
+  PlotCanvas(int width_px, int height_px, int right_px, int top_px, int bottom_px);
 
   /// Margins around the axes box [px].
   static constexpr int kLeftPx = 105, kTopPx = 64, kBottomPx = 78;
@@ -53,13 +93,24 @@ class PlotCanvas {
   double y_lo() const { return y_lo_; }
   double y_hi() const { return y_hi_; }
 
+  /// Without y ticks, DrawGrid and DrawAxes draw no horizontal grid lines and no y tick labels.
+  void set_y_ticks(bool on) { y_ticks_ = on; }
+
   /// Grid lines and the axes frame (call before drawing data).
   void DrawGrid();
-  /// Tick labels, axis labels and the title (call after the data so the frame is on top).
+  /// Tick labels, axis labels and the title (call after the data so the frame is on top). An
+  /// empty label or title is not drawn.
   void DrawAxes(const std::string& x_label, const std::string& y_label, const std::string& title);
 
   /// A polyline in data coordinates, clipped to the axes box.
   void Polyline(const std::vector<cv::Point2d>& data_pts, const cv::Scalar& color, int thickness);
+  /// Line segments between consecutive `data_pts`, segment i (from point i to i+1) in colours[i]
+  /// (colours.size() >= data_pts.size() - 1), clipped to the axes box; NaN points break the line.
+  void ColoredPolyline(const std::vector<cv::Point2d>& data_pts,
+                       const std::vector<cv::Scalar>& colors, int thickness);
+  /// A vertical turbo colour bar at pixel rectangle `bar` for values lo (bottom) .. hi (top), with
+  /// ticks and labels right of it and `label` above it.
+  void TurboColorBar(const cv::Rect& bar, double lo, double hi, const std::string& label);
   /// A filled rectangle in data x from x0 to x1 over the full y range, alpha-blended.
   void ShadeXSpan(double x0, double x1, const cv::Scalar& color, double alpha);
   /// A legend box in the upper-right (or upper-left) corner of the axes.
@@ -78,6 +129,7 @@ class PlotCanvas {
             int thickness = 1);
 
   cv::Mat& image() { return image_; }
+  const cv::Mat& image() const { return image_; }
   /// Writes a PNG; false on failure.
   bool Save(const std::string& path) const;
 
@@ -85,10 +137,17 @@ class PlotCanvas {
   // corner: 0 upper right, 1 upper left, 2 lower right, 3 lower left (inside the axes), 4 outside
   // right of the axes.
   void LegendAt(const std::vector<LegendEntry>& entries, int corner);
+  // About one y tick per 40 px of axes height, 2..7.
+  int YTickTarget() const;
 
   cv::Mat image_;
   cv::Rect area_;
+  int top_px_ = kTopPx;
+  bool y_ticks_ = true;
   double x_lo_ = 0, x_hi_ = 1, y_lo_ = 0, y_hi_ = 1;
 };
+
+/// Writes `image` as a PNG; NotFound naming the file on failure.
+Status SavePng(const cv::Mat& image, const std::filesystem::path& file);
 
 }  // namespace slam_mms::eval::internal

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <opencv2/imgproc.hpp>
 
@@ -14,75 +15,15 @@ using internal::LegendEntry;
 using internal::PaletteColor;
 using internal::PlotCanvas;
 
-const cv::Scalar kOutageColor(0, 140, 255);  // orange (BGR)
-const cv::Scalar kBlack(0, 0, 0);
+using internal::Bounds;
+using internal::kBlackColor;
+using internal::kOutageColor;
 
-struct Bounds {
-  double x_lo = std::numeric_limits<double>::infinity();
-  double x_hi = -std::numeric_limits<double>::infinity();
-  double y_lo = std::numeric_limits<double>::infinity();
-  double y_hi = -std::numeric_limits<double>::infinity();
-  void Add(double x, double y) {
-    if (!std::isfinite(x) || !std::isfinite(y)) return;
-    x_lo = std::min(x_lo, x);
-    x_hi = std::max(x_hi, x);
-    y_lo = std::min(y_lo, y);
-    y_hi = std::max(y_hi, y);
-  }
-  bool valid() const { return x_lo <= x_hi && y_lo <= y_hi; }
-  void Pad(double fraction, double min_pad) {
-    const double px = std::max(min_pad, fraction * (x_hi - x_lo));
-    const double py = std::max(min_pad, fraction * (y_hi - y_lo));
-    x_lo -= px;
-    x_hi += px;
-    y_lo -= py;
-    y_hi += py;
-  }
-};
-
-Status SaveCanvas(const PlotCanvas& canvas, const std::filesystem::path& file) {
-  if (!canvas.Save(file.string())) {
-    return NotFoundError("cannot write PNG " + file.string() +
-                         " (missing folder, no permission, or no PNG support in OpenCV)");
-  }
-  return OkStatus();
-}
-
-std::vector<cv::Point2d> XY(const Trajectory& t) {
-  std::vector<cv::Point2d> pts;
-  pts.reserve(t.size());
-  for (const StampedPose& p : t.poses()) {
-    pts.emplace_back(p.T_world_body.translation().x(), p.T_world_body.translation().y());
-  }
-  return pts;
-}
-
-// The parts of `t` inside any window, as polylines (NaN breaks between runs).
-std::vector<cv::Point2d> InsideOutages(const Trajectory& t,
-                                       const std::vector<OutageWindow>& outages,
-                                       Timestamp reference) {
-  std::vector<cv::Point2d> pts;
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-  bool prev_inside = false;
-  for (const StampedPose& p : t.poses()) {
-    bool inside = false;
-    for (const OutageWindow& w : outages) inside = inside || w.Contains(p.stamp, reference);
-    if (inside) {
-      pts.emplace_back(p.T_world_body.translation().x(), p.T_world_body.translation().y());
-    } else if (prev_inside) {
-      pts.emplace_back(nan, nan);
-    }
-    prev_inside = inside;
-  }
-  return pts;
-}
-
-// Draws `pts` with the given thickness on a copy and blends it in (translucent band).
-void TranslucentPolyline(PlotCanvas& canvas, const std::vector<cv::Point2d>& pts,
-                         const cv::Scalar& color, int thickness, double alpha) {
-  cv::Mat before = canvas.image().clone();
-  canvas.Polyline(pts, color, thickness);
-  cv::addWeighted(canvas.image(), alpha, before, 1.0 - alpha, 0.0, canvas.image());
+std::string Metres(double v) {
+  char buf[32];
+  const double a = std::abs(v);
+  std::snprintf(buf, sizeof(buf), a < 0.1 ? "%.3f m" : a < 10.0 ? "%.2f m" : "%.1f m", v);
+  return buf;
 }
 
 }  // namespace
@@ -99,82 +40,19 @@ Status PlotOptions::Validate() const {
   return OkStatus();
 }
 
-Status PlotTrajectoriesTopView(const NamedTrajectory& ground_truth,
-                               const std::vector<NamedTrajectory>& methods,
-                               const std::vector<OutageWindow>& outages, Timestamp outage_reference,
-                               const std::filesystem::path& png_file, const PlotOptions& options) {
-  SLAM_MMS_RETURN_IF_ERROR(options.Validate());
-  Bounds b;
-  for (const StampedPose& p : ground_truth.trajectory.poses()) {
-    b.Add(p.T_world_body.translation().x(), p.T_world_body.translation().y());
-  }
-  for (const NamedTrajectory& m : methods) {
-    for (const StampedPose& p : m.trajectory.poses()) {
-      b.Add(p.T_world_body.translation().x(), p.T_world_body.translation().y());
-    }
-  }
-  if (!b.valid()) return InvalidArgumentError("PlotTrajectoriesTopView: no finite pose to draw");
-  b.Pad(0.06, 5.0);
-
-  // The legend sits right of the axes (a top view has no free corner in general).
-  const bool has_gt = !ground_truth.trajectory.empty();
-  std::vector<LegendEntry> legend;
-  if (has_gt) legend.push_back({ground_truth.name, kBlack, 2, LegendEntry::Kind::kLine});
-  for (size_t i = 0; i < methods.size(); ++i) {
-    legend.push_back({methods[i].name, PaletteColor(i), 2, LegendEntry::Kind::kLine});
-  }
-  if (!outages.empty()) {
-    legend.push_back({"GNSS outage", 0.35 * kOutageColor + 0.65 * cv::Scalar(255, 255, 255), 10,
-                      LegendEntry::Kind::kLine});
-  }
-  legend.push_back({"start", kBlack, 2, LegendEntry::Kind::kDot});
-  const int right_px = PlotCanvas::LegendSize(legend).width + 40;
-  const cv::Size fig = PlotCanvas::FitEqualAspect(b.x_hi - b.x_lo, b.y_hi - b.y_lo,
-                                                  options.width_px, options.height_px, right_px);
-  PlotCanvas canvas(fig.width, fig.height, right_px);
-  canvas.SetRange(b.x_lo, b.x_hi, b.y_lo, b.y_hi, /*equal_aspect=*/true);
-  canvas.DrawGrid();
-
-  if (has_gt && !outages.empty()) {
-    const std::vector<cv::Point2d> band =
-        InsideOutages(ground_truth.trajectory, outages, outage_reference);
-    TranslucentPolyline(canvas, band, kOutageColor, 16, 0.35);
-  }
-  if (has_gt) {
-    canvas.Polyline(XY(ground_truth.trajectory), kBlack, 2);
-  }
-  for (size_t i = 0; i < methods.size(); ++i) {
-    const cv::Scalar color = PaletteColor(i);
-    canvas.Polyline(XY(methods[i].trajectory), color, 2);
-    if (!outages.empty()) {
-      canvas.Polyline(InsideOutages(methods[i].trajectory, outages, outage_reference), color, 5);
-    }
-  }
-  // Start marker on the ground truth (or the first method).
-  const Trajectory* first =
-      has_gt ? &ground_truth.trajectory : (methods.empty() ? nullptr : &methods.front().trajectory);
-  if (first != nullptr && !first->empty()) {
-    const Eigen::Vector3d p0 = first->poses().front().T_world_body.translation();
-    const cv::Point2d px = canvas.ToPixel(p0.x(), p0.y());
-    cv::circle(canvas.image(), cv::Point(px), 7, cv::Scalar(255, 255, 255), cv::FILLED,
-               cv::LINE_AA);
-    cv::circle(canvas.image(), cv::Point(px), 7, kBlack, 2, cv::LINE_AA);
-  }
-  canvas.LegendOutsideRight(legend);
-  canvas.DrawAxes("x east [m]", "y north [m]",
-                  options.title.empty() ? "Trajectories (top view)" : options.title);
-  return SaveCanvas(canvas, png_file);
-}
-
 ErrorSeries MakeErrorSeries(const std::string& name, const std::vector<PoseError>& errors,
                             Timestamp reference) {
   ErrorSeries s;
   s.name = name;
   s.time_s.reserve(errors.size());
   s.error_m.reserve(errors.size());
+  s.horizontal_m.reserve(errors.size());
+  s.vertical_m.reserve(errors.size());
   for (const PoseError& e : errors) {
     s.time_s.push_back(e.stamp.SecondsSince(reference));
     s.error_m.push_back(e.position_error_m);
+    s.horizontal_m.push_back(e.position_error_world.head<2>().norm());
+    s.vertical_m.push_back(e.position_error_world.z());
   }
   return s;
 }
@@ -183,80 +61,162 @@ Status PlotPositionErrors(const std::vector<ErrorSeries>& series,
                           const std::vector<OutageWindow>& outages,
                           const std::filesystem::path& png_file, const PlotOptions& options) {
   SLAM_MMS_RETURN_IF_ERROR(options.Validate());
-  double t_lo = std::numeric_limits<double>::infinity(), t_hi = -t_lo, e_hi = 0.0;
+  double t_lo = std::numeric_limits<double>::infinity(), t_hi = -t_lo;
+  bool components = !series.empty();
   for (const ErrorSeries& s : series) {
     if (s.time_s.size() != s.error_m.size()) {
       return InvalidArgumentError("PlotPositionErrors: series \"" + s.name + "\" has " +
                                   std::to_string(s.time_s.size()) + " times but " +
                                   std::to_string(s.error_m.size()) + " errors");
     }
+    for (const auto* v : {&s.horizontal_m, &s.vertical_m}) {
+      if (!v->empty() && v->size() != s.time_s.size()) {
+        return InvalidArgumentError(
+            "PlotPositionErrors: series \"" + s.name + "\" has " + std::to_string(s.time_s.size()) +
+            " times but " + std::to_string(v->size()) +
+            (v == &s.horizontal_m ? " horizontal" : " vertical") + " errors");
+      }
+    }
+    components = components && !s.horizontal_m.empty() && !s.vertical_m.empty();
     for (size_t i = 0; i < s.time_s.size(); ++i) {
       if (!std::isfinite(s.time_s[i]) || !std::isfinite(s.error_m[i])) continue;
       t_lo = std::min(t_lo, s.time_s[i]);
       t_hi = std::max(t_hi, s.time_s[i]);
-      e_hi = std::max(e_hi, s.error_m[i]);
     }
   }
   if (!(t_lo <= t_hi)) return InvalidArgumentError("PlotPositionErrors: no finite sample to draw");
-  if (!(e_hi > 0.0)) e_hi = 1.0;
-
-  PlotCanvas canvas(options.width_px, options.height_px);
-  canvas.SetRange(t_lo, t_hi, 0.0, e_hi * 1.08, /*equal_aspect=*/false);
-  canvas.DrawGrid();
+  if (!(t_hi > t_lo)) t_hi = t_lo + 1.0;
+  bool shaded = false;
   for (const OutageWindow& w : outages) {
-    canvas.ShadeXSpan(w.start_s, w.start_s + w.duration_s, kOutageColor, 0.22);
+    shaded = shaded || (w.duration_s > 0.0 && w.start_s < t_hi && w.start_s + w.duration_s > t_lo);
   }
-  std::vector<LegendEntry> legend;
-  std::vector<cv::Point2d> all_pts;
-  for (size_t i = 0; i < series.size(); ++i) {
-    std::vector<cv::Point2d> pts;
-    pts.reserve(series[i].time_s.size());
-    for (size_t k = 0; k < series[i].time_s.size(); ++k) {
-      pts.emplace_back(series[i].time_s[k], series[i].error_m[k]);
+
+  // Small multiples: a row per method, its own y scale; columns horizontal | vertical.
+  constexpr int kTitlePx = 46, kTopPx = 34, kBottomPx = 34, kLastBottomPx = 72, kRightPx = 24;
+  const int rows = static_cast<int>(series.size());
+  const int cols = components ? 2 : 1;
+  const int row_h =
+      std::max(110, (options.height_px - kTitlePx - (kLastBottomPx - kBottomPx)) / rows);
+  const int col_w = options.width_px / cols;
+  cv::Mat figure(kTitlePx + rows * row_h + (kLastBottomPx - kBottomPx), cols * col_w, CV_8UC3,
+                 cv::Scalar(255, 255, 255));
+  for (int r = 0; r < rows; ++r) {
+    const ErrorSeries& s = series[r];
+    const bool last = r + 1 == rows;
+    for (int c = 0; c < cols; ++c) {
+      const std::vector<double>& v =
+          !components ? s.error_m : (c == 0 ? s.horizontal_m : s.vertical_m);
+      const bool is_vertical = components && c == 1;
+      double lo = 0.0, hi = 0.0, sum_sq = 0.0, max_abs = 0.0;
+      size_t n = 0;
+      std::vector<cv::Point2d> pts;
+      pts.reserve(v.size());
+      for (size_t k = 0; k < v.size(); ++k) {
+        if (!std::isfinite(s.time_s[k]) || !std::isfinite(v[k])) {
+          pts.emplace_back(std::numeric_limits<double>::quiet_NaN(), 0.0);
+          continue;
+        }
+        pts.emplace_back(s.time_s[k], v[k]);
+        lo = std::min(lo, v[k]);
+        hi = std::max(hi, v[k]);
+        sum_sq += v[k] * v[k];
+        max_abs = std::max(max_abs, std::abs(v[k]));
+        ++n;
+      }
+      if (!(hi - lo > 1e-6)) hi = lo + 0.01;
+      const double pad = 0.08 * (hi - lo);
+      const int h = row_h + (last ? kLastBottomPx - kBottomPx : 0);
+      PlotCanvas canvas(col_w, h, kRightPx, kTopPx, last ? kLastBottomPx : kBottomPx);
+      canvas.SetRange(t_lo, t_hi, is_vertical ? lo - pad : 0.0, hi + pad, /*equal_aspect=*/false);
+      canvas.DrawGrid();
+      if (shaded) {
+        for (const OutageWindow& w : outages) {
+          canvas.ShadeXSpan(w.start_s, w.start_s + w.duration_s, kOutageColor, 0.22);
+        }
+      }
+      if (is_vertical) canvas.Polyline({{t_lo, 0.0}, {t_hi, 0.0}}, cv::Scalar(120, 120, 120), 1);
+      canvas.Polyline(pts, internal::PaletteColor(r), 2);
+      const std::string what = !components ? "3-D error"
+                               : c == 0    ? "horizontal"
+                                           : "vertical (up +)";
+      std::string title = s.name + " " + what;
+      if (n > 0) {
+        title += ": RMS " + Metres(std::sqrt(sum_sq / n)) + ", max |e| " + Metres(max_abs);
+      }
+      canvas.DrawAxes(last ? "time since start [s]" : "", c == 0 ? "error [m]" : "", title);
+      canvas.image().copyTo(figure(cv::Rect(c * col_w, kTitlePx + r * row_h, col_w, h)));
     }
-    all_pts.insert(all_pts.end(), pts.begin(), pts.end());
-    canvas.Polyline(pts, PaletteColor(i), 2);
-    legend.push_back({series[i].name, PaletteColor(i), 2, LegendEntry::Kind::kLine});
   }
-  if (!outages.empty()) {
-    legend.push_back({"GNSS outage", 0.22 * kOutageColor + 0.78 * cv::Scalar(255, 255, 255), 2,
-                      LegendEntry::Kind::kBox});
+  std::string title = options.title.empty() ? "Position error over time" : options.title;
+  // A caller's own "(GNSS outages shaded)" is dropped: it is appended here only when true.
+  const std::string kShadedNote = " (GNSS outages shaded)";
+  for (size_t at = title.find(kShadedNote); at != std::string::npos; at = title.find(kShadedNote)) {
+    title.erase(at, kShadedNote.size());
   }
-  canvas.LegendAvoiding(legend, all_pts);
-  canvas.DrawAxes("time since start [s]", "position error [m]",
-                  options.title.empty() ? "Position error over time" : options.title);
-  return SaveCanvas(canvas, png_file);
+  if (shaded) title += kShadedNote;
+  int base = 0;
+  const cv::Size sz = cv::getTextSize(title, cv::FONT_HERSHEY_SIMPLEX, 0.8, 2, &base);
+  cv::putText(figure, title, {std::max(4, figure.cols / 2 - sz.width / 2), 30},
+              cv::FONT_HERSHEY_SIMPLEX, 0.8, kBlackColor, 2, cv::LINE_AA);
+  return internal::SavePng(figure, png_file);
+}
+
+std::string HeightColorRange::Describe() const {
+  char note[200];
+  if (clipped()) {
+    std::snprintf(note, sizeof(note),
+                  "colours clipped to the 1st..99th height percentile: %.2f..%.2f m; data "
+                  "%.2f..%.2f m",
+                  color_lo_m, color_hi_m, data_lo_m, data_hi_m);
+  } else {
+    std::snprintf(note, sizeof(note), "colours span the data: %.2f..%.2f m", data_lo_m, data_hi_m);
+  }
+  return note;
+}
+
+StatusOr<HeightColorRange> MapHeightColorRange(const PointCloud& map) {
+  std::vector<float> heights;
+  heights.reserve(map.size());
+  for (const Eigen::Vector3f& p : map.points()) {
+    if (p.allFinite()) heights.push_back(p.z());
+  }
+  if (heights.empty()) return InvalidArgumentError("PlotMapHeight: the map has no finite point");
+  HeightColorRange r;
+  const auto [min_it, max_it] = std::minmax_element(heights.begin(), heights.end());
+  r.data_lo_m = *min_it;
+  r.data_hi_m = *max_it;
+  // 1st..99th percentile, so a few outliers do not wash out the colours.
+  const size_t n = heights.size();
+  std::nth_element(heights.begin(), heights.begin() + n / 100, heights.end());
+  r.color_lo_m = heights[n / 100];
+  std::nth_element(heights.begin(), heights.begin() + (n - 1 - n / 100), heights.end());
+  r.color_hi_m = heights[n - 1 - n / 100];
+  if (!(r.color_hi_m > r.color_lo_m)) {
+    r.color_lo_m -= 0.5;
+    r.color_hi_m += 0.5;
+  }
+  return r;
 }
 
 Status PlotMapHeight(const PointCloud& map, const std::vector<Eigen::Vector3d>& overlay,
                      const std::filesystem::path& png_file, const PlotOptions& options) {
   SLAM_MMS_RETURN_IF_ERROR(options.Validate());
   Bounds b;
-  std::vector<float> heights;
-  heights.reserve(map.size());
   for (const Eigen::Vector3f& p : map.points()) {
-    if (!p.allFinite()) continue;
-    b.Add(p.x(), p.y());
-    heights.push_back(p.z());
+    if (p.allFinite()) b.Add(p.x(), p.y());
   }
   if (!b.valid()) return InvalidArgumentError("PlotMapHeight: the map has no finite point");
   b.Pad(0.03, 1.0);
 
-  // Height range: 1st..99th percentile, so a few outliers do not wash out the colours.
-  const size_t n = heights.size();
-  std::nth_element(heights.begin(), heights.begin() + n / 100, heights.end());
-  double z_lo = heights[n / 100];
-  std::nth_element(heights.begin(), heights.begin() + (n - 1 - n / 100), heights.end());
-  double z_hi = heights[n - 1 - n / 100];
-  if (!(z_hi > z_lo)) {
-    z_lo -= 0.5;
-    z_hi += 0.5;
-  }
+  SLAM_MMS_ASSIGN_OR_RETURN(const HeightColorRange range, MapHeightColorRange(map));
+  const double z_lo = range.color_lo_m, z_hi = range.color_hi_m;
 
   const int colorbar_w = 150;
   const cv::Size fig = PlotCanvas::FitEqualAspect(b.x_hi - b.x_lo, b.y_hi - b.y_lo,
                                                   options.width_px, options.height_px, colorbar_w);
-  PlotCanvas canvas(fig.width, fig.height, colorbar_w);
+  // A taller top margin: the clipping note goes under the title.
+  PlotCanvas canvas(fig.width, fig.height, colorbar_w, PlotCanvas::kTopPx + 14,
+                    PlotCanvas::kBottomPx);
   canvas.SetRange(b.x_lo, b.x_hi, b.y_lo, b.y_hi, /*equal_aspect=*/true);
   canvas.DrawGrid();
 
@@ -299,33 +259,37 @@ Status PlotMapHeight(const PointCloud& map, const std::vector<Eigen::Vector3d>& 
     std::vector<cv::Point2d> pts;
     pts.reserve(overlay.size());
     for (const Eigen::Vector3d& p : overlay) pts.emplace_back(p.x(), p.y());
-    canvas.Polyline(pts, kBlack, 2);
+    canvas.Polyline(pts, kBlackColor, 2);
   }
 
-  // Colour bar with height ticks.
-  const int bar_x = area.br().x + 28, bar_w = 22, bar_y = area.y, bar_h = area.height;
-  cv::Mat ramp(bar_h, 1, CV_8U);
-  for (int r = 0; r < bar_h; ++r) {
-    ramp.at<uint8_t>(r, 0) = static_cast<uint8_t>(
-        std::lround(255.0 * (1.0 - static_cast<double>(r) / std::max(1, bar_h - 1))));
+  // Colour bar with height ticks; a triangle at an end beyond which data were clipped.
+  const int bar_x = area.br().x + 28, bar_w = 22;
+  const int bar_y = area.y + 16, bar_h = area.height - 32;
+  canvas.TurboColorBar(cv::Rect(bar_x, bar_y, bar_w, bar_h), z_lo, z_hi, "");
+  const bool clipped_hi = range.data_hi_m > z_hi + 0.005;
+  const bool clipped_lo = range.data_lo_m < z_lo - 0.005;
+  if (clipped_hi) {
+    const std::vector<cv::Point> tri = {
+        {bar_x, bar_y - 2}, {bar_x + bar_w, bar_y - 2}, {bar_x + bar_w / 2, bar_y - 14}};
+    cv::fillConvexPoly(canvas.image(), tri, internal::TurboColor(1.0), cv::LINE_AA);
   }
-  cv::Mat ramp_colored;
-  cv::applyColorMap(ramp, ramp_colored, cv::COLORMAP_TURBO);
-  cv::resize(ramp_colored, ramp_colored, cv::Size(bar_w, bar_h), 0, 0, cv::INTER_NEAREST);
-  ramp_colored.copyTo(canvas.image()(cv::Rect(bar_x, bar_y, bar_w, bar_h)));
-  cv::rectangle(canvas.image(), cv::Rect(bar_x, bar_y, bar_w, bar_h), cv::Scalar(60, 60, 60), 1);
-  double step = 1.0;
-  for (double z : internal::NiceTicks(z_lo, z_hi, 6, &step)) {
-    const int y = bar_y + static_cast<int>(std::lround((z_hi - z) / (z_hi - z_lo) * (bar_h - 1)));
-    cv::line(canvas.image(), {bar_x + bar_w, y}, {bar_x + bar_w + 5, y}, cv::Scalar(60, 60, 60), 1);
-    canvas.Text(internal::FormatTick(z, step), {bar_x + bar_w + 9, y + 6}, 0.5,
-                cv::Scalar(60, 60, 60));
+  if (clipped_lo) {
+    const int y = bar_y + bar_h + 1;
+    const std::vector<cv::Point> tri = {
+        {bar_x, y + 1}, {bar_x + bar_w, y + 1}, {bar_x + bar_w / 2, y + 13}};
+    cv::fillConvexPoly(canvas.image(), tri, internal::TurboColor(0.0), cv::LINE_AA);
   }
-  canvas.Text("z [m]", {bar_x - 4, bar_y - 10}, 0.55, kBlack);
+  canvas.Text("z [m]", {bar_x - 4, bar_y - 20}, 0.55, kBlackColor);
+  // The clipping, stated under the title.
+  const std::string note = range.Describe();
+  int base = 0;
+  const cv::Size nsz = cv::getTextSize(note, cv::FONT_HERSHEY_SIMPLEX, 0.48, 1, &base);
+  canvas.Text(note, {std::max(2, area.x + area.width / 2 - nsz.width / 2), area.y - 7}, 0.48,
+              cv::Scalar(60, 60, 60));
 
   canvas.DrawAxes("x east [m]", "y north [m]",
                   options.title.empty() ? "Map from above, coloured by height" : options.title);
-  return SaveCanvas(canvas, png_file);
+  return internal::SavePng(canvas.image(), png_file);
 }
 
 }  // namespace slam_mms::eval

@@ -6,8 +6,10 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <opencv2/imgcodecs.hpp>
 #include <random>
 
+#include "eval/plot_canvas.hpp"
 #include "slam_mms/core/lie.hpp"
 #include "testing/test_data.hpp"
 
@@ -113,7 +115,10 @@ TEST(PlotsTest, BadInputsFail) {
   EXPECT_EQ(PlotTrajectoriesTopView({"gt", Trajectory()}, {}, {}, kT0, dir / "a.png").code(),
             StatusCode::kInvalidArgument);
   EXPECT_FALSE(PlotMapHeight(PointCloud(), {}, dir / "b.png").ok());
-  ErrorSeries bad{"x", {0.0, 1.0}, {0.5}};
+  ErrorSeries bad;
+  bad.name = "x";
+  bad.time_s = {0.0, 1.0};
+  bad.error_m = {0.5};
   EXPECT_FALSE(PlotPositionErrors({bad}, {}, dir / "c.png").ok());
   PlotOptions tiny;
   tiny.width_px = 10;
@@ -122,7 +127,225 @@ TEST(PlotsTest, BadInputsFail) {
   // Unwritable path.
   const NamedTrajectory gt{"gt", Drive(0.0, 0.0)};
   EXPECT_FALSE(PlotTrajectoriesTopView(gt, {}, {}, kT0, dir / "missing" / "t.png").ok());
+  // Components of another length than the times.
+  ErrorSeries bad_h;
+  bad_h.name = "h";
+  bad_h.time_s = {0.0, 1.0};
+  bad_h.error_m = {0.5, 0.5};
+  bad_h.horizontal_m = {0.1};
+  bad_h.vertical_m = {0.1, 0.2};
+  const Status s = PlotPositionErrors({bad_h}, {}, dir / "e.png");
+  EXPECT_NE(s.message().find("horizontal"), std::string::npos) << s.ToString();
+  EXPECT_FALSE(PlotGnssStatus({}, {}, dir / "f.png").ok());
+  EXPECT_FALSE(PlotGnssStatus({GnssStatusTrack{}}, {}, dir / "g.png").ok());
   std::filesystem::remove_all(dir);
+}
+
+// ---- Pixel checks on the written PNGs.
+
+cv::Mat Load(const std::filesystem::path& file) {
+  cv::Mat m = cv::imread(file.string(), cv::IMREAD_COLOR);
+  EXPECT_FALSE(m.empty()) << file;
+  return m;
+}
+
+// Pixels within `tol` (per channel) of `color` (BGR).
+int CountColor(const cv::Mat& image, const cv::Scalar& color, int tol = 6) {
+  int n = 0;
+  for (int r = 0; r < image.rows; ++r) {
+    for (int c = 0; c < image.cols; ++c) {
+      const cv::Vec3b v = image.at<cv::Vec3b>(r, c);
+      if (std::abs(v[0] - color[0]) <= tol && std::abs(v[1] - color[1]) <= tol &&
+          std::abs(v[2] - color[2]) <= tol) {
+        ++n;
+      }
+    }
+  }
+  return n;
+}
+
+// Pixels close to the hot end of the turbo colour map (u in 0.8..1: red).
+int CountHot(const cv::Mat& image) {
+  int n = 0;
+  for (int k = 0; k <= 20; ++k) n += CountColor(image, internal::TurboColor(0.8 + 0.01 * k), 4);
+  return n;
+}
+
+// The demo drive's shape: a straight 237 m line east at 10 m/s, 10 Hz.
+Trajectory Straight(double lateral_bump_m, double offset_m, double drift_per_s) {
+  Trajectory t;
+  for (int i = 0; i <= 237; ++i) {
+    const double s = 0.1 * i;
+    const double bump = lateral_bump_m * std::exp(-0.5 * std::pow((s - 15.0) / 1.0, 2));
+    const Eigen::Vector3d p(10.0 * s, offset_m + bump + drift_per_s * s, 0.3 * offset_m);
+    EXPECT_TRUE(t.Add(kT0.PlusSeconds(s), MakeIsometry(Eigen::Matrix3d::Identity(), p)).ok());
+  }
+  return t;
+}
+
+TEST(PlotsTest, StraightDriveTrajectoriesAreColouredByErrorWithAZoom) {
+  const std::filesystem::path dir = OutDir();
+  const NamedTrajectory gt{"ground truth", Straight(0.0, 0.0, 0.0)};
+  const std::vector<NamedTrajectory> methods = {{"full", Straight(0.4, 0.0, 0.0)},
+                                                {"gnss_ins", Straight(0.0, 0.15, 0.0)},
+                                                {"lidar_only", Straight(0.0, 0.0, 0.05)}};
+  ASSERT_TRUE(
+      PlotTrajectoriesTopView(gt, methods, {}, kT0, dir / "straight_trajectories.png").ok());
+  // The same methods without errors: only the colour bars are hot.
+  const std::vector<NamedTrajectory> exact = {
+      {"full", gt.trajectory}, {"gnss_ins", gt.trajectory}, {"lidar_only", gt.trajectory}};
+  ASSERT_TRUE(PlotTrajectoriesTopView(gt, exact, {}, kT0, dir / "exact.png").ok());
+  const cv::Mat img = Load(dir / "straight_trajectories.png");
+  const cv::Mat flat = Load(dir / "exact.png");
+  ASSERT_EQ(img.size(), flat.size());
+  EXPECT_EQ(img.cols, 1400);
+  // Coloured by error: the bump of full and the end of lidar_only's drift are hot.
+  EXPECT_GT(CountHot(img), CountHot(flat) + 100) << CountHot(img) << " vs " << CountHot(flat);
+  // The zoom panel draws every method in its palette colour (the method panels use the colour
+  // map): full's blue and gnss_ins's vermillion are there, lines of a few px over some 100 px.
+  EXPECT_GT(CountColor(img, internal::PaletteColor(0)), 150);
+  EXPECT_GT(CountColor(img, internal::PaletteColor(1)), 150);
+  // No outage: no orange band.
+  const cv::Scalar band = 0.35 * internal::kOutageColor + 0.65 * cv::Scalar(255, 255, 255);
+  EXPECT_EQ(CountColor(img, band, 3), 0);
+
+  // With an outage covering some poses the band appears; one after the drive draws nothing.
+  ASSERT_TRUE(PlotTrajectoriesTopView(gt, methods, {{5.0, 6.0}}, kT0, dir / "outage.png").ok());
+  EXPECT_GT(CountColor(Load(dir / "outage.png"), band, 3), 200);
+  ASSERT_TRUE(PlotTrajectoriesTopView(gt, methods, {{100.0, 6.0}}, kT0, dir / "late.png").ok());
+  EXPECT_EQ(CountColor(Load(dir / "late.png"), band, 3), 0);
+
+  // Without ground truth: one panel in palette colours, no colour map.
+  ASSERT_TRUE(
+      PlotTrajectoriesTopView({"gt", Trajectory()}, methods, {}, kT0, dir / "nogt.png").ok());
+  const cv::Mat nogt = Load(dir / "nogt.png");
+  EXPECT_EQ(CountHot(nogt), 0);
+  EXPECT_GT(CountColor(nogt, internal::PaletteColor(0)), 50);
+  Cleanup(dir);
+}
+
+TEST(PlotsTest, PositionErrorsSplitHorizontalVerticalAndShadeOnlyPresentOutages) {
+  const std::filesystem::path dir = OutDir();
+  const Trajectory gt = Straight(0.0, 0.0, 0.0);
+  std::vector<ErrorSeries> series;
+  for (const auto& [name, t] :
+       std::vector<std::pair<std::string, Trajectory>>{{"full", Straight(0.4, 0.0, 0.0)},
+                                                       {"gnss_ins", Straight(0.0, 0.15, 0.0)},
+                                                       {"lidar_only", Straight(0.0, 0.0, 0.5)}}) {
+    const StatusOr<AteResult> ate = ComputeAte(t, gt);
+    ASSERT_TRUE(ate.ok());
+    series.push_back(MakeErrorSeries(name, ate->errors, kT0));
+  }
+  // Components: gnss_ins is 0.15 m north and 0.045 m up of the ground truth everywhere.
+  ASSERT_EQ(series[1].horizontal_m.size(), series[1].time_s.size());
+  ASSERT_EQ(series[1].vertical_m.size(), series[1].time_s.size());
+  for (size_t i = 0; i < series[1].time_s.size(); ++i) {
+    EXPECT_NEAR(series[1].horizontal_m[i], 0.15, 1e-9);
+    EXPECT_NEAR(series[1].vertical_m[i], 0.045, 1e-9);
+    EXPECT_NEAR(std::hypot(series[1].horizontal_m[i], series[1].vertical_m[i]),
+                series[1].error_m[i], 1e-9);
+  }
+  const cv::Scalar shade = 0.22 * internal::kOutageColor + 0.78 * cv::Scalar(255, 255, 255);
+  ASSERT_TRUE(PlotPositionErrors(series, {}, dir / "pe_none.png").ok());
+  EXPECT_EQ(CountColor(Load(dir / "pe_none.png"), shade, 3), 0);
+  ASSERT_TRUE(PlotPositionErrors(series, {{30.0, 5.0}}, dir / "pe_late.png").ok());
+  EXPECT_EQ(CountColor(Load(dir / "pe_late.png"), shade, 3), 0);
+  ASSERT_TRUE(PlotPositionErrors(series, {{5.0, 6.0}}, dir / "pe_outage.png").ok());
+  const cv::Mat img = Load(dir / "pe_outage.png");
+  EXPECT_GT(CountColor(img, shade, 3), 1000);
+  EXPECT_EQ(img.cols, 1400);
+  EXPECT_EQ(img.rows, 1050);
+  // Each method keeps its own scale: full's 0.4 m bump fills its panel as much as lidar_only's
+  // 12 m drift fills its own; so full's blue curve spans about as many rows as lidar_only's green.
+  auto rows_spanned = [&](const cv::Scalar& color) {
+    int lo = img.rows, hi = -1;
+    for (int r = 0; r < img.rows; ++r) {
+      for (int c = 0; c < img.cols / 2; ++c) {  // the horizontal column
+        const cv::Vec3b v = img.at<cv::Vec3b>(r, c);
+        if (std::abs(v[0] - color[0]) <= 6 && std::abs(v[1] - color[1]) <= 6 &&
+            std::abs(v[2] - color[2]) <= 6) {
+          lo = std::min(lo, r);
+          hi = std::max(hi, r);
+        }
+      }
+    }
+    return hi - lo;
+  };
+  const int full_rows = rows_spanned(internal::PaletteColor(0));
+  const int lidar_rows = rows_spanned(internal::PaletteColor(2));
+  EXPECT_GT(full_rows, 0.6 * lidar_rows) << full_rows << " vs " << lidar_rows;
+  // Series without components: one column.
+  for (ErrorSeries& s : series) {
+    s.horizontal_m.clear();
+    s.vertical_m.clear();
+  }
+  ASSERT_TRUE(PlotPositionErrors(series, {}, dir / "pe_3d.png").ok());
+  Cleanup(dir);
+}
+
+TEST(PlotsTest, MapHeightColourRangeStatesItsClipping) {
+  PointCloud map;
+  for (int i = 0; i < 1000; ++i) map.Add({0.1f * i, 0.05f * (i % 40), 0.003f * i});  // 0..3 m
+  StatusOr<HeightColorRange> r = MapHeightColorRange(map);
+  ASSERT_TRUE(r.ok());
+  EXPECT_NEAR(r->data_lo_m, 0.0, 1e-6);
+  EXPECT_NEAR(r->data_hi_m, 2.997, 1e-4);
+  // 1 % of 1000 points: 10 clipped at each end.
+  EXPECT_NEAR(r->color_lo_m, 0.03, 1e-4);
+  EXPECT_NEAR(r->color_hi_m, 2.967, 1e-4);
+  EXPECT_TRUE(r->clipped());
+  EXPECT_NE(r->Describe().find("clipped to the 1st..99th height percentile: 0.03..2.97 m"),
+            std::string::npos)
+      << r->Describe();
+  EXPECT_NE(r->Describe().find("data 0.00..3.00 m"), std::string::npos) << r->Describe();
+  // A flat map: nothing clipped.
+  PointCloud flat;
+  for (int i = 0; i < 50; ++i) flat.Add({0.1f * i, 0.0f, 1.0f});
+  r = MapHeightColorRange(flat);
+  ASSERT_TRUE(r.ok());
+  EXPECT_FALSE(r->clipped());
+  EXPECT_NE(r->Describe().find("colours span the data: 1.00..1.00 m"), std::string::npos);
+  EXPECT_FALSE(MapHeightColorRange(PointCloud()).ok());
+}
+
+TEST(PlotsTest, GnssStatusTrackAndStrip) {
+  const std::filesystem::path dir = OutDir();
+  const std::vector<GnssAvailabilityInterval> availability = {
+      {kT0, kT0.PlusSeconds(10.0), GnssAvailability::kValid},
+      {kT0.PlusSeconds(10.0), kT0.PlusSeconds(12.0), GnssAvailability::kDegraded},
+      {kT0.PlusSeconds(12.0), kT0.PlusSeconds(20.0), GnssAvailability::kOutage},
+      {kT0.PlusSeconds(20.0), kT0.PlusSeconds(30.0), GnssAvailability::kValid}};
+  std::vector<ScanSubmap> scans;
+  for (int i = 0; i < 300; ++i) scans.push_back({kT0.PlusSeconds(0.1 * i), i / 50});  // 5 s each
+  const GnssStatusTrack track = MakeGnssStatusTrack("full", availability, scans, kT0);
+  ASSERT_EQ(track.spans.size(), 4u);
+  EXPECT_NEAR(track.spans[2].start_s, 12.0, 1e-9);
+  ASSERT_EQ(track.submaps.size(), 6u);
+  EXPECT_EQ(track.submaps[2].id, 2);
+  EXPECT_NEAR(track.submaps[2].start_s, 10.0, 1e-9);
+  EXPECT_NEAR(track.submaps[2].end_s, 15.0, 1e-9);
+  EXPECT_NEAR(track.submaps[5].end_s, 29.9, 1e-9);
+  // Submap 1 (5..10 s) valid, 2 (10..15 s) outage (its worst), 4 (20..25 s) valid.
+  EXPECT_EQ(WorstGnssStatus(track, 5.0, 10.0), GnssAvailability::kValid);
+  EXPECT_EQ(WorstGnssStatus(track, 10.0, 11.0), GnssAvailability::kDegraded);
+  EXPECT_EQ(WorstGnssStatus(track, 10.0, 15.0), GnssAvailability::kOutage);
+  EXPECT_EQ(WorstGnssStatus(track, 20.0, 25.0), GnssAvailability::kValid);
+  EXPECT_EQ(WorstGnssStatus(track, 15.0, 15.0), GnssAvailability::kOutage);  // a point in time
+
+  const GnssStatusTrack lidar = MakeGnssStatusTrack("lidar_only", {}, scans, kT0);
+  PlotOptions o;
+  o.height_px = 600;
+  ASSERT_TRUE(PlotGnssStatus({track, lidar}, {{12.0, 8.0}}, dir / "gnss_status.png", o).ok());
+  const cv::Mat img = Load(dir / "gnss_status.png");
+  // The outage (vermillion) and available (bluish green) strips are drawn.
+  EXPECT_GT(CountColor(img, cv::Scalar(0, 94, 213), 2), 3000);
+  EXPECT_GT(CountColor(img, cv::Scalar(115, 158, 0), 2), 1000);
+  // All available: no outage colour but the legend's swatch (36 x ~16 px).
+  const GnssStatusTrack ok = MakeGnssStatusTrack(
+      "gnss_ins", {{kT0, kT0.PlusSeconds(30.0), GnssAvailability::kValid}}, scans, kT0);
+  ASSERT_TRUE(PlotGnssStatus({ok}, {}, dir / "gnss_ok.png", o).ok());
+  EXPECT_LT(CountColor(Load(dir / "gnss_ok.png"), cv::Scalar(0, 94, 213), 2), 700);
+  Cleanup(dir);
 }
 
 }  // namespace

@@ -43,7 +43,7 @@ void WritePlots(const std::vector<ModeRun>& runs, const std::vector<MethodEvalua
     }
     if (!series.empty()) {
       eval::PlotOptions pe;
-      pe.title = "Position error vs " + gt->kind + " ground truth (GNSS outages shaded)";
+      pe.title = "Position error vs " + gt->kind + " ground truth";
       warn("position_error.png",
            eval::PlotPositionErrors(series, outages, out_dir / "position_error.png", pe));
     }

@@ -4,6 +4,8 @@
 # Cases: kitti_frames, truncated_bin, bad_oxts, bad_config, bad_cli, sim_all, folder_input,
 # rosbag_input (these two convert the real frames with slam_mms_convert, next to the app, and also
 # run slam_mms_bench_e2e on them where it is built).
+# Conventions (issue 22): dump_config (--dump-config/--config round trip), app_conventions
+# (--version of every app, --opt=value forms, slam_mms_eval's JSON).
 # Exit 0 = pass, 77 = skipped (real KITTI data absent), anything else = fail (with a message).
 set -uo pipefail
 case_name=$1
@@ -26,13 +28,18 @@ run() {
   local log=$1; shift
   timeout 300 "$bin" "$@" >"$log" 2>&1
 }
-# The report's keys must be exactly the issue-8 schema's.
+# The report's keys: the issue-8 schema's unchanged, plus issue 22's ("outputs" is optional).
 check_report() {
   local report=$1; shift
   [[ -s $report ]] || fail "no $report"
   if command -v jq >/dev/null; then
-    jq -e '(keys == ["gnss_outages","ground_truth_map","input","methods"]) and
-           (.input | keys == ["drive","duration_s","ground_truth","scans"]) and
+    jq -e '((keys - ["outputs"]) == ["command_line","complete","georef","gnss_outages",
+             "ground_truth_map","input","methods","options","version"]) and
+           (.input | keys == ["drive","duration_s","ground_truth","kind","scans","scans_processed",
+             "scans_total","skipped_scans"]) and
+           (.input.scans == .input.scans_processed) and
+           (.input.skipped_scans | keys == ["count","scans"]) and
+           ((.command_line | type) == "array") and ((.complete | type) == "boolean") and
            (.ground_truth_map | keys == ["mme"])' "$report" >/dev/null ||
       fail "report.json top-level/input keys differ from the schema: $(cat "$report")"
     for m in "$@"; do
@@ -46,7 +53,8 @@ check_report() {
              '"methods"' '"ate_rmse_m"' '"ate_rmse_xyz_m"' '"rot_rmse_deg"' '"rot_rmse_rpy_deg"' \
              '"t_rel_pct"' '"r_rel_deg_per_100m"' '"max_pos_err_in_outage_m"' \
              '"max_rot_err_in_outage_deg"' '"mme"' '"scans_per_s"' '"peak_rss_mb"' \
-             '"ground_truth_map"'; do
+             '"ground_truth_map"' '"version"' '"complete"' '"command_line"' '"options"' \
+             '"georef"' '"kind"' '"scans_total"' '"scans_processed"' '"skipped_scans"'; do
       grep -q "$k" "$report" || fail "report.json lacks $k"
     done
     for m in "$@"; do grep -q "\"$m\"" "$report" || fail "report.json lacks method $m"; done
@@ -134,26 +142,49 @@ case $case_name in
       fail "error does not name the line and field: $(cat "$tmp/log")"
     ;;
   bad_config)
-    printf 'localizer.submap_duration_s = 5\n# a comment\nlocalizer.bogus_key = 3\n' >"$tmp/a.cfg"
-    run "$tmp/log" --kitti-raw "$tmp/none" --out "$tmp/out" --config "$tmp/a.cfg"
+    # YAML: nested or dotted keys; errors name file:line and key; exit status 2.
+    printf 'localizer:\n  submap_duration_s: 5\n# a comment\n  bogus_key: 3\n' >"$tmp/a.yaml"
+    run "$tmp/log" --kitti-raw "$tmp/none" --out "$tmp/out" --config "$tmp/a.yaml"
     status=$?
     [[ $status == 2 ]] || fail "unknown key: expected exit status 2, got $status"
-    grep -q "a.cfg:3: unknown key 'localizer.bogus_key'" "$tmp/log" ||
+    grep -q "a.yaml:4: unknown key 'localizer.bogus_key'" "$tmp/log" ||
       fail "unknown key: message lacks file:line and key: $(cat "$tmp/log")"
-    printf 'level2.use_loops = maybe\n' >"$tmp/b.cfg"
-    run "$tmp/log" --kitti-raw "$tmp/none" --out "$tmp/out" --config "$tmp/b.cfg"
+    printf 'level2.use_loops: maybe\n' >"$tmp/b.yaml"
+    run "$tmp/log" --kitti-raw "$tmp/none" --out "$tmp/out" --config "$tmp/b.yaml"
     [[ $? == 2 ]] || fail "bad bool: expected exit status 2"
-    grep -q "b.cfg:1: key 'level2.use_loops': bad value 'maybe'" "$tmp/log" ||
+    grep -q "b.yaml:1: key 'level2.use_loops': bad value 'maybe'" "$tmp/log" ||
       fail "bad bool: message lacks file:line, key and value: $(cat "$tmp/log")"
-    printf 'num_threads = 0\n' >"$tmp/c.cfg"
-    run "$tmp/log" --kitti-raw "$tmp/none" --out "$tmp/out" --config "$tmp/c.cfg"
+    printf 'num_threads: 0\n' >"$tmp/c.yaml"
+    run "$tmp/log" --kitti-raw "$tmp/none" --out "$tmp/out" --config "$tmp/c.yaml"
     [[ $? == 2 ]] || fail "invalid option: expected exit status 2"
-    grep -q "c.cfg: .*num_threads" "$tmp/log" ||
+    grep -q "c.yaml: .*num_threads" "$tmp/log" ||
       fail "invalid option: message lacks the option name: $(cat "$tmp/log")"
-    printf 'localizer.submap_duration_s = 4.5\nlevel2.use_loops = off\n' >"$tmp/ok.cfg"
-    run "$tmp/log" --kitti-raw "$tmp/none" --out "$tmp/out" --config "$tmp/ok.cfg"
+    printf '# wrong type\nlevel2:\n  max_iterations: [3]\n' >"$tmp/d.yaml"
+    run "$tmp/log" --kitti-raw "$tmp/none" --out "$tmp/out" --config "$tmp/d.yaml"
+    [[ $? == 2 ]] || fail "wrong type: expected exit status 2"
+    grep -q "d.yaml:3: key 'level2.max_iterations': expected int, got a list" "$tmp/log" ||
+      fail "wrong type: message lacks file:line, key and type: $(cat "$tmp/log")"
+    printf 'level2:\n  use_gnss: true\nlevel2.use_gnss: false\n' >"$tmp/e.yaml"
+    run "$tmp/log" --kitti-raw "$tmp/none" --out "$tmp/out" --config "$tmp/e.yaml"
+    [[ $? == 2 ]] || fail "key twice: expected exit status 2"
+    grep -q "e.yaml:3: key 'level2.use_gnss' given twice" "$tmp/log" ||
+      fail "key twice: $(cat "$tmp/log")"
+    printf 'localizer:\n  icp: [1,\n' >"$tmp/f.yaml"
+    run "$tmp/log" --kitti-raw "$tmp/none" --out "$tmp/out" --config "$tmp/f.yaml"
+    [[ $? == 2 ]] || fail "bad YAML: expected exit status 2"
+    grep -q "f.yaml:[0-9]*: not valid YAML" "$tmp/log" || fail "bad YAML: $(cat "$tmp/log")"
+    # The old "key = value" format is not read any more.
+    printf 'localizer.submap_duration_s = 4.5\n' >"$tmp/old.cfg"
+    run "$tmp/log" --kitti-raw "$tmp/none" --out "$tmp/out" --config "$tmp/old.cfg"
+    [[ $? == 2 ]] || fail "key = value: expected exit status 2"
+    grep -q "old.cfg:1: expected a mapping" "$tmp/log" || fail "key = value: $(cat "$tmp/log")"
+    printf 'localizer:\n  submap_duration_s: 4.5\nlevel2.use_loops: off\n' >"$tmp/ok.yaml"
+    run "$tmp/log" --kitti-raw "$tmp/none" --out "$tmp/out" --config "$tmp/ok.yaml"
     [[ $? == 1 ]] || fail "a good config then a missing drive: expected exit status 1"
-    grep -q "ok.cfg" "$tmp/log" && fail "a good config was rejected: $(cat "$tmp/log")"
+    grep -q "ok.yaml" "$tmp/log" && fail "a good config was rejected: $(cat "$tmp/log")"
+    run "$tmp/log" --kitti-raw "$tmp/none" --out "$tmp/out" --config "$tmp/missing.yaml"
+    [[ $? == 2 ]] || fail "a missing config file: expected exit status 2"
+    grep -q "missing.yaml" "$tmp/log" || fail "a missing config file: $(cat "$tmp/log")"
     ;;
   bad_cli)
     run "$tmp/log" --out "$tmp/out" --frames 5
@@ -174,6 +205,34 @@ case $case_name in
     run "$tmp/log" --help
     [[ $? == 0 ]] || fail "--help: expected exit status 0"
     grep -q -- "--kitti-raw DRIVE_DIR --out DIR" "$tmp/log" || fail "--help text"
+    grep -q -- "--dump-config FILE" "$tmp/log" || fail "--help lacks --dump-config"
+    # --opt=value works like --opt value (same messages).
+    run "$tmp/log" --out="$tmp/out" --frames=5
+    [[ $? == 2 ]] || fail "--frames=5: expected exit status 2"
+    grep -q -- "--frames 5: expected A:B" "$tmp/log" || fail "--frames=5 message: $(cat "$tmp/log")"
+    run "$tmp/log" --out "$tmp/out" --las-tile-size -5
+    [[ $? == 2 ]] || fail "--las-tile-size -5: expected exit status 2"
+    grep -q -- "--las-tile-size -5: expected metres >= 0" "$tmp/log" ||
+      fail "--las-tile-size message: $(cat "$tmp/log")"
+    run "$tmp/log" --out "$tmp/out" --checkpoint-every=two
+    [[ $? == 2 ]] || fail "--checkpoint-every=two: expected exit status 2"
+    grep -q -- "--checkpoint-every two: expected a number of submaps >= 0" "$tmp/log" ||
+      fail "--checkpoint-every message: $(cat "$tmp/log")"
+    run "$tmp/log" --out "$tmp/out" --checkpoint-every -1
+    [[ $? == 2 ]] || fail "--checkpoint-every -1: expected exit status 2"
+    run "$tmp/log" --out "$tmp/out" --crs 32632
+    [[ $? == 2 ]] || fail "--crs 32632: expected exit status 2"
+    grep -q -- "--crs 32632: expected EPSG:nnnn" "$tmp/log" || fail "--crs message: $(cat "$tmp/log")"
+    run "$tmp/log" --out "$tmp/out" --mode full --mode lidar_only
+    [[ $? == 2 ]] || fail "--mode twice: expected exit status 2"
+    grep -q -- "--mode given twice" "$tmp/log" || fail "--mode twice message: $(cat "$tmp/log")"
+    run "$tmp/log" --out "$tmp/out" --sim-duration
+    [[ $? == 2 ]] || fail "--sim-duration without a value: expected exit status 2"
+    run "$tmp/log" --bogus=3 --out "$tmp/out"
+    [[ $? == 2 ]] || fail "--bogus=3: expected exit status 2"
+    grep -q -- "--bogus" "$tmp/log" || fail "--bogus=3 message: $(cat "$tmp/log")"
+    run "$tmp/log" --version
+    [[ $? == 0 ]] || fail "--version: expected exit status 0"
     ;;
   sim_all)
     # --pos smoothed: full on the smoothed POS (the default, forward, runs in folder_input).
@@ -194,6 +253,67 @@ case $case_name in
              .methods.full.ate_rmse_m < 1.0 and .methods.gnss_ins.ate_rmse_m < 1.0' \
         "$tmp/out/report.json" >/dev/null || fail "sim metrics: $(cat "$tmp/out/report.json")"
     fi
+    ;;
+  dump_config)
+    # --dump-config writes the effective options (defaults + --config) as YAML that --config reads
+    # back: dump, read, dump again gives the same bytes; --config-keys prints the defaults' YAML.
+    printf 'localizer:\n  submap_duration_s: 4.5\n  icp: {max_iterations: 17}\nlevel2.use_loops: off\nins.gnss.t_body_antenna: [0.1, 0, 0.75]\n' >"$tmp/my.yaml"
+    run "$tmp/log" --config "$tmp/my.yaml" --dump-config "$tmp/d1.yaml" ||
+      fail "--dump-config: exit status $?: $(cat "$tmp/log")"
+    [[ -s $tmp/d1.yaml ]] || fail "--dump-config wrote nothing"
+    grep -q "^  submap_duration_s: 4.5  # double; default " "$tmp/d1.yaml" ||
+      fail "the dump lacks the config's value with its comment: $(cat "$tmp/d1.yaml")"
+    grep -q "^    max_iterations: 17  # int; default " "$tmp/d1.yaml" || fail "icp.max_iterations"
+    grep -q "^  use_loops: false  # bool; default " "$tmp/d1.yaml" || fail "level2.use_loops"
+    grep -q "^    t_body_antenna: \[0.1, 0, 0.75\]" "$tmp/d1.yaml" || fail "t_body_antenna"
+    run "$tmp/log" --config "$tmp/d1.yaml" --dump-config="$tmp/d2.yaml" ||
+      fail "--config of a dump: exit status $?: $(cat "$tmp/log")"
+    cmp "$tmp/d1.yaml" "$tmp/d2.yaml" || fail "dump, read, dump: the two dumps differ"
+    run "$tmp/keys.yaml" --config-keys || fail "--config-keys: exit status $?"
+    grep -q "^localizer:$" "$tmp/keys.yaml" || fail "--config-keys is not YAML: $(head "$tmp/keys.yaml")"
+    run "$tmp/log" --config "$tmp/keys.yaml" --dump-config "$tmp/d3.yaml" ||
+      fail "--config of --config-keys: exit status $?: $(cat "$tmp/log")"
+    cmp "$tmp/keys.yaml" "$tmp/d3.yaml" || fail "--config-keys differs from the defaults' dump"
+    # A bad config is reported before anything is dumped.
+    printf 'level2.use_loops: maybe\n' >"$tmp/bad.yaml"
+    run "$tmp/log" --config "$tmp/bad.yaml" --dump-config "$tmp/d4.yaml"
+    [[ $? == 2 ]] || fail "--dump-config with a bad config: expected exit status 2"
+    [[ -e $tmp/d4.yaml ]] && fail "--dump-config wrote a file from a bad config"
+    ;;
+  app_conventions)
+    # Every app: --version prints "<app> <project version>" and exits 0; --opt=value works.
+    version=$(sed -n 's/^project(slam_mms VERSION \([0-9.]*\).*/\1/p' "$src/CMakeLists.txt")
+    [[ -n $version ]] || fail "no project version in $src/CMakeLists.txt"
+    dir=$(dirname "$bin")
+    for app in "$bin" "$dir/slam_mms_eval" "$dir/slam_mms_sim" "$dir/slam_mms_sim_images" \
+               "$convert" "$bench"; do
+      [[ -x $app ]] || { [[ $app == "$bench" ]] && continue; fail "no $app"; }
+      out=$("$app" --version 2>&1) || fail "$app --version: exit status $?: $out"
+      [[ $out == "$(basename "$app") $version" ]] ||
+        fail "$app --version printed '$out', expected '$(basename "$app") $version'"
+      "$app" --no-such-flag >"$tmp/log" 2>&1
+      status=$?
+      # slam_mms_convert exits with CLI11's own code (non-zero); the others with 2.
+      if [[ $app == "$convert" ]]; then
+        [[ $status != 0 ]] || fail "$app --no-such-flag: expected a non-zero exit status"
+      else
+        [[ $status == 2 ]] || fail "$app --no-such-flag: expected exit status 2, got $status: $(cat "$tmp/log")"
+      fi
+    done
+    # slam_mms_eval with --opt=value; its JSON (nlohmann) parses and holds exact numbers.
+    awk 'BEGIN { for (i = 0; i < 30; ++i) printf "%d.5 %.3f %.3f 0 0 0 0 1\n", 1000 + i, i * 1.5, i * 0.1 }' >"$tmp/gt.tum"
+    awk '{ $2 = $2 + 0.25; print }' "$tmp/gt.tum" >"$tmp/est.tum"
+    "$dir/slam_mms_eval" --gt="$tmp/gt.tum" --est=shifted="$tmp/est.tum" --segments=short \
+      --json="$tmp/eval.json" >"$tmp/log" 2>&1 || fail "slam_mms_eval --opt=value: $(cat "$tmp/log")"
+    python3 - "$tmp/eval.json" "$version" <<'EOF' || fail "slam_mms_eval JSON: $(cat "$tmp/eval.json")"
+import json, sys
+j = json.load(open(sys.argv[1]))
+t = j["trajectories"]["shifted"]
+assert j["version"] == sys.argv[2], j["version"]
+assert t["num_matched"] == 30, t
+assert abs(t["ate_rmse_m"] - 0.25) < 1e-9, t["ate_rmse_m"]
+assert t["max_pos_err_in_outage_m"] is None, t
+EOF
     ;;
   folder_input)
     require_kitti

@@ -119,7 +119,9 @@ Options:
   --las-tile-size M       split LAS maps into square tiles of M metres (default 0 = one file).
   --resume                continue a killed run from the checkpoint in --out.
   --checkpoint-every N    write a checkpoint every N finished submaps (default 10; 0 = never).
-  --sim-duration S        seconds of the default drive to simulate (default 30; 0 = all ~3 min).
+  --sim-scenario NAME     the drive simulated without input data: demo (default: one city block
+                          with four turns and a revisit, ~60 s), default (190 s) or long.
+  --sim-duration S        seconds of that drive to simulate (default 0 = all of it).
   --sim-seed N            simulator seed (default 1).
   --keep-sim              keep the simulated default drive in DIR/sim (default: removed at the end).
   --log-level L           debug | info | warning | error: the library's messages on stderr from
@@ -171,6 +173,7 @@ StatusOr<RunArgs> ParseRunArgs(int argc, const char* const* argv) {
   app.add_option("--gnss-outage", outages)->expected(1, CLI::detail::expected_max_vector_size);
   app.add_option("--config", config);
   app.add_option("--dump-config", dump_config);
+  app.add_option("--sim-scenario", args.sim_scenario);
   app.add_option("--sim-duration", sim_duration);
   app.add_option("--sim-seed", sim_seed);
   app.add_flag("--keep-sim", args.keep_sim);
@@ -216,6 +219,11 @@ StatusOr<RunArgs> ParseRunArgs(int argc, const char* const* argv) {
   }
   if (given("--frames")) SLAM_MMS_RETURN_IF_ERROR(ParseFrames(frames, &args));
   for (const std::string& o : outages) SLAM_MMS_RETURN_IF_ERROR(ParseOutage(o, &args));
+  if (args.sim_scenario != "demo" && args.sim_scenario != "default" &&
+      args.sim_scenario != "long") {
+    return InvalidArgumentError("--sim-scenario " + args.sim_scenario +
+                                ": expected demo, default or long");
+  }
   if (given("--sim-duration") &&
       (!ParseDouble(sim_duration, &args.sim_duration_s) || args.sim_duration_s < 0.0)) {
     return InvalidArgumentError("--sim-duration " + sim_duration + ": expected seconds >= 0");

@@ -2116,8 +2116,8 @@ def plot_trajectories_top_view(ground_truth: Trajectory, ground_truth_name: str,
 def read_ply(path: os.PathLike[str]) -> numpy.ndarray:
     """N x 4 float32 [x y z intensity]."""
 
-def report_to_json(drive: str, scans: int, duration_s: float, ground_truth: str, gnss_outages: List[Tuple[float, float]], methods: List[Tuple[str, MethodReport]], ground_truth_map_mme: Optional[float] = None) -> str:
-    """report.json text by the C++ writer (the exact schema of eval/report.hpp)."""
+def report_to_json(drive: str, scans: int, duration_s: float, ground_truth: str, gnss_outages: List[Tuple[float, float]], methods: List[Tuple[str, MethodReport]], ground_truth_map_mme: Optional[float] = None, *, kind: str = '', scans_total: int = -1, skipped_scans: List[Tuple[str, str]] = [], command_line: List[str] = [], options_json: str = '', georef_json: str = '', complete: bool = True, outputs: List[str] = []) -> str:
+    """report.json text by the C++ writer (the schema of eval/report.hpp): kind (kitti_raw|folder|rosbag|simulated, '' = null), scans_total (< 0 = null), skipped_scans [(source, reason)], command_line, options_json / georef_json (JSON object texts, '' = null), complete, outputs (file names)."""
 
 def set_min_log_level(level: LogLevel) -> None:
     """Messages below this level are not even formatted by the library (default INFO)."""

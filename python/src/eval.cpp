@@ -279,20 +279,41 @@ void RegisterEval(py::module_& m) {
       [](const std::string& drive, int64_t scans, double duration_s,
          const std::string& ground_truth, const std::vector<std::pair<double, double>>& outages,
          const std::vector<std::pair<std::string, MethodReport>>& methods,
-         std::optional<double> ground_truth_map_mme) {
+         std::optional<double> ground_truth_map_mme, const std::string& kind, int64_t scans_total,
+         const std::vector<std::pair<std::string, std::string>>& skipped_scans,
+         const std::vector<std::string>& command_line, const std::string& options_json,
+         const std::string& georef_json, bool complete, const std::vector<std::string>& outputs) {
         EvalReport r;
         r.input.drive = drive;
+        r.input.kind = kind;
         r.input.scans = scans;
+        r.input.scans_total = scans_total;
         r.input.duration_s = duration_s;
         r.input.ground_truth = ground_truth;
+        for (const auto& [source, reason] : skipped_scans) {
+          r.input.skipped_scans.push_back({source, reason});
+        }
         for (const auto& [s, d] : outages) r.gnss_outages.push_back({s, d});
         r.methods = methods;
         r.ground_truth_map_mme = ground_truth_map_mme;
+        r.command_line = command_line;
+        r.options_json = options_json;
+        r.georef_json = georef_json;
+        r.complete = complete;
+        r.outputs = outputs;
         return ValueOrThrow(ReportToJson(r));
       },
       py::arg("drive"), py::arg("scans"), py::arg("duration_s"), py::arg("ground_truth"),
       py::arg("gnss_outages"), py::arg("methods"), py::arg("ground_truth_map_mme") = py::none(),
-      "report.json text by the C++ writer (the exact schema of eval/report.hpp).");
+      py::kw_only(), py::arg("kind") = "", py::arg("scans_total") = -1,
+      py::arg("skipped_scans") = std::vector<std::pair<std::string, std::string>>(),
+      py::arg("command_line") = std::vector<std::string>(), py::arg("options_json") = "",
+      py::arg("georef_json") = "", py::arg("complete") = true,
+      py::arg("outputs") = std::vector<std::string>(),
+      "report.json text by the C++ writer (the schema of eval/report.hpp): kind "
+      "(kitti_raw|folder|rosbag|simulated, '' = null), scans_total (< 0 = null), skipped_scans "
+      "[(source, reason)], command_line, options_json / georef_json (JSON object texts, '' = "
+      "null), complete, outputs (file names).");
   m.def("peak_rss_mb", &PeakRssMb, "Peak resident set size of this process [MB] (Linux).");
 
   // ---- map files ----

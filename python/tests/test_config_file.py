@@ -57,3 +57,24 @@ def test_python_cli_config_keys_is_yaml(tmp_path):
     o = slam_mms.Options()
     slam_mms.apply_config_text(r.stdout, o, "keys.yaml")
     assert slam_mms.options_to_yaml(o) == r.stdout
+
+
+def test_report_embeds_options_and_issue22_fields():
+    o = slam_mms.Options()
+    slam_mms.apply_config_text("level2.use_loops: false\n", o)
+    text = slam_mms.report_to_json(
+        "d", 9, 1.0, "none", [], [], None, kind="folder", scans_total=10,
+        skipped_scans=[("scans/0004.pcd", "truncated")], command_line=["slam_mms_run", "--out=x"],
+        options_json=slam_mms.options_to_json(o), complete=False, outputs=["full.tum"])
+    r = json.loads(text)
+    assert r["version"] and r["complete"] is False
+    assert r["command_line"] == ["slam_mms_run", "--out=x"]
+    assert r["input"]["kind"] == "folder" and r["input"]["scans_total"] == 10
+    assert r["input"]["scans"] == r["input"]["scans_processed"] == 9
+    assert r["input"]["skipped_scans"] == {
+        "count": 1, "scans": [{"source": "scans/0004.pcd", "reason": "truncated"}]}
+    assert r["options"]["level2"]["use_loops"] is False
+    assert r["options"] == json.loads(slam_mms.options_to_json(o))
+    assert r["georef"] is None and r["outputs"] == {"files": ["full.tum"]}
+    with pytest.raises(ValueError, match="options_json"):
+        slam_mms.report_to_json("d", 1, 1.0, "none", [], [], options_json="{bad")

@@ -9,12 +9,15 @@
 #include <cstring>
 #include <fstream>
 #include <system_error>
+#include <utility>
 #include <vector>
 
 namespace slam_mms::internal {
 namespace {
 
 constexpr char kMagic[8] = {'S', 'M', 'M', 'S', 'C', 'L', 'D', '1'};
+constexpr char kMagic2[8] = {'S', 'M', 'M', 'S', 'C', 'L', 'D', '2'};  // + MapPointStamps
+constexpr size_t kStampBytes = 2 * sizeof(int64_t);
 constexpr size_t kHeaderBytes = sizeof(kMagic) + sizeof(uint64_t);
 constexpr size_t kPointBytes = 4 * sizeof(float);
 // Points per write/read batch.
@@ -22,7 +25,8 @@ constexpr size_t kBatch = 4096;
 
 }  // namespace
 
-Status WriteCloudFile(const std::filesystem::path& path, const PointCloud& cloud) {
+Status WriteCloudFile(const std::filesystem::path& path, const PointCloud& cloud,
+                      const MapPointStamps* stamps) {
   static_assert(sizeof(float) == 4, "IEEE floats expected");
   const auto fail = [&path](const char* what) {
     std::error_code ec;
@@ -32,7 +36,9 @@ Status WriteCloudFile(const std::filesystem::path& path, const PointCloud& cloud
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
   if (!out) return UnavailableError(path.string() + ": cannot be created");
   const uint64_t n = cloud.size();
-  out.write(kMagic, sizeof(kMagic));
+  const bool with_stamps = stamps != nullptr && !stamps->empty() && stamps->size() == n &&
+                           stamps->scan_index.size() == n;
+  out.write(with_stamps ? kMagic2 : kMagic, sizeof(kMagic));
   out.write(reinterpret_cast<const char*>(&n), sizeof(n));
   std::vector<float> buf;
   buf.reserve(4 * kBatch);
@@ -47,6 +53,12 @@ Status WriteCloudFile(const std::filesystem::path& path, const PointCloud& cloud
     out.write(reinterpret_cast<const char*>(buf.data()),
               static_cast<std::streamsize>(buf.size() * sizeof(float)));
   }
+  if (with_stamps && out) {
+    out.write(reinterpret_cast<const char*>(stamps->time_ns.data()),
+              static_cast<std::streamsize>(n * sizeof(int64_t)));
+    out.write(reinterpret_cast<const char*>(stamps->scan_index.data()),
+              static_cast<std::streamsize>(n * sizeof(int64_t)));
+  }
   out.flush();
   if (!out) return fail("write failed (disk full?)");
   out.close();
@@ -54,7 +66,8 @@ Status WriteCloudFile(const std::filesystem::path& path, const PointCloud& cloud
   return OkStatus();
 }
 
-StatusOr<PointCloud> ReadCloudFile(const std::filesystem::path& path) {
+StatusOr<PointCloud> ReadCloudFile(const std::filesystem::path& path, MapPointStamps* stamps) {
+  if (stamps != nullptr) stamps->clear();
   std::ifstream in(path, std::ios::binary);
   if (!in) return NotFoundError(path.string() + ": cannot be opened");
   std::error_code ec;
@@ -68,13 +81,15 @@ StatusOr<PointCloud> ReadCloudFile(const std::filesystem::path& path) {
     return DataLossError(path.string() + ": truncated header (" + std::to_string(bytes) +
                          " bytes)");
   }
-  if (std::memcmp(magic.data(), kMagic, sizeof(kMagic)) != 0) {
+  const bool v2 = std::memcmp(magic.data(), kMagic2, sizeof(kMagic2)) == 0;
+  if (!v2 && std::memcmp(magic.data(), kMagic, sizeof(kMagic)) != 0) {
     return DataLossError(path.string() + ": not a slam_mms cloud file (bad magic)");
   }
-  if (n > (bytes - kHeaderBytes) / kPointBytes || bytes != kHeaderBytes + n * kPointBytes) {
+  const size_t per_point = kPointBytes + (v2 ? kStampBytes : 0);
+  if (n > (bytes - kHeaderBytes) / per_point || bytes != kHeaderBytes + n * per_point) {
     return DataLossError(path.string() + ": header says " + std::to_string(n) +
                          " points, the file has " + std::to_string(bytes) + " bytes (expected " +
-                         std::to_string(kHeaderBytes + n * kPointBytes) + ")");
+                         std::to_string(kHeaderBytes + n * per_point) + ")");
   }
   PointCloud cloud;
   cloud.reserve(static_cast<size_t>(n));
@@ -88,6 +103,17 @@ StatusOr<PointCloud> ReadCloudFile(const std::filesystem::path& path) {
     for (size_t k = 0; k < m; ++k) {
       cloud.Add(Eigen::Vector3f(buf[4 * k], buf[4 * k + 1], buf[4 * k + 2]), buf[4 * k + 3]);
     }
+  }
+  if (v2) {
+    MapPointStamps read;
+    read.time_ns.resize(static_cast<size_t>(n));
+    read.scan_index.resize(static_cast<size_t>(n));
+    in.read(reinterpret_cast<char*>(read.time_ns.data()),
+            static_cast<std::streamsize>(n * sizeof(int64_t)));
+    in.read(reinterpret_cast<char*>(read.scan_index.data()),
+            static_cast<std::streamsize>(n * sizeof(int64_t)));
+    if (!in) return DataLossError(path.string() + ": read failed in the point stamps");
+    if (stamps != nullptr) *stamps = std::move(read);
   }
   return cloud;
 }
@@ -128,20 +154,26 @@ void SpillFolder::Remove() {
   path_.clear();
 }
 
-Status SpillFolder::Spill(const std::string& name, PointCloud* cloud,
-                          std::filesystem::path* file) const {
+Status SpillFolder::Spill(const std::string& name, PointCloud* cloud, std::filesystem::path* file,
+                          MapPointStamps* stamps) const {
   if (!enabled() || !file->empty()) return OkStatus();
   const std::filesystem::path target = path_ / name;
-  SLAM_MMS_RETURN_IF_ERROR(WriteCloudFile(target, *cloud));
+  SLAM_MMS_RETURN_IF_ERROR(WriteCloudFile(target, *cloud, stamps));
   *file = target;
   *cloud = PointCloud();
+  if (stamps != nullptr) *stamps = MapPointStamps();
   return OkStatus();
 }
 
 StatusOr<PointCloud> CloudFromMemoryOrFile(const PointCloud& cloud,
-                                           const std::filesystem::path& file) {
-  if (file.empty()) return cloud;
-  return ReadCloudFile(file);
+                                           const std::filesystem::path& file,
+                                           const MapPointStamps* stamps,
+                                           MapPointStamps* stamps_out) {
+  if (file.empty()) {
+    if (stamps_out != nullptr) *stamps_out = stamps != nullptr ? *stamps : MapPointStamps();
+    return cloud;
+  }
+  return ReadCloudFile(file, stamps_out);
 }
 
 }  // namespace slam_mms::internal

@@ -207,7 +207,7 @@ DriveRun RunDrive(const DriveReader& reader, const MappingSystem::Options& base_
   // What was computed, also after a fatal error (the current estimates).
   run.trajectory = system->FinalTrajectory();
   run.results = system->results();
-  run.map = system->FinalMap();
+  run.map = system->FinalMap(&run.map_stamps);
   if (StatusOr<GeodeticPoint> origin = system->Origin(); origin.ok()) run.origin = *origin;
   run.availability = system->GnssAvailability();
   run.scans_skipped_by_system = system->num_skipped_scans();

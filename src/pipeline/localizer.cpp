@@ -155,10 +155,10 @@ struct Localizer::Impl {
   /// Moves one cloud of `rec` to a file in the spill folder; on failure it stays in memory.
   void Spill(SubmapRecord& rec, CloudKind kind) {
     const bool map = kind == CloudKind::kMap;
-    const Status st =
-        spill.Spill("submap_" + std::to_string(rec.id) + (map ? "_map.bin" : "_registration.bin"),
-                    map ? &rec.cloud : &rec.registration_cloud,
-                    map ? &rec.cloud_file : &rec.registration_cloud_file);
+    const Status st = spill.Spill(
+        "submap_" + std::to_string(rec.id) + (map ? "_map.bin" : "_registration.bin"),
+        map ? &rec.cloud : &rec.registration_cloud,
+        map ? &rec.cloud_file : &rec.registration_cloud_file, map ? &rec.cloud_stamps : nullptr);
     if (!st.ok()) {
       SLAM_MMS_LOG(kWarning) << "Localizer: submap " << rec.id
                              << " cloud kept in memory, spilling failed: " << st.ToString();
@@ -229,7 +229,7 @@ struct Localizer::Impl {
   void CloseCurrentSubmap() {
     if (submaps.empty() || submaps.back().finished) return;
     SubmapRecord& rec = submaps.back();
-    rec.cloud = map_acc.Cloud();
+    rec.cloud = map_acc.Cloud(&rec.cloud_stamps.time_ns, &rec.cloud_stamps.scan_index);
     rec.registration_cloud = reg_acc.Cloud();
     rec.cloud_size = rec.cloud.size();
     rec.finished = true;
@@ -368,7 +368,9 @@ struct Localizer::Impl {
     T_submap_prev = Eigen::Isometry3d::Identity();
     v_submap_prev = T_submap_cur.linear().transpose() * v_submap_prev;
     SLAM_MMS_RETURN_IF_ERROR(StartWindow(v_submap_prev, bias_prev));
-    map_acc.Add(deskewed, T_body_lidar, opt.map_max_range_m);
+    const internal::ScanStamp stamp{scan.stamp_start.nanoseconds(), &scan.cloud.time_offsets_s(),
+                                    scan.index};
+    map_acc.Add(deskewed, T_body_lidar, opt.map_max_range_m, &stamp);
     reg_acc.Add(deskewed, T_body_lidar, opt.map_max_range_m);
     res->new_submap = true;
     res->submap_id = current().id;
@@ -450,7 +452,7 @@ StatusOr<std::unique_ptr<Localizer>> Localizer::Create(const Options& options,
   m.renderer = std::move(renderer).value();
   SLAM_MMS_RETURN_IF_ERROR(m.map.SetRenderer(m.renderer.get()));
   SLAM_MMS_ASSIGN_OR_RETURN(m.icp, ProjectiveIcp::Create(m.projection, options.icp));
-  m.map_acc = internal::VoxelAccumulator(options.map_voxel_m);
+  m.map_acc = internal::VoxelAccumulator(options.map_voxel_m, /*track_first_observation=*/true);
   m.reg_acc = internal::VoxelAccumulator(options.registration_voxel_m);
   if (!options.spill_dir.empty()) {
     auto spill = internal::SpillFolder::Create(options.spill_dir);
@@ -658,7 +660,9 @@ StatusOr<LocalizationResult> Localizer::ProcessScan(const Scan& scan,
   if (!stats.ok()) return stats.status().WithContext("Localizer: surfel integration");
   res.num_surfels = stats->num_surfels;
   const Eigen::Isometry3d T_submap_lidar = T_submap_cur * m.T_body_lidar;
-  m.map_acc.Add(m.deskewed, T_submap_lidar, m.opt.map_max_range_m);
+  const internal::ScanStamp stamp{scan.stamp_start.nanoseconds(), &scan.cloud.time_offsets_s(),
+                                  scan.index};
+  m.map_acc.Add(m.deskewed, T_submap_lidar, m.opt.map_max_range_m, &stamp);
   m.reg_acc.Add(m.deskewed, T_submap_lidar, m.opt.map_max_range_m);
   res.timings.integrate_ms = MsSince(t0);
 
@@ -723,6 +727,7 @@ void Localizer::ReleaseSubmapClouds(int32_t id, bool keep_registration_cloud) {
     if (rec.id != id) continue;
     std::error_code ec;
     rec.cloud = PointCloud();
+    rec.cloud_stamps = MapPointStamps();
     rec.cloud_size = 0;
     if (!rec.cloud_file.empty()) std::filesystem::remove(rec.cloud_file, ec);
     rec.cloud_file.clear();
@@ -736,12 +741,18 @@ void Localizer::ReleaseSubmapClouds(int32_t id, bool keep_registration_cloud) {
 }
 
 StatusOr<PointCloud> Localizer::SubmapCloud(int32_t id, CloudKind kind) const {
+  return SubmapCloud(id, kind, nullptr);
+}
+
+StatusOr<PointCloud> Localizer::SubmapCloud(int32_t id, CloudKind kind,
+                                            MapPointStamps* stamps) const {
+  if (stamps != nullptr) stamps->clear();
   for (const SubmapRecord& rec : impl_->submaps) {
     if (rec.id != id) continue;
     const bool map = kind == CloudKind::kMap;
-    auto cloud =
-        internal::CloudFromMemoryOrFile(map ? rec.cloud : rec.registration_cloud,
-                                        map ? rec.cloud_file : rec.registration_cloud_file);
+    auto cloud = internal::CloudFromMemoryOrFile(map ? rec.cloud : rec.registration_cloud,
+                                                 map ? rec.cloud_file : rec.registration_cloud_file,
+                                                 map ? &rec.cloud_stamps : nullptr, stamps);
     if (!cloud.ok()) {
       return cloud.status().WithContext("Localizer: spilled cloud of submap " + std::to_string(id));
     }

@@ -1,6 +1,7 @@
 #include "slam_mms/pipeline/mapping_system.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <deque>
 #include <optional>
 #include <string>
@@ -271,7 +272,9 @@ struct MappingSystem::Impl {
       }
       const Eigen::Isometry3d T_bstart_bend = s0->T_world_body.inverse() * s1->T_world_body;
       SLAM_MMS_RETURN_IF_ERROR(deskewer.Deskew(scan, T_bstart_bend, opt.T_body_lidar, &deskewed));
-      pos_map.Add(deskewed, s0->T_world_body * opt.T_body_lidar, opt.map_max_range_m);
+      const internal::ScanStamp stamp{scan.stamp_start.nanoseconds(), &scan.cloud.time_offsets_s(),
+                                      scan.index};
+      pos_map.Add(deskewed, s0->T_world_body * opt.T_body_lidar, opt.map_max_range_m, &stamp);
       StampedPose pose;
       pose.stamp = scan.stamp_start;
       pose.T_world_body = s0->T_world_body;
@@ -396,7 +399,7 @@ StatusOr<std::unique_ptr<MappingSystem>> MappingSystem::Create(const Options& op
   ScanDeskewer::Options dopt;
   dopt.num_threads = options.num_threads;
   SLAM_MMS_ASSIGN_OR_RETURN(m.deskewer, ScanDeskewer::Create(dopt));
-  m.pos_map = internal::VoxelAccumulator(options.map_voxel_m);
+  m.pos_map = internal::VoxelAccumulator(options.map_voxel_m, /*track_first_observation=*/true);
   if (options.mode != MappingMode::kGnssIns) {
     Localizer::Options lopt = options.localizer;
     lopt.mode = options.mode;
@@ -547,16 +550,71 @@ Trajectory MappingSystem::FinalTrajectory() const {
   return traj;
 }
 
-PointCloud MappingSystem::FinalMap() const {
+PointCloud MappingSystem::FinalMap() const { return FinalMap(nullptr); }
+
+namespace {
+
+// Per voxel of eval::VoxelDownsample(cloud, voxel_m), in its output order (voxels sorted by
+// integer key, the same floor(p / voxel) of the float point): the stamps of the voxel's earliest
+// point. Empty when `in` does not match `cloud`.
+MapPointStamps EarliestPerVoxel(const PointCloud& cloud, const MapPointStamps& in, double voxel_m) {
+  MapPointStamps out;
+  if (in.size() != cloud.size() || in.scan_index.size() != cloud.size()) return out;
+  struct Key {
+    int32_t ix, iy, iz;
+    uint32_t index;
+  };
+  const double inv = 1.0 / voxel_m;
+  std::vector<Key> keys;
+  keys.reserve(cloud.size());
+  for (size_t i = 0; i < cloud.size(); ++i) {
+    const Eigen::Vector3f& p = cloud.points()[i];
+    if (!p.allFinite()) continue;
+    keys.push_back({static_cast<int32_t>(std::floor(p.x() * inv)),
+                    static_cast<int32_t>(std::floor(p.y() * inv)),
+                    static_cast<int32_t>(std::floor(p.z() * inv)), static_cast<uint32_t>(i)});
+  }
+  std::sort(keys.begin(), keys.end(), [](const Key& a, const Key& b) {
+    if (a.ix != b.ix) return a.ix < b.ix;
+    if (a.iy != b.iy) return a.iy < b.iy;
+    if (a.iz != b.iz) return a.iz < b.iz;
+    return a.index < b.index;
+  });
+  for (size_t begin = 0; begin < keys.size();) {
+    size_t end = begin + 1;
+    size_t best = keys[begin].index;
+    while (end < keys.size() && keys[end].ix == keys[begin].ix && keys[end].iy == keys[begin].iy &&
+           keys[end].iz == keys[begin].iz) {
+      if (in.time_ns[keys[end].index] < in.time_ns[best]) best = keys[end].index;
+      ++end;
+    }
+    out.time_ns.push_back(in.time_ns[best]);
+    out.scan_index.push_back(in.scan_index[best]);
+    begin = end;
+  }
+  return out;
+}
+
+}  // namespace
+
+PointCloud MappingSystem::FinalMap(MapPointStamps* stamps) const {
   const Impl& m = *impl_;
-  if (!m.loc) return m.pos_map.Cloud();
+  if (stamps != nullptr) stamps->clear();
+  if (!m.loc) {
+    return stamps != nullptr ? m.pos_map.Cloud(&stamps->time_ns, &stamps->scan_index)
+                             : m.pos_map.Cloud();
+  }
   PointCloud merged;
+  MapPointStamps merged_stamps;
+  bool all_stamped = stamps != nullptr;
   size_t total = 0;
   for (const SubmapRecord& rec : m.loc->submaps()) total += rec.cloud_size;
   merged.reserve(total);
+  MapPointStamps submap_stamps;
   for (const SubmapRecord& rec : m.loc->submaps()) {
     // From memory, or read back from the spill folder (Localizer::Options::spill_dir).
-    auto cloud = m.loc->SubmapCloud(rec.id, Localizer::CloudKind::kMap);
+    auto cloud = m.loc->SubmapCloud(rec.id, Localizer::CloudKind::kMap,
+                                    stamps != nullptr ? &submap_stamps : nullptr);
     if (!cloud.ok()) {
       SLAM_MMS_LOG(kError) << "MappingSystem::FinalMap: submap " << rec.id
                            << " left out: " << cloud.status().ToString();
@@ -567,9 +625,31 @@ PointCloud MappingSystem::FinalMap() const {
     for (size_t i = 0; i < cloud->size(); ++i) {
       merged.Add(R * cloud->points()[i] + t, cloud->intensities()[i]);
     }
+    if (all_stamped && submap_stamps.size() == cloud->size()) {
+      merged_stamps.time_ns.insert(merged_stamps.time_ns.end(), submap_stamps.time_ns.begin(),
+                                   submap_stamps.time_ns.end());
+      merged_stamps.scan_index.insert(merged_stamps.scan_index.end(),
+                                      submap_stamps.scan_index.begin(),
+                                      submap_stamps.scan_index.end());
+    } else {
+      all_stamped = false;
+    }
   }
   auto down = eval::VoxelDownsample(merged, m.opt.map_voxel_m);
-  return down.ok() ? std::move(down).value() : merged;
+  if (!down.ok()) {
+    if (all_stamped) *stamps = std::move(merged_stamps);
+    return merged;
+  }
+  if (all_stamped) {
+    MapPointStamps earliest = EarliestPerVoxel(merged, merged_stamps, m.opt.map_voxel_m);
+    if (earliest.size() == down->size()) {
+      *stamps = std::move(earliest);
+    } else {
+      SLAM_MMS_LOG(kWarning) << "MappingSystem::FinalMap: point stamps do not match the map ("
+                             << earliest.size() << " vs " << down->size() << "), left out";
+    }
+  }
+  return std::move(down).value();
 }
 
 std::vector<Surfel> MappingSystem::SurfelMapSnapshot() const {

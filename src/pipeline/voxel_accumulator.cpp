@@ -34,6 +34,8 @@ size_t Slot(uint64_t key, size_t mask) {
 void VoxelAccumulator::Clear() {
   table_ = std::vector<Entry>();
   size_ = 0;
+  first_time_ns_ = std::vector<int64_t>();
+  first_scan_ = std::vector<int64_t>();
 }
 
 void VoxelAccumulator::Reserve(size_t voxels) {
@@ -58,6 +60,7 @@ VoxelAccumulator::Entry& VoxelAccumulator::Find(uint64_t key, size_t slot) {
     if (e.key == key) return e;
     if (e.key == kEmpty) {
       e.key = key;
+      e.order = static_cast<uint32_t>(size_);
       ++size_;
       return e;
     }
@@ -66,7 +69,7 @@ VoxelAccumulator::Entry& VoxelAccumulator::Find(uint64_t key, size_t slot) {
 }
 
 void VoxelAccumulator::Add(const PointCloud& cloud, const Eigen::Isometry3d& T_frame_c,
-                           double max_range_m) {
+                           double max_range_m, const ScanStamp* stamp) {
   const Eigen::Matrix3f R = T_frame_c.linear().cast<float>();
   const Eigen::Vector3d t = T_frame_c.translation();
   const float max_range_sq = static_cast<float>(max_range_m * max_range_m);
@@ -75,6 +78,10 @@ void VoxelAccumulator::Add(const PointCloud& cloud, const Eigen::Isometry3d& T_f
   std::array<Eigen::Vector3f, kBatch> offsets;
   std::array<float, kBatch> intensities;
   std::array<size_t, kBatch> slots;
+  std::array<size_t, kBatch> index;  // of each batch point in `cloud` (first-observation times)
+  const bool track = track_ && stamp != nullptr;
+  const std::vector<float>* dt = track ? stamp->dt_from_scan_start_s : nullptr;
+  if (dt != nullptr && dt->size() != cloud.size()) dt = nullptr;
   const size_t n = cloud.size();
   size_t i = 0;
   while (i < n) {
@@ -92,11 +99,20 @@ void VoxelAccumulator::Add(const PointCloud& cloud, const Eigen::Isometry3d& T_f
       offsets[b] = (p - cell * voxel_).cast<float>();
       intensities[b] = cloud.intensities()[i];
       slots[b] = Slot(keys[b], mask);
+      index[b] = i;
       __builtin_prefetch(&table_[slots[b]], 1);
       ++b;
     }
     for (size_t k = 0; k < b; ++k) {
       Entry& e = Find(keys[k], slots[k]);
+      if (track && e.count == 0) {  // a new voxel: its first observation
+        const double offset_s = dt != nullptr ? static_cast<double>((*dt)[index[k]]) : 0.0;
+        first_time_ns_.push_back(stamp->scan_start_ns + std::llround(offset_s * 1e9));
+        first_scan_.push_back(stamp->scan_index);
+      } else if (track_ && e.count == 0) {
+        first_time_ns_.push_back(0);
+        first_scan_.push_back(0);
+      }
       e.dx += offsets[k].x();
       e.dy += offsets[k].y();
       e.dz += offsets[k].z();
@@ -106,7 +122,13 @@ void VoxelAccumulator::Add(const PointCloud& cloud, const Eigen::Isometry3d& T_f
   }
 }
 
-PointCloud VoxelAccumulator::Cloud() const {
+PointCloud VoxelAccumulator::Cloud() const { return Cloud(nullptr, nullptr); }
+
+PointCloud VoxelAccumulator::Cloud(std::vector<int64_t>* first_time_ns,
+                                   std::vector<int64_t>* first_scan) const {
+  const bool stamps = track_ && first_time_ns_.size() == size_;
+  if (first_time_ns != nullptr) first_time_ns->clear();
+  if (first_scan != nullptr) first_scan->clear();
   std::vector<const Entry*> sorted;
   sorted.reserve(size_);
   for (const Entry& e : table_) {
@@ -123,6 +145,8 @@ PointCloud VoxelAccumulator::Cloud() const {
                                  static_cast<double>(Axis(e->key, 0)) * voxel_);
     const Eigen::Vector3d mean = corner + Eigen::Vector3d(e->dx, e->dy, e->dz) / n;
     out.Add(mean.cast<float>(), e->intensity / static_cast<float>(n));
+    if (stamps && first_time_ns != nullptr) first_time_ns->push_back(first_time_ns_[e->order]);
+    if (stamps && first_scan != nullptr) first_scan->push_back(first_scan_[e->order]);
   }
   return out;
 }

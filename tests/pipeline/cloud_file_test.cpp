@@ -49,6 +49,43 @@ TEST_F(CloudFileTest, RoundTripIsExact) {
   }
 }
 
+TEST_F(CloudFileTest, StampsRoundTripAndTruncatedStampsAreDataLoss) {
+  const PointCloud c = MakeCloud(5000);
+  MapPointStamps stamps;
+  for (size_t i = 0; i < c.size(); ++i) {
+    stamps.time_ns.push_back(1317042651000000000 + static_cast<int64_t>(i) * 12345);
+    stamps.scan_index.push_back(static_cast<int64_t>(i / 100));
+  }
+  const fs::path p = dir_ / "s.bin";
+  ASSERT_TRUE(WriteCloudFile(p, c, &stamps).ok());
+  EXPECT_EQ(fs::file_size(p), 16u + 32u * c.size());
+  MapPointStamps back;
+  auto r = ReadCloudFile(p, &back);
+  ASSERT_TRUE(r.ok()) << r.status().ToString();
+  EXPECT_EQ(r->points(), c.points());
+  EXPECT_EQ(back.time_ns, stamps.time_ns);
+  EXPECT_EQ(back.scan_index, stamps.scan_index);
+  // A version-1 file (no stamps) clears them.
+  ASSERT_TRUE(WriteCloudFile(dir_ / "v1.bin", c).ok());
+  ASSERT_TRUE(ReadCloudFile(dir_ / "v1.bin", &back).ok());
+  EXPECT_TRUE(back.empty());
+  fs::resize_file(p, fs::file_size(p) - 8);
+  EXPECT_EQ(ReadCloudFile(p, &back).status().code(), StatusCode::kDataLoss);
+  // The spill folder moves the stamps with the cloud and gives them back.
+  auto folder = SpillFolder::Create(dir_);
+  ASSERT_TRUE(folder.ok());
+  PointCloud moved = c;
+  MapPointStamps moved_stamps = stamps;
+  fs::path file;
+  ASSERT_TRUE(folder->Spill("m.bin", &moved, &file, &moved_stamps).ok());
+  EXPECT_TRUE(moved.empty());
+  EXPECT_TRUE(moved_stamps.empty());
+  MapPointStamps out;
+  auto again = CloudFromMemoryOrFile(moved, file, &moved_stamps, &out);
+  ASSERT_TRUE(again.ok());
+  EXPECT_EQ(out.time_ns, stamps.time_ns);
+}
+
 TEST_F(CloudFileTest, MissingTruncatedAndCorruptFilesAreNamed) {
   const fs::path missing = dir_ / "missing.bin";
   auto r = ReadCloudFile(missing);

@@ -4,11 +4,13 @@
 #include "slam_mms/pipeline/drive_runner.hpp"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <GeographicLib/LocalCartesian.hpp>
 #include <atomic>
 #include <filesystem>
 #include <fstream>
+#include <set>
 
 #include "slam_mms/io/kitti_drive_reader.hpp"
 #include "slam_mms/pipeline/open_drive.hpp"
@@ -109,6 +111,51 @@ TEST_F(DriveRunnerTest, GivesExactlyWhatAHandFedSystemGives) {
   ASSERT_TRUE((*system)->Finish().ok());
   ExpectSameTrajectory(run.trajectory, (*system)->FinalTrajectory());
   EXPECT_EQ(run.map.size(), (*system)->FinalMap().size());
+}
+
+// Every map point carries the time and scan of the first point observed in its voxel (LAS GPS time
+// and point source ID): inside that scan's [start, end], also when the submap clouds are spilled.
+TEST_F(DriveRunnerTest, MapPointsCarryTheTimeAndScanOfTheirFirstObservation) {
+  auto reader = Open(sim_->drive_dir);
+  ASSERT_NE(reader, nullptr);
+  const std::filesystem::path spill = std::filesystem::temp_directory_path() /
+                                      ("slam_mms_stamps_spill_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(spill);
+  for (const MappingMode mode : {MappingMode::kGnssIns, MappingMode::kFull}) {
+    MappingSystem::Options options = OptionsFor(mode, *reader);
+    options.localizer.submap_duration_s = 1.5;
+    const DriveRun run = RunDrive(*reader, options);
+    ASSERT_TRUE(run.status.ok()) << run.status.ToString();
+    ASSERT_GT(run.map.size(), 1000u);
+    ASSERT_EQ(run.map_stamps.size(), run.map.size()) << MappingModeName(mode);
+    ASSERT_EQ(run.map_stamps.scan_index.size(), run.map.size());
+    std::vector<size_t> per_scan(reader->NumScans(), 0);
+    for (size_t i = 0; i < run.map.size(); ++i) {
+      const int64_t k = run.map_stamps.scan_index[i];
+      ASSERT_GE(k, 0);
+      ASSERT_LT(static_cast<size_t>(k), reader->NumScans());
+      const int64_t t = run.map_stamps.time_ns[i];
+      // The point's own time: its scan's start plus its firing offset (1 us of float rounding).
+      EXPECT_GE(t, reader->ScanStart(static_cast<size_t>(k)).nanoseconds() - 1000) << i;
+      EXPECT_LE(t, reader->ScanEnd(static_cast<size_t>(k)).nanoseconds() + 1000) << i;
+      ++per_scan[static_cast<size_t>(k)];
+    }
+    // Not all at the scan start: the offsets spread over the scan.
+    std::set<int64_t> distinct(run.map_stamps.time_ns.begin(), run.map_stamps.time_ns.end());
+    EXPECT_GT(distinct.size(), 100 * reader->NumScans());
+    EXPECT_GT(per_scan.front(), 0u);  // the first scan sees most of the map first
+    if (mode == MappingMode::kFull) {
+      options.localizer.spill_dir = spill;
+      const DriveRun spilled = RunDrive(*reader, options);
+      ASSERT_TRUE(spilled.status.ok()) << spilled.status.ToString();
+      ASSERT_EQ(spilled.map.size(), run.map.size());
+      EXPECT_EQ(spilled.map_stamps.time_ns, run.map_stamps.time_ns);
+      EXPECT_EQ(spilled.map_stamps.scan_index, run.map_stamps.scan_index);
+      EXPECT_EQ(spilled.map.points(), run.map.points());
+    }
+  }
+  std::error_code ec;
+  std::filesystem::remove_all(spill, ec);
 }
 
 TEST_F(DriveRunnerTest, UnreadableScanIsSkippedListedAndTheRunCompletes) {

@@ -74,5 +74,58 @@ TEST(VoxelAccumulatorTest, MatchesReferenceGrid) {
   EXPECT_EQ(acc.Cloud().size(), 0u);
 }
 
+// With first-observation tracking: the centroids are those of an untracked grid, and each voxel
+// gets the time and scan of its first point (scan start + that point's own offset).
+TEST(VoxelAccumulatorTest, TracksTheFirstObservationWithoutChangingCentroids) {
+  std::mt19937 rng(8);
+  std::uniform_real_distribution<float> u(-10.0f, 10.0f);
+  PointCloud a, b;
+  for (int i = 0; i < 20000; ++i) {
+    a.Add(Eigen::Vector3f(u(rng), u(rng), 0.1f * u(rng)), 1.0f, 0.1f * i / 20000.0f);
+    b.Add(Eigen::Vector3f(u(rng) + 10.0f, u(rng), 0.1f * u(rng)), 2.0f, 0.1f * i / 20000.0f);
+  }
+  const int64_t t_a = 1317042651000000000, t_b = t_a + 100000000;
+  const ScanStamp stamp_a{t_a, &a.time_offsets_s(), 41};
+  const ScanStamp stamp_b{t_b, &b.time_offsets_s(), 42};
+  const double voxel = 1.0;
+  VoxelAccumulator plain(voxel), tracked(voxel, true);
+  plain.Add(a, Eigen::Isometry3d::Identity(), 100.0);
+  plain.Add(b, Eigen::Isometry3d::Identity(), 100.0);
+  tracked.Add(a, Eigen::Isometry3d::Identity(), 100.0, &stamp_a);
+  tracked.Add(b, Eigen::Isometry3d::Identity(), 100.0, &stamp_b);
+  std::vector<int64_t> time_ns, scan;
+  const PointCloud c = tracked.Cloud(&time_ns, &scan);
+  const PointCloud ref = plain.Cloud();
+  ASSERT_EQ(c.size(), ref.size());
+  EXPECT_EQ(c.points(), ref.points());
+  ASSERT_EQ(time_ns.size(), c.size());
+  ASSERT_EQ(scan.size(), c.size());
+  // Reference: the earliest point of each voxel (a's points come first, in index order).
+  std::map<std::tuple<int64_t, int64_t, int64_t>, std::pair<int64_t, int64_t>> first;
+  for (const auto& [cloud, stamp] : {std::make_pair(&a, &stamp_a), std::make_pair(&b, &stamp_b)}) {
+    for (size_t k = 0; k < cloud->size(); ++k) {
+      const Eigen::Vector3d p = cloud->points()[k].cast<double>();
+      const auto key = std::make_tuple(static_cast<int64_t>(std::floor(p.x() / voxel)),
+                                       static_cast<int64_t>(std::floor(p.y() / voxel)),
+                                       static_cast<int64_t>(std::floor(p.z() / voxel)));
+      const int64_t t = stamp->scan_start_ns +
+                        std::llround(static_cast<double>(cloud->time_offsets_s()[k]) * 1e9);
+      first.emplace(key, std::make_pair(t, stamp->scan_index));  // keeps the first
+    }
+  }
+  ASSERT_EQ(first.size(), c.size());
+  size_t i = 0, from_b = 0;
+  for (const auto& [key, value] : first) {  // std::map order = the grid's key order
+    EXPECT_EQ(time_ns[i], value.first) << i;
+    EXPECT_EQ(scan[i], value.second) << i;
+    from_b += scan[i] == 42;
+    ++i;
+  }
+  EXPECT_GT(from_b, 0u);
+  // Untracked: no stamps.
+  plain.Cloud(&time_ns, &scan);
+  EXPECT_TRUE(time_ns.empty());
+}
+
 }  // namespace
 }  // namespace slam_mms::internal

@@ -51,6 +51,7 @@ struct DriveRun {
   Trajectory trajectory;                    ///< T_world_body at each processed scan's start.
   std::vector<LocalizationResult> results;  ///< Per scan, level 1 (before level 2).
   PointCloud map;                           ///< MappingSystem::FinalMap().
+  MapPointStamps map_stamps;                ///< Per map point: first time and scan (or empty).
   std::optional<GeodeticPoint> origin;      ///< World origin, where known.
   std::vector<GnssAvailabilityInterval> availability;
   /// Start of the first scan fed to the system: GNSS outage windows are relative to it.

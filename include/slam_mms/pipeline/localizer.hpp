@@ -38,6 +38,7 @@
 #include "slam_mms/core/status.hpp"
 #include "slam_mms/ins/imu_preintegration.hpp"
 #include "slam_mms/pipeline/localization_result.hpp"
+#include "slam_mms/pipeline/map_point_stamps.hpp"
 #include "slam_mms/pipeline/scan_deskewer.hpp"
 #include "slam_mms/registration/projective_icp.hpp"
 #include "slam_mms/render_egl/surfel_renderer_factory.hpp"
@@ -77,6 +78,9 @@ struct SubmapRecord {
   /// Empty once spilled to `cloud_file` (Localizer::Options::spill_dir): read it with
   /// Localizer::SubmapCloud, which serves both cases.
   PointCloud cloud;
+  /// Per point of `cloud`: the time and scan of the voxel's first point (empty once spilled, like
+  /// `cloud`; SubmapCloud returns them).
+  MapPointStamps cloud_stamps;
   /// A coarser cloud for map-to-map registration and loop closure; spilled like `cloud` once the
   /// submap is two behind the current one.
   PointCloud registration_cloud;
@@ -169,6 +173,9 @@ class Localizer {
   /// file. NotFound for an unknown id; DataLoss / NotFound naming the file when the spill file is
   /// unreadable or corrupt.
   StatusOr<PointCloud> SubmapCloud(int32_t id, CloudKind kind) const;
+  /// The same; `stamps` (may be null) gets the map cloud's MapPointStamps (empty for
+  /// kRegistration).
+  StatusOr<PointCloud> SubmapCloud(int32_t id, CloudKind kind, MapPointStamps* stamps) const;
   /// The private spill folder (empty without Options::spill_dir).
   const std::filesystem::path& spill_folder() const;
   /// Ends the current submap (Finish()).

@@ -41,6 +41,7 @@
 #include "slam_mms/ins/ins_filter.hpp"
 #include "slam_mms/pipeline/localization_result.hpp"
 #include "slam_mms/pipeline/localizer.hpp"
+#include "slam_mms/pipeline/map_point_stamps.hpp"
 #include "slam_mms/pipeline/submap_manager.hpp"
 #include "slam_mms/surfel/surfel.hpp"
 
@@ -113,6 +114,10 @@ class MappingSystem {
   /// The map: de-skewed scan points at the final poses within map_max_range_m, voxel-downsampled to
   /// map_voxel_m, with intensity, in world.
   PointCloud FinalMap() const;
+  /// The same, and per map point (`stamps`, may be null) the absolute time and scan index of the
+  /// first point observed in its voxel (the LAS GPS time and point source ID): one more sort of
+  /// the merged submap points.
+  PointCloud FinalMap(MapPointStamps* stamps) const;
   /// The surfels (world frame; kFull and kLidarOnly): those of the current and the previous
   /// submap, plus the archived older ones when localizer.archive_surfels is set.
   std::vector<Surfel> SurfelMapSnapshot() const;

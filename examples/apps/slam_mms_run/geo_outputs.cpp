@@ -56,9 +56,7 @@ Status WriteRunGeoref(const GeodeticPoint& origin, const GeoOutputOptions& opt,
 }
 
 Status WriteGeoOutputs(const ModeRun& run, const GeoOutputOptions& opt,
-                       const std::filesystem::path& out_dir,
-                       const std::vector<int64_t>& map_time_ns,
-                       const std::vector<uint16_t>& map_source_id) {
+                       const std::filesystem::path& out_dir, const MapPointStamps& map_stamps) {
   if (!run.origin) {
     SLAM_MMS_LOG(kWarning) << run.name
                            << ": world origin unknown, no WGS-84/projected CSV and no LAS written";
@@ -84,8 +82,13 @@ Status WriteGeoOutputs(const ModeRun& run, const GeoOutputOptions& opt,
   if (map_wanted && !run.map.empty()) {
     MapCloud map;
     map.cloud = run.map;
-    if (map_time_ns.size() == run.map.size()) map.time_ns = map_time_ns;
-    if (map_source_id.size() == run.map.size()) map.source_id = map_source_id;
+    if (map_stamps.size() == run.map.size() && map_stamps.scan_index.size() == run.map.size()) {
+      map.time_ns = map_stamps.time_ns;
+      map.source_id.reserve(map.time_ns.size());
+      for (const int64_t k : map_stamps.scan_index) {
+        map.source_id.push_back(static_cast<uint16_t>(static_cast<uint64_t>(k) & 0xffff));
+      }
+    }
     if (map.time_ns.empty()) {
       SLAM_MMS_LOG(kWarning) << run.name << ": the map has no per-point times, LAS GPS time is 0";
     }

@@ -11,6 +11,7 @@
 
 #include "slam_mms/core/status.hpp"
 #include "slam_mms/ins/gnss_prior.hpp"
+#include "slam_mms/pipeline/map_point_stamps.hpp"
 #include "slam_mms_run/run_mode.hpp"
 
 namespace slam_mms::app {
@@ -40,13 +41,13 @@ StatusOr<std::string> RunGeorefJson(const GeodeticPoint& origin, const GeoOutput
                                     const std::filesystem::path& out_dir);
 
 /// Per method: <name>_wgs84.csv and the projected CSV (when it has poses), map_<name>.las or its
-/// tiles (full, gnss_ins, gnss_ins_smoothed with a map). `map_time_ns` / `map_source_id`: empty
-/// or one per point of run.map (absolute UTC time and scan index of each map point: LAS GPS time
-/// and point source ID). A run without origin writes nothing and warns. Returns the first
-/// failure (all files are attempted).
+/// tiles (full, gnss_ins, gnss_ins_smoothed with a map). `map_stamps`: empty or one per point of
+/// run.map (DriveRun::map_stamps: each map point's first-observation time and scan, written as
+/// the LAS GPS time and point source ID = scan index mod 65536; empty: GPS time 0, source ID 0,
+/// with a warning). A run without origin writes nothing and warns. Returns the first failure
+/// (all files are attempted).
 Status WriteGeoOutputs(const ModeRun& run, const GeoOutputOptions& opt,
                        const std::filesystem::path& out_dir,
-                       const std::vector<int64_t>& map_time_ns = {},
-                       const std::vector<uint16_t>& map_source_id = {});
+                       const MapPointStamps& map_stamps = MapPointStamps());
 
 }  // namespace slam_mms::app

@@ -87,7 +87,13 @@ int main(int argc, char** argv) {
   app.add_flag("--no-point-time", settings.bag_no_point_time,
                "--to rosbag: leave out PointCloud2's `time` field (as kitti2bag); the reader then "
                "derives times from the azimuth over the median scan period");
-  CLI11_PARSE(app, argc, argv);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    // --help / --version: exit 0 (CLI11 prints them); a bad command line: exit 2 (as documented).
+    const int code = app.exit(e);
+    return code == 0 ? 0 : 2;
+  }
 
   const int inputs = !kitti_raw.empty() + !folder.empty() + !rosbag.empty();
   if (inputs != 1) {

@@ -114,6 +114,13 @@ TEST(GeoReferenceTest, BadCrsIsAClearError) {
     EXPECT_THAT(g.status().message(), HasSubstr("'" + c.crs + "'"));
     EXPECT_THAT(g.status().message(), HasSubstr(c.expected)) << g.status().message();
   }
+  // Checked before the origin is known (the app refuses a bad --crs before any processing).
+  EXPECT_TRUE(GeoReference::CheckCrs("").ok());
+  EXPECT_TRUE(GeoReference::CheckCrs("EPSG:25832").ok());
+  EXPECT_TRUE(GeoReference::CheckCrs("EPSG:32756").ok());
+  EXPECT_TRUE(GeoReference::CheckCrs("EPSG:2193").ok());  // NZTM (northing first in EPSG)
+  EXPECT_THAT(GeoReference::CheckCrs("EPSG:4326").message(), HasSubstr("geographic"));
+  EXPECT_THAT(GeoReference::CheckCrs("EPSG:99999").message(), HasSubstr("unknown"));
   EXPECT_FALSE(GeoReference::Create({85.0, 0.0, 0.0}).ok());  // no UTM zone
   EXPECT_FALSE(GeoReference::Create({NAN, 0.0, 0.0}, "EPSG:32632").ok());
 }

@@ -8,14 +8,14 @@ Status WriteScanResultsCsv(const std::vector<LocalizationResult>& results,
                            const std::filesystem::path& path) {
   std::ofstream f(path);
   if (!f) return UnavailableError("cannot write " + path.string());
-  f << "scan_index,stamp,submap_id,motion_factor,registered,registration_used,downweighted,"
+  f << "scan_index,t_utc_ns,submap_id,motion_factor,registered,registration_used,downweighted,"
        "termination,inlier_ratio,rms_residual_m,icp_iterations,degenerate,consistency_d2,"
        "num_model_surfels,num_surfels";
   for (const char* name : StageTimings::Names()) f << "," << name << "_ms";
   f << ",total_ms\n";
   f.precision(9);
   for (const LocalizationResult& r : results) {
-    f << r.scan_index << "," << r.stamp.ToKittiString() << "," << r.submap_id << ","
+    f << r.scan_index << "," << r.stamp.nanoseconds() << "," << r.submap_id << ","
       << MotionFactorTypeName(r.motion_factor) << "," << r.registered << "," << r.registration_used
       << "," << r.registration_downweighted << "," << IcpTerminationName(r.termination) << ","
       << r.inlier_ratio << "," << r.rms_residual_m << "," << r.icp_iterations << "," << r.degenerate

@@ -3,10 +3,10 @@
 // `python -m slam_mms run`): one row per LocalizationResult with the registration outcome,
 // degeneracy, motion factor and the stage times.
 //
-// Columns: scan_index, stamp (KITTI "YYYY-MM-DD hh:mm:ss.nnnnnnnnn"), submap_id, motion_factor,
-// registered, registration_used, downweighted, termination, inlier_ratio, rms_residual_m,
-// icp_iterations, degenerate, consistency_d2, num_model_surfels, num_surfels, one <stage>_ms per
-// StageTimings::Names(), total_ms. Numbers with 9 significant digits; booleans 0/1.
+// Columns: scan_index, t_utc_ns (the scan start, int64 UTC ns: the outputs' one time format),
+// submap_id, motion_factor, registered, registration_used, downweighted, termination, inlier_ratio,
+// rms_residual_m, icp_iterations, degenerate, consistency_d2, num_model_surfels, num_surfels, one
+// <stage>_ms per StageTimings::Names(), total_ms. Numbers with 9 significant digits; booleans 0/1.
 //
 // Thread safety: a free function; one call per output file.
 

@@ -77,6 +77,7 @@ PlotCanvas::PlotCanvas(int width_px, int height_px, int right_px, int top_px, in
 }
 
 int PlotCanvas::YTickTarget() const { return std::clamp(area_.height / 40, 2, 7); }
+int PlotCanvas::XTickTarget() const { return std::clamp(area_.width / 85, 2, 8); }
 
 cv::Size PlotCanvas::FitEqualAspect(double dx, double dy, int max_width_px, int max_height_px,
                                     int right_px) {
@@ -128,7 +129,7 @@ cv::Point PlotCanvas::ToPixelFixed(double x, double y) const {
 
 void PlotCanvas::DrawGrid() {
   cv::Mat roi = image_(area_);
-  for (double x : NiceTicks(x_lo_, x_hi_, 8)) {
+  for (double x : NiceTicks(x_lo_, x_hi_, XTickTarget())) {
     const double px = ToPixel(x, 0).x - area_.x;
     cv::line(roi, cv::Point(static_cast<int>(std::lround(px)), 0),
              cv::Point(static_cast<int>(std::lround(px)), area_.height), kGridGray, 1, cv::LINE_8);
@@ -151,7 +152,7 @@ void PlotCanvas::DrawAxes(const std::string& x_label, const std::string& y_label
   cv::rectangle(image_, area_, kDarkGray, 1, cv::LINE_8);
   const double tick_scale = 0.52;
   double step = 1.0;
-  for (double x : NiceTicks(x_lo_, x_hi_, 8, &step)) {
+  for (double x : NiceTicks(x_lo_, x_hi_, XTickTarget(), &step)) {
     const int px = static_cast<int>(std::lround(ToPixel(x, 0).x));
     cv::line(image_, {px, area_.br().y}, {px, area_.br().y + 6}, kDarkGray, 1);
     const std::string s = FormatTick(x, step);
@@ -198,8 +199,10 @@ void PlotCanvas::DrawAxes(const std::string& x_label, const std::string& y_label
     title_scale *= std::max(0.6, static_cast<double>(image_.cols - 8) / sz.width);
     sz = cv::getTextSize(title, kFont, title_scale, small ? 1 : 2, &base);
   }
-  Text(title, {std::max(2, area_.x + area_.width / 2 - sz.width / 2), area_.y - (small ? 9 : 22)},
-       title_scale, kBlack, small ? 1 : 2);
+  // Centred over the axes, kept inside the figure.
+  const int tx =
+      std::max(2, std::min(area_.x + area_.width / 2 - sz.width / 2, image_.cols - 4 - sz.width));
+  Text(title, {tx, area_.y - (small ? 9 : 22)}, title_scale, kBlack, small ? 1 : 2);
 }
 
 void PlotCanvas::Polyline(const std::vector<cv::Point2d>& data_pts, const cv::Scalar& color,

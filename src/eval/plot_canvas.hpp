@@ -139,6 +139,8 @@ class PlotCanvas {
   void LegendAt(const std::vector<LegendEntry>& entries, int corner);
   // About one y tick per 40 px of axes height, 2..7.
   int YTickTarget() const;
+  // About one x tick per 85 px of axes width, 2..8.
+  int XTickTarget() const;
 
   cv::Mat image_;
   cv::Rect area_;

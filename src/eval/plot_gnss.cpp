@@ -166,6 +166,12 @@ Status PlotGnssStatus(const std::vector<GnssStatusTrack>& tracks,
         box(s.start_s, s.end_s, s0, s0 + kStrip, StatusColor(s.status));
       }
     }
+    if (tr.submaps.empty()) {
+      box(t_lo, t_hi, s1, s1 + kStrip, kNoGnssColor);
+      const cv::Point2d p = canvas.ToPixel(0.5 * (t_lo + t_hi), total - (s1 + 0.75 * kStrip));
+      canvas.Text("no submaps", {static_cast<int>(p.x) - 45, static_cast<int>(p.y)}, 0.5,
+                  cv::Scalar(60, 60, 60));
+    }
     for (const GnssStatusTrack::Submap& m : tr.submaps) {
       const GnssAvailability worst = WorstGnssStatus(tr, m.start_s, m.end_s);
       const cv::Rect r = box(m.start_s, std::max(m.end_s, m.start_s + 1e-3), s1, s1 + kStrip,
@@ -177,7 +183,7 @@ Status PlotGnssStatus(const std::vector<GnssStatusTrack>& tracks,
       const cv::Size sz = cv::getTextSize(id, cv::FONT_HERSHEY_SIMPLEX, 0.4, 1, &base);
       if (sz.width + 4 < r.width) {
         canvas.Text(id, {r.x + r.width / 2 - sz.width / 2, r.y + r.height / 2 + sz.height / 2}, 0.4,
-                    cv::Scalar(255, 255, 255));
+                    tr.spans.empty() ? cv::Scalar(70, 70, 70) : cv::Scalar(255, 255, 255));
       }
     }
   }

@@ -244,10 +244,13 @@ Status PlotTrajectoriesTopView(const NamedTrajectory& ground_truth,
                                      options.height_px);
   cv::Mat figure(kFigureTitlePx + layout.rows * layout.panel_h, layout.cols * layout.panel_w,
                  CV_8UC3, cv::Scalar(255, 255, 255));
+  // The zoom panel (the last) also takes the empty cells of the last row.
+  const int zoom_cells = layout.cols * layout.rows - num_panels + 1;
+  const int zoom_w = zoom_cells * layout.panel_w;
   auto place = [&](const PlotCanvas& canvas, int index) {
     const int r = index / layout.cols, c = index % layout.cols;
     canvas.image().copyTo(figure(cv::Rect(c * layout.panel_w, kFigureTitlePx + r * layout.panel_h,
-                                          layout.panel_w, layout.panel_h)));
+                                          canvas.image().cols, layout.panel_h)));
   };
 
   const std::vector<cv::Point2d> gt_xy = XY(ground_truth.trajectory);
@@ -275,7 +278,7 @@ Status PlotTrajectoriesTopView(const NamedTrajectory& ground_truth,
   double zoom_x_lo = 0, zoom_x_hi = 0, zoom_y_lo = 0, zoom_y_hi = 0;
   {
     // The zoom panel's range (computed once to outline it on the focus panel).
-    PlotCanvas zoom(layout.panel_w, layout.panel_h, zoom_right_px);
+    PlotCanvas zoom(zoom_w, layout.panel_h, zoom_right_px);
     zoom.SetRange(zoom_center.x - zoom_radius, zoom_center.x + zoom_radius,
                   zoom_center.y - zoom_radius, zoom_center.y + zoom_radius, true);
     zoom_x_lo = zoom.x_lo();
@@ -346,7 +349,7 @@ Status PlotTrajectoriesTopView(const NamedTrajectory& ground_truth,
   // The zoom panel: the ground truth and every method around the worst error, in palette colours,
   // with the focus method's error vectors (estimate -> ground truth at the same time).
   {
-    PlotCanvas zoom(layout.panel_w, layout.panel_h, zoom_right_px);
+    PlotCanvas zoom(zoom_w, layout.panel_h, zoom_right_px);
     zoom.SetRange(zoom_x_lo, zoom_x_hi, zoom_y_lo, zoom_y_hi, false);
     zoom.DrawGrid();
     if (gt_outage_shown) TranslucentPolyline(zoom, gt_outage, kOutageColor, 24, 0.35);
@@ -367,10 +370,16 @@ Status PlotTrajectoriesTopView(const NamedTrajectory& ground_truth,
     dots(gt_xy, kBlackColor, 3);
     std::vector<LegendEntry> legend = {
         {ground_truth.name, kBlackColor, 2, LegendEntry::Kind::kLine}};
-    for (size_t i = 0; i < methods.size(); ++i) {
+    // The focus method drawn last (on top); the legend keeps the methods' order.
+    for (size_t j = 0; j < methods.size(); ++j) {
+      const size_t i =
+          j + 1 == methods.size() ? focus : (j < static_cast<size_t>(focus) ? j : j + 1);
       const std::vector<cv::Point2d> pts = XY(methods[i].trajectory);
       zoom.Polyline(pts, PaletteColor(i), 2);
       dots(pts, PaletteColor(i), 3);
+    }
+    for (size_t i = 0; i < methods.size(); ++i) {
+      const std::vector<cv::Point2d> pts = XY(methods[i].trajectory);
       const bool inside = std::any_of(pts.begin(), pts.end(),
                                       [&](const cv::Point2d& p) { return window.contains(p); });
       legend.push_back({methods[i].name + (inside ? "" : " (outside the zoom)"), PaletteColor(i), 2,

@@ -215,7 +215,7 @@ Status PlotMapHeight(const PointCloud& map, const std::vector<Eigen::Vector3d>& 
   const cv::Size fig = PlotCanvas::FitEqualAspect(b.x_hi - b.x_lo, b.y_hi - b.y_lo,
                                                   options.width_px, options.height_px, colorbar_w);
   // A taller top margin: the clipping note goes under the title.
-  PlotCanvas canvas(fig.width, fig.height, colorbar_w, PlotCanvas::kTopPx + 14,
+  PlotCanvas canvas(fig.width, fig.height, colorbar_w, PlotCanvas::kTopPx + 30,
                     PlotCanvas::kBottomPx);
   canvas.SetRange(b.x_lo, b.x_hi, b.y_lo, b.y_hi, /*equal_aspect=*/true);
   canvas.DrawGrid();
@@ -284,11 +284,16 @@ Status PlotMapHeight(const PointCloud& map, const std::vector<Eigen::Vector3d>& 
   const std::string note = range.Describe();
   int base = 0;
   const cv::Size nsz = cv::getTextSize(note, cv::FONT_HERSHEY_SIMPLEX, 0.48, 1, &base);
-  canvas.Text(note, {std::max(2, area.x + area.width / 2 - nsz.width / 2), area.y - 7}, 0.48,
+  canvas.Text(note, {std::max(2, area.x + area.width / 2 - nsz.width / 2), area.y - 8}, 0.48,
               cv::Scalar(60, 60, 60));
 
-  canvas.DrawAxes("x east [m]", "y north [m]",
-                  options.title.empty() ? "Map from above, coloured by height" : options.title);
+  canvas.DrawAxes("x east [m]", "y north [m]", "");
+  // The title above the note (DrawAxes would put it where the note is).
+  const std::string title =
+      options.title.empty() ? "Map from above, coloured by height" : options.title;
+  const cv::Size tsz = cv::getTextSize(title, cv::FONT_HERSHEY_SIMPLEX, 0.8, 2, &base);
+  canvas.Text(title, {std::max(2, area.x + area.width / 2 - tsz.width / 2), area.y - 34}, 0.8,
+              kBlackColor, 2);
   return internal::SavePng(canvas.image(), png_file);
 }
 

@@ -274,6 +274,19 @@ TEST(PlotsTest, PositionErrorsSplitHorizontalVerticalAndShadeOnlyPresentOutages)
   const int full_rows = rows_spanned(internal::PaletteColor(0));
   const int lidar_rows = rows_spanned(internal::PaletteColor(2));
   EXPECT_GT(full_rows, 0.6 * lidar_rows) << full_rows << " vs " << lidar_rows;
+  // The title says "(GNSS outages shaded)" only when shaded: a caller's own is dropped without
+  // outages (same pixels as without it), and the title band differs when there is shading.
+  PlotOptions with_note, without_note;
+  with_note.title = "Position error (GNSS outages shaded)";
+  without_note.title = "Position error";
+  ASSERT_TRUE(PlotPositionErrors(series, {}, dir / "pe_note.png", with_note).ok());
+  ASSERT_TRUE(PlotPositionErrors(series, {}, dir / "pe_plain.png", without_note).ok());
+  ASSERT_TRUE(PlotPositionErrors(series, {{5.0, 6.0}}, dir / "pe_shaded.png", without_note).ok());
+  const cv::Rect title_band(0, 0, 1400, 40);
+  const cv::Mat plain = Load(dir / "pe_plain.png");
+  EXPECT_EQ(cv::norm(Load(dir / "pe_note.png")(title_band), plain(title_band), cv::NORM_L1), 0.0);
+  EXPECT_GT(cv::norm(Load(dir / "pe_shaded.png")(title_band), plain(title_band), cv::NORM_L1),
+            1000.0);
   // Series without components: one column.
   for (ErrorSeries& s : series) {
     s.horizontal_m.clear();

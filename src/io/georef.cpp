@@ -378,7 +378,7 @@ StatusOr<double> AdjustedGpsTimeFromUtc(Timestamp utc) {
 // ---- georef.json ----
 
 StatusOr<std::string> GeoReferenceJson(const GeoReference& geo) {
-  using nlohmann::json;
+  using json = nlohmann::ordered_json;
   const GeoOrigin& o = geo.origin();
   const GeodeticCoordinates og{o.latitude_deg, o.longitude_deg, o.height_m};
   SLAM_MMS_ASSIGN_OR_RETURN(const Eigen::Vector3d op, geo.GeodeticToProjected(og));

@@ -13,7 +13,8 @@
 
 Writes in DIR what slam_mms_run writes: <method>.tum, <method>.kitti, <method>_cov.csv per method;
 <method>_scans.csv and <method>_level1.tum for full and lidar_only; map_<method>.ply/.pcd/.las for
-every method but lidar_only; ground_truth.tum; report.json; summary.txt; trajectories.png,
+every method but lidar_only (.las: or map_<method>_tiles/ with --las-tile-size); <method>_wgs84.csv
+and <method>_utm.csv (<method>_epsg<code>.csv with --crs); georef.json; ground_truth.tum; report.json; summary.txt; trajectories.png,
 position_error.png and map_<method>_height.png (drawn by the app's C++ plot code). Every file
 comes from the C++ writers, so the trajectories, maps, ground truth and plots are byte-identical
 to the app's on the same input (report.json and summary.txt differ in scans/s and RSS only).
@@ -90,6 +91,11 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("--frames", help="A:B inclusive (A: = from A to the end)")
     r.add_argument("--gnss-outage", type=_outage, nargs="+", action="extend", default=[],
                    metavar="START_S:DURATION_S")
+    r.add_argument("--crs", default="",
+                   help="output CRS of the LAS maps and projected CSVs (EPSG:nnnn; default WGS 84 / "
+                        "UTM zone of the world origin)")
+    r.add_argument("--las-tile-size", type=float, default=0.0, metavar="M",
+                   help="LAS maps in square tiles of M metres (default 0 = one file)")
     r.add_argument("--config", type=pathlib.Path, help="YAML file of option overrides (slam_mms_run --config)")
     r.add_argument("--sim-duration", type=float, default=30.0,
                    help="seconds of the default drive to simulate (0 = all)")
@@ -111,8 +117,10 @@ def _try(what: str, f, *args) -> bool:
         return False
 
 
-def _write_method(result: DriveResult, name: str, out: pathlib.Path) -> bool:
-    """slam_mms_run's WriteMethodFiles: returns False when a file could not be written."""
+def _write_method(result: DriveResult, name: str, out: pathlib.Path, crs: str = "",
+                  las_tile_size: float = 0.0, run_origin=None) -> bool:
+    """slam_mms_run's WriteMethodFiles and WriteGeoOutputs: returns False when a file could not be
+    written."""
     run = result.run
     ok = True
     traj = run.trajectory
@@ -133,13 +141,11 @@ def _write_method(result: DriveResult, name: str, out: pathlib.Path) -> bool:
             base = out / f"map_{name}"
             ok &= _try(f"map_{name}.ply", _C.write_map, result.map_points, f"{base}.ply")
             ok &= _try(f"map_{name}.pcd", _C.write_map, result.map_points, f"{base}.pcd")
-            if result.origin is not None:
-                ok &= _try(f"map_{name}.las", _C.write_map, result.map_points, f"{base}.las",
-                           result.origin)
-            else:
-                _log.warning("%s: world origin unknown, map_%s.las not written", name, name)
         else:
             _log.warning("%s: empty map, map files not written", name)
+    # WGS-84 / projected CSVs and the LAS map (or its tiles), as slam_mms_run's WriteGeoOutputs.
+    ok &= _try(f"{name} geo-referenced files", run.write_geo_outputs, name, os.fspath(out), crs,
+               las_tile_size, run_origin)
     return ok
 
 
@@ -218,6 +224,10 @@ def _run(args) -> int:
         _parse_frames(args.frames)
     except ValueError as e:
         raise _UsageError(f"--frames {args.frames}: {e}") from None
+    try:
+        _C.check_geo_output_options(args.crs, args.las_tile_size)
+    except ValueError as e:
+        raise _UsageError(str(e)) from None
     out: pathlib.Path = args.out
     options = _C.Options()
     # As slam_mms_run: finished submaps' clouds spill into --out (memory stays flat).
@@ -259,6 +269,7 @@ def _run(args) -> int:
     status = 0
     gt = None
     gt_map_mme = None
+    run_origin = None  # the origin of georef.json: the first method's that has one
     for i, name in enumerate(args.mode):
         print(f"[{name}] running ...", flush=True)
         # The simulator's scene map entropy once (it does not depend on the method).
@@ -266,7 +277,11 @@ def _run(args) -> int:
                              ground_truth_map=(i == 0), check=False, pos=args.pos)
         result.extra["name"] = name
         results.append(result)
-        written = _write_method(result, name, out)
+        if run_origin is None and result.origin is not None:
+            run_origin = result.origin
+            if not _try("georef.json", _C.write_georef_json, run_origin, os.fspath(out), args.crs):
+                status = 1
+        written = _write_method(result, name, out, args.crs, args.las_tile_size, run_origin)
         if i == 0:
             gt_map_mme = result.extra.get("ground_truth_map_mme")
         if gt is None and result.ground_truth is not None:

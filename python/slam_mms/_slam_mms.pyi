@@ -233,6 +233,14 @@ class DriveRun:
         """Trajectory of the level-1 poses of the results (slam_mms_run's <mode>_level1.tum)."""
     def write_scan_results_csv(self: DriveRun, path: os.PathLike[str]) -> None:
         """Writes the per-scan results as slam_mms_run's <mode>_scans.csv."""
+    @property
+    def map_time_ns(self) -> numpy.ndarray:
+        """Per map point: UTC ns of the first point observed in its voxel (empty if unknown)."""
+    @property
+    def map_scan_index(self) -> numpy.ndarray:
+        """Per map point: the scan index of that first point (LAS point source ID mod 65536)."""
+    def write_geo_outputs(self: DriveRun, name: str, out_dir: os.PathLike[str], crs: str = '', las_tile_size_m: float = 0.0, run_origin: Optional[GeodeticPoint] = None) -> None:
+        """slam_mms_run's geo-referenced files of this method: <name>_wgs84.csv, <name>_utm.csv (<name>_epsg<code>.csv with crs), map_<name>.las or map_<name>_tiles/ (WriteGeoreferencedOutputs)."""
 
 class DriveStreams:
     """The non-scan streams of a drive and its calibration, as numpy arrays."""
@@ -2059,6 +2067,9 @@ def apply_config_file(path: os.PathLike[str], options: Options) -> None:
 def apply_config_text(text: str, options: Options, name: str = '<config>') -> None:
     """apply_config_file on YAML text already read; `name` is used in messages."""
 
+def check_geo_output_options(crs: str = '', las_tile_size_m: float = 0.0) -> None:
+    """Raises ValueError for an unusable --crs or --las-tile-size (before any processing)."""
+
 def compute_ate(estimate: Trajectory, ground_truth: Trajectory, alignment: Alignment = ..., max_ground_truth_gap_s: float = 1.0) -> AteResult:
     """ATE of estimate against ground_truth interpolated at each estimated stamp (no alignment by default). Trajectories: Trajectory objects or N x 8 TUM arrays."""
 
@@ -2076,6 +2087,9 @@ def config_keys() -> list:
 
 def flush_log() -> None:
     """Delivers the library messages logged so far by other threads to the Python handler now."""
+
+def georef_json(origin: GeodeticPoint, crs: str = '') -> str:
+    """georef.json's text (also report.json's georef)."""
 
 def has_simulator_ground_truth(drive_dir: os.PathLike[str]) -> bool:
     ...
@@ -2127,6 +2141,9 @@ def write_drive_folder(reader: DriveReader, dir: os.PathLike[str], scan_format: 
 
 def write_extrinsics_yaml(path: os.PathLike[str], T_body_lidar: object, t_body_antenna_m: object = None) -> None:
     """extrinsics.yaml (the drive folder's, also --extrinsics of a bag) with T_body_lidar 4 x 4."""
+
+def write_georef_json(origin: GeodeticPoint, out_dir: os.PathLike[str], crs: str = '') -> None:
+    """Writes out_dir/georef.json (slam_mms_run writes it once, for the first method's origin)."""
 
 def write_map(points: object, path: os.PathLike[str], origin: Optional[GeodeticPoint] = None) -> None:
     """Writes N x 3 / N x 4 points as PLY, PCD or geo-referenced LAS 1.4 (by extension)."""

@@ -8,6 +8,7 @@
 
 #include "common.hpp"
 #include "slam_mms/pipeline/drive_runner.hpp"
+#include "slam_mms/pipeline/georeferenced_outputs.hpp"
 #include "slam_mms/pipeline/scan_results_csv.hpp"
 
 namespace slam_mms::python {
@@ -403,7 +404,72 @@ void RegisterMappingSystem(py::module_& m) {
           [](const DriveRun& r, const std::filesystem::path& path) {
             ThrowIfError(WithoutGil([&] { return WriteScanResultsCsv(r.results, path); }));
           },
-          py::arg("path"), "Writes the per-scan results as slam_mms_run's <mode>_scans.csv.");
+          py::arg("path"), "Writes the per-scan results as slam_mms_run's <mode>_scans.csv.")
+      .def_property_readonly(
+          "map_time_ns",
+          [](const DriveRun& r) {
+            py::array_t<int64_t> a(static_cast<py::ssize_t>(r.map_stamps.time_ns.size()));
+            std::copy(r.map_stamps.time_ns.begin(), r.map_stamps.time_ns.end(),
+                      a.mutable_data());
+            return a;
+          },
+          "Per map point: UTC ns of the first point observed in its voxel (empty if unknown).")
+      .def_property_readonly(
+          "map_scan_index",
+          [](const DriveRun& r) {
+            py::array_t<int64_t> a(static_cast<py::ssize_t>(r.map_stamps.scan_index.size()));
+            std::copy(r.map_stamps.scan_index.begin(), r.map_stamps.scan_index.end(),
+                      a.mutable_data());
+            return a;
+          },
+          "Per map point: the scan index of that first point (LAS point source ID mod 65536).")
+      .def(
+          "write_geo_outputs",
+          [](const DriveRun& r, const std::string& name, const std::filesystem::path& out_dir,
+             const std::string& crs, double las_tile_size_m,
+             std::optional<GeodeticPoint> run_origin) {
+            GeoOutputOptions o;
+            o.crs = crs;
+            o.las_tile_size_m = las_tile_size_m;
+            o.run_origin = run_origin;
+            ThrowIfError(WithoutGil([&] {
+              return WriteGeoreferencedOutputs(name, r.mode, r.trajectory, r.map, r.map_stamps,
+                                               r.origin, o, out_dir);
+            }));
+          },
+          py::arg("name"), py::arg("out_dir"), py::arg("crs") = "",
+          py::arg("las_tile_size_m") = 0.0, py::arg("run_origin") = py::none(),
+          "slam_mms_run's geo-referenced files of this method: <name>_wgs84.csv, <name>_utm.csv "
+          "(<name>_epsg<code>.csv with crs), map_<name>.las or map_<name>_tiles/ "
+          "(WriteGeoreferencedOutputs).");
+  m.def(
+      "check_geo_output_options",
+      [](const std::string& crs, double las_tile_size_m) {
+        GeoOutputOptions o;
+        o.crs = crs;
+        o.las_tile_size_m = las_tile_size_m;
+        ThrowIfError(o.Validate());
+      },
+      py::arg("crs") = "", py::arg("las_tile_size_m") = 0.0,
+      "Raises ValueError for an unusable --crs or --las-tile-size (before any processing).");
+  m.def(
+      "georef_json",
+      [](const GeodeticPoint& origin, const std::string& crs) {
+        GeoOutputOptions o;
+        o.crs = crs;
+        return ValueOrThrow(RunGeorefJson(origin, o));
+      },
+      py::arg("origin"), py::arg("crs") = "", "georef.json's text (also report.json's georef).");
+  m.def(
+      "write_georef_json",
+      [](const GeodeticPoint& origin, const std::filesystem::path& out_dir,
+         const std::string& crs) {
+        GeoOutputOptions o;
+        o.crs = crs;
+        ThrowIfError(WithoutGil([&] { return WriteRunGeorefJson(origin, o, out_dir); }));
+      },
+      py::arg("origin"), py::arg("out_dir"), py::arg("crs") = "",
+      "Writes out_dir/georef.json (slam_mms_run writes it once, for the first method's origin).");
   m.def(
       "write_scan_results_csv",
       [](const std::vector<LocalizationResult>& results, const std::filesystem::path& path) {

@@ -13,7 +13,16 @@
 // so far is written (trajectories, maps, report with what exists); exit status 1. A bad command
 // line or config file: exit status 2.
 
+#include <signal.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cerrno>
+#include <csignal>
 #include <cstdio>
+#include <cstring>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -30,8 +39,10 @@
 #include "slam_mms/io/trajectory_io.hpp"
 #include "slam_mms/pipeline/mapping_system.hpp"
 #include "slam_mms/sim/drive_simulator.hpp"
+#include "slam_mms/version.hpp"
 #include "slam_mms_run/cli.hpp"
 #include "slam_mms_run/config_file.hpp"
+#include "slam_mms_run/geo_outputs.hpp"
 #include "slam_mms_run/input.hpp"
 #include "slam_mms_run/outputs.hpp"
 #include "slam_mms_run/progress.hpp"
@@ -45,6 +56,97 @@ namespace {
 
 constexpr int kExitError = 1;
 constexpr int kExitUsage = 2;
+// localizer.spill_dir's app default: the --out folder (see main).
+const fs::path kSpillToOutDir = "<out>";
+
+// SIGINT / SIGTERM: the first one sets the flag that RunDrive and the simulator poll before every
+// scan (the run then ends after the current scan, writes everything computed so far and exits
+// 128 + signal). A second one more than a second later ends the process at once; repeats within
+// the second are the same request delivered twice (`timeout` signals its child and then its
+// process group) and are ignored.
+std::atomic<bool> g_stop{false};
+volatile std::sig_atomic_t g_signal = 0;
+timespec g_first_signal{};
+static_assert(std::atomic<bool>::is_always_lock_free, "the stop flag is set in a signal handler");
+
+extern "C" void OnStopSignal(int sig) {
+  timespec now{};
+  clock_gettime(CLOCK_MONOTONIC, &now);  // async-signal-safe
+  if (!g_stop.load()) {
+    g_first_signal = now;
+    g_signal = sig;
+    g_stop.store(true);
+    return;
+  }
+  const double since = static_cast<double>(now.tv_sec - g_first_signal.tv_sec) +
+                       1e-9 * static_cast<double>(now.tv_nsec - g_first_signal.tv_nsec);
+  if (since > 1.0) {
+    signal(sig, SIG_DFL);
+    raise(sig);
+  }
+}
+
+void InstallStopHandlers() {
+  struct sigaction sa {};
+  sa.sa_handler = OnStopSignal;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = 0;
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+}
+
+int StopExitCode() { return 128 + static_cast<int>(g_signal); }
+const char* StopSignalName() { return g_signal == SIGTERM ? "SIGTERM" : "SIGINT"; }
+
+// --out is created and a file written into it before any work, so that a folder that cannot be
+// written fails at once instead of after the run.
+Status CheckOutputDir(const fs::path& dir) {
+  std::error_code ec;
+  if (fs::exists(dir, ec) && !fs::is_directory(dir, ec)) {
+    return InvalidArgumentError("--out " + dir.string() + ": exists and is not a folder");
+  }
+  fs::create_directories(dir, ec);
+  if (ec) {
+    return InvalidArgumentError("--out " + dir.string() +
+                                ": cannot create the folder: " + ec.message());
+  }
+  if (!fs::is_directory(dir, ec)) {
+    return InvalidArgumentError("--out " + dir.string() + ": exists and is not a folder");
+  }
+  const fs::path probe = dir / (".slam_mms_write_probe_" + std::to_string(::getpid()));
+  errno = 0;
+  bool written = false;
+  {
+    std::ofstream f(probe, std::ios::binary | std::ios::trunc);
+    if (f) f << "slam_mms\n";
+    f.flush();
+    written = static_cast<bool>(f);
+  }
+  const int err = errno;
+  fs::remove(probe, ec);
+  if (!written) {
+    return InvalidArgumentError("--out " + dir.string() +
+                                ": not writable (cannot create a file in it" +
+                                (err != 0 ? std::string(": ") + std::strerror(err) : "") + ")");
+  }
+  return OkStatus();
+}
+
+// Bytes and files under `dir` (the disk use printed at the end).
+std::pair<uintmax_t, size_t> DiskUse(const fs::path& dir) {
+  uintmax_t bytes = 0;
+  size_t files = 0;
+  std::error_code ec;
+  for (fs::recursive_directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    std::error_code e2;
+    if (it->is_regular_file(e2)) {
+      const uintmax_t n = it->file_size(e2);
+      if (!e2) bytes += n;
+      ++files;
+    }
+  }
+  return {bytes, files};
+}
 
 int Fail(const Status& status, int code) {
   ProgressReporter::BreakLine();
@@ -52,13 +154,14 @@ int Fail(const Status& status, int code) {
   return code;
 }
 
-// Simulates the embedded default drive into out/sim; returns the drive folder.
-StatusOr<fs::path> SimulateDefaultDrive(const RunArgs& args, bool tty) {
+// Simulates the embedded drive (--sim-scenario, "demo" by default) into out/sim; returns the drive
+// folder. Stopped by a signal: the drive is left as written so far and *stopped is set.
+StatusOr<fs::path> SimulateDefaultDrive(const RunArgs& args, bool tty, bool* stopped) {
   sim::DriveSimulator::Options so;
-  so.scenario = "default";
+  so.scenario = args.sim_scenario;
   so.duration_s = args.sim_duration_s;
   so.seed = args.sim_seed;
-  std::printf("[sim] simulating the default drive (%s, seed %llu) into %s\n",
+  std::printf("[sim] simulating the %s drive (%s, seed %llu) into %s\n", args.sim_scenario.c_str(),
               args.sim_duration_s > 0 ? (std::to_string(args.sim_duration_s) + " s").c_str()
                                       : "whole route",
               static_cast<unsigned long long>(args.sim_seed), (args.out_dir / "sim").c_str());
@@ -67,12 +170,24 @@ StatusOr<fs::path> SimulateDefaultDrive(const RunArgs& args, bool tty) {
   ProgressReporter progress("sim", static_cast<size_t>(simulator.num_scans()), tty);
   SLAM_MMS_ASSIGN_OR_RETURN(
       const sim::DriveSimulator::Summary summary,
-      simulator.Run(args.out_dir / "sim", [&](int done, int) { progress.Update(done); }));
+      simulator.Run(
+          args.out_dir / "sim", [&](int done, int) { progress.Update(done); }, &g_stop));
+  *stopped = summary.stopped;
   char note[160];
   std::snprintf(note, sizeof(note), "(%.0f m, %.1f s simulated)", summary.path_length_m,
                 summary.simulated_seconds);
   progress.Finish(static_cast<size_t>(summary.num_scans), note);
   return summary.drive_dir;
+}
+
+// DriveRun::skipped_scans entries are "<source>: <reason>".
+eval::SkippedScan SplitSkippedScan(const std::string& entry) {
+  const size_t colon = entry.find(": ");
+  if (colon == std::string::npos) return {entry, ""};
+  eval::SkippedScan s{entry.substr(0, colon), entry.substr(colon + 2)};
+  // Reader messages often start with the file again.
+  if (s.reason.rfind(s.source + ": ", 0) == 0) s.reason = s.reason.substr(s.source.size() + 2);
+  return s;
 }
 
 bool SameOrigin(const GeodeticPoint& a, const GeodeticPoint& b) {
@@ -93,36 +208,80 @@ int main(int argc, char** argv) {
     std::fputs(RunUsage().c_str(), stdout);
     return 0;
   }
+  if (args.version) {
+    std::printf("%s\n", RunVersion().c_str());
+    return 0;
+  }
+  // The app's defaults: finished submaps' clouds go to a private folder inside --out (removed at
+  // the end, also after a signal), so memory stays flat on long drives. In a config file
+  // `localizer.spill_dir: "<out>"` (what --dump-config writes) means that folder, `~` keeps them
+  // in memory, any other path is used as given.
+  MappingSystem::Options options;
+  options.localizer.spill_dir = kSpillToOutDir;
   if (args.list_config_keys) {
-    std::printf("| key | type | default |\n|---|---|---|\n");
-    for (const ConfigKeyInfo& k : ConfigKeys()) {
-      std::printf("| `%s` | %s | %s |\n", k.key.c_str(), k.type.c_str(), k.default_value.c_str());
-    }
+    std::fputs(OptionsToYaml(options).c_str(), stdout);
     return 0;
   }
   const bool tty = StdoutIsTerminal();
 
-  // Options: defaults, then the config file (checked before any work).
-  MappingSystem::Options options;
-  // Finished submaps' clouds go to a private folder inside --out (removed at the end), so memory
-  // stays flat on long drives; `localizer.spill_dir = none` in the config keeps them in memory.
-  options.localizer.spill_dir = args.out_dir;
+  // The config file, then the output options, checked before any work.
   if (!args.config.empty()) {
     const Status s = ApplyConfigFile(args.config, &options);
     if (!s.ok()) return Fail(s, kExitUsage);
   }
-  std::error_code ec;
-  fs::create_directories(args.out_dir, ec);
-  if (ec) {
-    return Fail(InvalidArgumentError("--out " + args.out_dir.string() + ": " + ec.message()),
-                kExitUsage);
+  if (!args.dump_config.empty()) {
+    const Status s = WriteConfigFile(options, args.dump_config);
+    if (!s.ok()) return Fail(s, kExitUsage);
+    std::printf("options written to %s (--config reads it back)\n", args.dump_config.c_str());
+    return 0;
   }
+  const std::string options_json = OptionsToJson(options);
+  if (options.localizer.spill_dir == kSpillToOutDir) options.localizer.spill_dir = args.out_dir;
+  GeoOutputOptions geo;
+  geo.crs = args.crs;
+  geo.las_tile_size_m = args.las_tile_size_m;
+  {
+    const Status s = CheckGeoOutputOptions(geo);
+    if (!s.ok()) return Fail(s, kExitUsage);
+    const Status writable = CheckOutputDir(args.out_dir);
+    if (!writable.ok()) return Fail(writable, kExitUsage);
+  }
+  InstallStopHandlers();
+  std::vector<std::string> warnings;  // also in report.json and report.html
+  auto warn = [&warnings](const std::string& text) {
+    ProgressReporter::BreakLine();
+    std::fprintf(stderr, "slam_mms_run: warning: %s\n", text.c_str());
+    warnings.push_back(text);
+  };
 
   // The drive.
   fs::path drive_dir = InputPath(args);
-  if (drive_dir.empty()) {
-    StatusOr<fs::path> simulated = SimulateDefaultDrive(args, tty);
+  const bool simulated_input = drive_dir.empty();
+  const fs::path sim_dir = args.out_dir / "sim";
+  // The simulated drive is ~2 MB a scan: removed at the end unless --keep-sim.
+  auto remove_sim = [&]() {
+    if (!simulated_input || args.keep_sim) return;
+    const auto [bytes, files] = DiskUse(sim_dir);
+    std::error_code ec;
+    fs::remove_all(sim_dir, ec);
+    if (ec) {
+      warn("cannot remove the simulated drive " + sim_dir.string() + ": " + ec.message());
+    } else {
+      std::printf("[sim] removed the simulated drive (%zu files, %.0f MB; --keep-sim keeps it)\n",
+                  files, static_cast<double>(bytes) / 1e6);
+    }
+  };
+  if (simulated_input) {
+    bool sim_stopped = false;
+    StatusOr<fs::path> simulated = SimulateDefaultDrive(args, tty, &sim_stopped);
     if (!simulated.ok()) return Fail(simulated.status(), kExitError);
+    if (sim_stopped) {
+      ProgressReporter::BreakLine();
+      std::fprintf(stderr, "slam_mms_run: %s during the simulation: nothing processed\n",
+                   StopSignalName());
+      remove_sim();
+      return StopExitCode();
+    }
     drive_dir = *simulated;
   }
   StatusOr<std::unique_ptr<DriveReader>> opened = OpenRunInput(args, drive_dir);
@@ -159,6 +318,20 @@ int main(int argc, char** argv) {
   for (const auto& [start, duration] : args.gnss_outages) {
     std::printf("[input] GNSS outage %.1f s .. %.1f s after the first scan\n", start,
                 start + duration);
+    char text[256];
+    if (start >= duration_s) {
+      std::snprintf(text, sizeof(text),
+                    "--gnss-outage %g:%g starts after the drive's last scan (%.1f s): it removes "
+                    "no GNSS fix",
+                    start, duration, duration_s);
+      warn(text);
+    } else if (start + duration > duration_s) {
+      std::snprintf(text, sizeof(text),
+                    "--gnss-outage %g:%g ends after the drive's last scan (%.1f s): the outage is "
+                    "%.1f s long, not %g s",
+                    start, duration, duration_s, duration_s - start, duration);
+      warn(text);
+    }
   }
   std::fflush(stdout);
 
@@ -166,12 +339,29 @@ int main(int argc, char** argv) {
   std::vector<ModeRun> runs;
   Status fatal;
   for (const MappingMode mode : args.modes) {
-    ModeRun run = RunMode(mode, options, reader, args.pos, tty);
-    const Status written = WriteMethodFiles(run, args.out_dir);
+    if (g_stop.load()) break;
+    ModeRun run = RunMode(mode, options, reader, args.pos, tty, &g_stop);
+    Status written = WriteMethodFiles(run, args.out_dir);
+    if (run.origin && !geo.run_origin) {
+      // georef.json: the world frame of the first method that has an origin.
+      geo.run_origin = run.origin;
+      const Status g = WriteRunGeoref(*run.origin, geo, args.out_dir);
+      if (written.ok() && !g.ok()) written = g;
+    }
+    const Status geo_written = WriteGeoOutputs(run, geo, args.out_dir, run.map_stamps);
+    if (written.ok() && !geo_written.ok()) written = geo_written;
     if (!run.status.ok()) fatal = run.status;
     if (fatal.ok() && !written.ok()) fatal = written;
     runs.push_back(std::move(run));
     if (!fatal.ok()) break;  // stop the run; evaluate and report what exists
+  }
+  const bool stopped = g_stop.load();
+  if (stopped) {
+    warn(std::string(StopSignalName()) + ": the run was stopped after " +
+         std::to_string(runs.empty() ? 0 : runs.back().scans_processed) + " of " +
+         std::to_string(reader.NumScans()) + " scans of " +
+         (runs.empty() ? std::string("the first method") : runs.back().name) +
+         "; the outputs hold what was computed so far (report.json \"complete\": false)");
   }
 
   // Ground truth in each run's world frame (one load per distinct origin).
@@ -256,6 +446,31 @@ int main(int argc, char** argv) {
   }
   report.input.duration_s = duration_s;
   report.input.ground_truth = gts.empty() ? gt_kind : gts.front().second.kind;
+  report.input.kind = simulated_input        ? "simulated"
+                      : !args.folder.empty() ? "folder"
+                      : !args.rosbag.empty() ? "rosbag"
+                                             : "kitti_raw";
+  report.input.scans_total = static_cast<int64_t>(reader.NumScans());
+  // The skipped scans are the reader's, the same for every method: the first run's list.
+  if (!runs.empty()) {
+    for (const std::string& entry : runs.front().skipped_scans) {
+      report.input.skipped_scans.push_back(SplitSkippedScan(entry));
+    }
+  }
+  report.command_line = args.command_line;
+  report.options_json = options_json;
+  if (geo.run_origin) {
+    StatusOr<std::string> georef = RunGeorefJson(*geo.run_origin, geo);
+    if (georef.ok()) {
+      report.georef_json = *georef;
+    } else {
+      SLAM_MMS_LOG(kWarning) << "georef: " << georef.status().ToString();
+    }
+  }
+  report.complete =
+      !stopped && fatal.ok() && !runs.empty() && runs.size() == args.modes.size() &&
+      std::all_of(runs.begin(), runs.end(), [](const ModeRun& r) { return r.complete; });
+  report.warnings = warnings;
   report.gnss_outages = windows;
   for (const MethodEvaluation& e : evals) report.methods.emplace_back(e.name, e.report);
   report.ground_truth_map_mme = gt_map_mme;
@@ -270,8 +485,12 @@ int main(int argc, char** argv) {
   std::ofstream(args.out_dir / "summary.txt") << table;
   ProgressReporter::BreakLine();
   std::printf("\n%s", table.c_str());
-  std::printf("outputs in %s\n", args.out_dir.c_str());
+  remove_sim();
+  const auto [out_bytes, out_files] = DiskUse(args.out_dir);
+  std::printf("outputs in %s (%zu files, %.0f MB)\n", args.out_dir.c_str(), out_files,
+              static_cast<double>(out_bytes) / 1e6);
   std::fflush(stdout);
   if (!fatal.ok()) return Fail(fatal, kExitError);
+  if (stopped) return StopExitCode();
   return 0;
 }

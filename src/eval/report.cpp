@@ -145,6 +145,7 @@ StatusOr<std::string> ReportToJson(const EvalReport& report) {
   j["ground_truth_map"] = Json{{"mme", Number(report.ground_truth_map_mme)}};
   j["options"] = std::move(options);
   j["georef"] = std::move(georef);
+  j["warnings"] = report.warnings;
   if (!report.outputs.empty()) j["outputs"] = Json{{"files", report.outputs}};
   // Invalid UTF-8 in a path or message is replaced rather than failing the whole report.
   return j.dump(2, ' ', false, Json::error_handler_t::replace) + "\n";

@@ -3,7 +3,8 @@
 #   slam_mms_run_test.sh CASE SLAM_MMS_RUN_BINARY SOURCE_DIR
 # Cases: kitti_frames, truncated_bin, bad_oxts, bad_config, bad_cli, sim_all, folder_input,
 # rosbag_input (these two convert the real frames with slam_mms_convert, next to the app, and also
-# run slam_mms_bench_e2e on them where it is built).
+# run slam_mms_bench_e2e on them where it is built), sigint, sigterm (a signal mid-run: partial
+# outputs, no spill folder, exit 130/143), unwritable_out, outage_outside.
 # Conventions (issue 22): dump_config (--dump-config/--config round trip), app_conventions
 # (--version of every app, --opt=value forms, slam_mms_eval's JSON).
 # Exit 0 = pass, 77 = skipped (real KITTI data absent), anything else = fail (with a message).
@@ -34,12 +35,13 @@ check_report() {
   [[ -s $report ]] || fail "no $report"
   if command -v jq >/dev/null; then
     jq -e '((keys - ["outputs"]) == ["command_line","complete","georef","gnss_outages",
-             "ground_truth_map","input","methods","options","version"]) and
+             "ground_truth_map","input","methods","options","version","warnings"]) and
            (.input | keys == ["drive","duration_s","ground_truth","kind","scans","scans_processed",
              "scans_total","skipped_scans"]) and
            (.input.scans == .input.scans_processed) and
            (.input.skipped_scans | keys == ["count","scans"]) and
            ((.command_line | type) == "array") and ((.complete | type) == "boolean") and
+           ((.warnings | type) == "array") and
            (.ground_truth_map | keys == ["mme"])' "$report" >/dev/null ||
       fail "report.json top-level/input keys differ from the schema: $(cat "$report")"
     for m in "$@"; do
@@ -54,7 +56,7 @@ check_report() {
              '"t_rel_pct"' '"r_rel_deg_per_100m"' '"max_pos_err_in_outage_m"' \
              '"max_rot_err_in_outage_deg"' '"mme"' '"scans_per_s"' '"peak_rss_mb"' \
              '"ground_truth_map"' '"version"' '"complete"' '"command_line"' '"options"' \
-             '"georef"' '"kind"' '"scans_total"' '"scans_processed"' '"skipped_scans"'; do
+             '"georef"' '"kind"' '"scans_total"' '"scans_processed"' '"skipped_scans"' '"warnings"'; do
       grep -q "$k" "$report" || fail "report.json lacks $k"
     done
     for m in "$@"; do grep -q "\"$m\"" "$report" || fail "report.json lacks method $m"; done
@@ -233,6 +235,63 @@ case $case_name in
     grep -q -- "--bogus" "$tmp/log" || fail "--bogus=3 message: $(cat "$tmp/log")"
     run "$tmp/log" --version
     [[ $? == 0 ]] || fail "--version: expected exit status 0"
+    ;;
+  sigint | sigterm)
+    # A signal while `full` runs: it stops after the current scan, writes what was computed
+    # (trajectory, map, report with "complete": false), removes its spill folder and the simulated
+    # drive, and exits 128 + signal.
+    sig=INT code=130
+    [[ $case_name == sigterm ]] && sig=TERM code=143
+    timeout 300 "$bin" --out "$tmp/out" --mode all --sim-duration 8 >"$tmp/log" 2>&1 &
+    pid=$!
+    for _ in $(seq 1 1200); do  # until full has started (its spill folder exists), at most 120 s
+      compgen -G "$tmp/out/slam_mms_spill_*" >/dev/null && break
+      kill -0 $pid 2>/dev/null || break
+      sleep 0.1
+    done
+    compgen -G "$tmp/out/slam_mms_spill_*" >/dev/null ||
+      fail "full never started (no spill folder): $(tail -20 "$tmp/log")"
+    sleep 2
+    kill -$sig $pid
+    wait $pid
+    status=$?
+    [[ $status == "$code" ]] || fail "SIG$sig: expected exit status $code, got $status: $(tail -20 "$tmp/log")"
+    compgen -G "$tmp/out/slam_mms_spill_*" >/dev/null && fail "spill folder left behind after SIG$sig"
+    [[ -e $tmp/out/sim ]] && fail "the simulated drive was left behind (no --keep-sim)"
+    grep -q "SIG$sig: the run was stopped after" "$tmp/log" || fail "no stop message: $(tail -20 "$tmp/log")"
+    check_files "$tmp/out" full.tum full.kitti map_full.ply report.json summary.txt
+    [[ -e $tmp/out/gnss_ins.tum ]] && fail "methods after the stopped one must not run"
+    n=$(grep -vc '^#' "$tmp/out/full.tum")
+    [[ $n -ge 1 && $n -lt 80 ]] || fail "full.tum: expected part of the 80 scans, got $n poses"
+    if command -v jq >/dev/null; then
+      jq -e '.complete == false and (.methods.full.ate_rmse_m | type) == "number"' \
+        "$tmp/out/report.json" >/dev/null || fail "report after SIG$sig: $(cat "$tmp/out/report.json")"
+    else
+      grep -q '"complete": *false' "$tmp/out/report.json" || fail "report lacks \"complete\": false"
+    fi
+    ;;
+  unwritable_out)
+    # Found before any work, in well under a second (also as root: /proc refuses new files).
+    start=$(date +%s%N)
+    run "$tmp/log" --out /proc/self/slam_mms_out --sim-duration 1
+    status=$?
+    ms=$(( ($(date +%s%N) - start) / 1000000 ))
+    [[ $status == 2 ]] || fail "unwritable --out: expected exit status 2, got $status: $(cat "$tmp/log")"
+    grep -q -- "--out /proc/self/slam_mms_out" "$tmp/log" || fail "message lacks --out: $(cat "$tmp/log")"
+    grep -q "outputs in" "$tmp/log" && fail "an unwritable --out still says 'outputs in'"
+    [[ $ms -lt 1000 ]] || fail "unwritable --out took $ms ms (must fail before any work)"
+    : >"$tmp/file"
+    run "$tmp/log" --out "$tmp/file" --sim-duration 1
+    [[ $? == 2 ]] || fail "--out naming a file: expected exit status 2"
+    grep -q "not a folder" "$tmp/log" || fail "--out naming a file: $(cat "$tmp/log")"
+    ;;
+  outage_outside)
+    run "$tmp/log" --out "$tmp/out" --mode gnss_ins --sim-duration 2 --gnss-outage 1:5 \
+      --gnss-outage 30:5 || fail "exit status $?: $(tail -20 "$tmp/log")"
+    grep -q "warning: --gnss-outage 30:5 starts after the drive's last scan" "$tmp/log" ||
+      fail "no warning for an outage after the drive: $(cat "$tmp/log")"
+    grep -q "warning: --gnss-outage 1:5 ends after the drive's last scan" "$tmp/log" ||
+      fail "no warning for an outage past the drive's end: $(cat "$tmp/log")"
     ;;
   sim_all)
     # --pos smoothed: full on the smoothed POS (the default, forward, runs in folder_input).

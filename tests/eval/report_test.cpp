@@ -60,6 +60,7 @@ EvalReport SampleReport() {
                        "origin_height_m": null})";
   r.georef_json = R"({"crs": "EPSG:32632", "origin": [49.0, 8.4, 110.0]})";
   r.complete = false;
+  r.warnings = {"--gnss-outage 300:30 starts after the drive's last scan (190.0 s)", "SIGINT"};
   r.outputs = {"full.tum", "map_full.las"};
   return r;
 }
@@ -72,8 +73,9 @@ TEST(ReportTest, JsonHasTheSchemaKeysAndRoundTrips) {
   ASSERT_TRUE(j.is_object());
   EXPECT_EQ(Keys(j), (std::vector<std::string>{"version", "complete", "command_line", "input",
                                                "gnss_outages", "methods", "ground_truth_map",
-                                               "options", "georef", "outputs"}));
+                                               "options", "georef", "warnings", "outputs"}));
   EXPECT_EQ(j["version"], SLAM_MMS_VERSION_STRING);
+  EXPECT_EQ(j["warnings"].get<std::vector<std::string>>(), r.warnings);
   EXPECT_EQ(j["complete"], false);
   EXPECT_EQ(j["command_line"].get<std::vector<std::string>>(), r.command_line);
   const Json& input = j["input"];
@@ -159,6 +161,7 @@ TEST(ReportTest, DoublesReadBackExactlyAndDefaultsAreNull) {
   EXPECT_TRUE(j["georef"].is_null());
   EXPECT_EQ(j["complete"], true);
   EXPECT_TRUE(j["command_line"].is_array());
+  EXPECT_TRUE(j["warnings"].is_array() && j["warnings"].empty());
   EXPECT_FALSE(j.contains("outputs"));
 }
 

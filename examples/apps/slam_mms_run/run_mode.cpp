@@ -20,7 +20,8 @@ bool ResetPeakRss() {
 }
 
 ModeRun RunMode(MappingMode mode, const MappingSystem::Options& base_options,
-                const DriveReader& reader, PosWorkflow pos, bool tty) {
+                const DriveReader& reader, PosWorkflow pos, bool tty,
+                const std::atomic<bool>* stop) {
   ModeRun run;
   run.mode = mode;
   run.name = MappingModeName(mode);
@@ -32,6 +33,7 @@ ModeRun RunMode(MappingMode mode, const MappingSystem::Options& base_options,
   ProgressReporter progress(run.name, run.scans_total, tty);
   DriveRunCallbacks callbacks;
   callbacks.on_scan = [&](size_t fed, size_t) { progress.Update(fed); };
+  callbacks.stop = stop;
   DriveRunOptions run_options;
   run_options.pos = pos;
   DriveRun d = RunDrive(reader, options, callbacks, run_options);
@@ -39,6 +41,7 @@ ModeRun RunMode(MappingMode mode, const MappingSystem::Options& base_options,
   run.trajectory = std::move(d.trajectory);
   run.results = std::move(d.results);
   run.map = std::move(d.map);
+  run.map_stamps = std::move(d.map_stamps);
   run.origin = d.origin;
   run.availability = std::move(d.availability);
   run.first_scan_start = d.first_scan_start;
@@ -49,6 +52,7 @@ ModeRun RunMode(MappingMode mode, const MappingSystem::Options& base_options,
   run.skipped_scans = std::move(d.skipped_scans);
   run.finished = d.finished;
   run.complete = d.complete;
+  run.stopped = d.finished && !d.complete && d.status.ok() && stop != nullptr && stop->load();
   run.smoothed_pos = d.smoothed_pos;
   run.status = d.status;
   run.scans_per_s = run.wall_s > 0 ? static_cast<double>(run.scans_processed) / run.wall_s : 0.0;
@@ -60,6 +64,7 @@ ModeRun RunMode(MappingMode mode, const MappingSystem::Options& base_options,
     note += (note.empty() ? "" : " ") + std::string("(on the smoothed POS)");
   }
   if (!run.status.ok()) note += (note.empty() ? "" : " ") + std::string("(stopped by an error)");
+  if (run.stopped) note += (note.empty() ? "" : " ") + std::string("(stopped by a signal)");
   progress.Finish(run.scans_processed, note);
   return run;
 }

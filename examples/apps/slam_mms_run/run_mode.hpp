@@ -4,6 +4,7 @@
 // are skipped with a warning naming the file; any other error stops the run and is kept in
 // `status`, with the estimates computed so far still filled in.
 
+#include <atomic>
 #include <cstddef>
 #include <optional>
 #include <string>
@@ -15,6 +16,7 @@
 #include "slam_mms/core/trajectory.hpp"
 #include "slam_mms/io/drive_reader.hpp"
 #include "slam_mms/pipeline/drive_runner.hpp"
+#include "slam_mms/pipeline/map_point_stamps.hpp"
 #include "slam_mms/pipeline/mapping_system.hpp"
 
 namespace slam_mms::app {
@@ -25,6 +27,7 @@ struct ModeRun {
   Trajectory trajectory;
   std::vector<LocalizationResult> results;  ///< Per scan, level 1 (before level 2).
   PointCloud map;
+  MapPointStamps map_stamps;  ///< Per map point: first time and scan (LAS GPS time, source ID).
   std::optional<GeodeticPoint> origin;
   std::vector<GnssAvailabilityInterval> availability;
   /// Start of the first scan fed to the system: GNSS outage windows are relative to it.
@@ -39,14 +42,16 @@ struct ModeRun {
   std::optional<double> peak_rss_mb;
   bool finished = false;      ///< Finish() completed.
   bool complete = false;      ///< Every scan fed and Finish() completed.
+  bool stopped = false;       ///< Ended early by the stop flag (a signal).
   bool smoothed_pos = false;  ///< On a forward-backward smoothed POS (gnss_ins_smoothed, full).
   Status status;              ///< The fatal error, if any.
 };
 
 /// Runs `mode` with `options` (mode overridden) on `reader`; `pos`: the POS of full (--pos).
-/// `tty`: progress bar vs plain lines.
+/// `tty`: progress bar vs plain lines. `stop` (may be null; set by the SIGINT/SIGTERM handler)
+/// ends the run after the current scan, with what was fed finished (ModeRun::complete false).
 ModeRun RunMode(MappingMode mode, const MappingSystem::Options& options, const DriveReader& reader,
-                PosWorkflow pos, bool tty);
+                PosWorkflow pos, bool tty, const std::atomic<bool>* stop = nullptr);
 
 /// Resets the kernel's peak-RSS counter (VmHWM) so the next mode's peak is its own; returns false
 /// where /proc/self/clear_refs is not writable (the peak is then the process's).

@@ -20,6 +20,8 @@
 //    "ground_truth_map": {"mme": f|null},
 //    "options": {...}|null,                 + the effective MappingSystem options (config tree)
 //    "georef": {...}|null,                  + the output CRS and origin (georef.json's object)
+//    "warnings": [str, ...],                + what the run warned about (outage windows outside
+//                                             the drive, a stop by a signal, ...)
 //    "outputs": {"files": [str, ...]}}      + files written (only when the caller lists some)
 //
 // "options" and "georef" are JSON object texts the caller passes (EvalReport::options_json,
@@ -97,6 +99,8 @@ struct EvalReport {
   std::string georef_json;
   /// False where the run stopped before the end of the drive (error, interrupt).
   bool complete = true;
+  /// The run's warnings, in order ("warnings": always written, [] when none).
+  std::vector<std::string> warnings;
   /// Files written, relative to the output folder ("outputs": {"files": [...]}); empty = no
   /// "outputs" key.
   std::vector<std::string> outputs;

@@ -60,10 +60,10 @@ const char* kUsage =
     "                 stamp of the first estimate\n"
     "  --format       trajectory format of --est; auto decides per file by numbers a line (8 or "
     "12)\n"
-    "  --kitti-times  stamps for KITTI files (one time in seconds a line); without it a KITTI "
-    "file\n"
-    "                 must have one pose per ground-truth pose and takes the ground truth's "
-    "stamps\n"
+    "  --kitti-times  stamps for KITTI files (one time in seconds a line); default: "
+    "<stem>_times.txt\n"
+    "                 or times.txt beside the file, else a KITTI file must have one pose per\n"
+    "                 ground-truth pose and takes the ground truth's stamps\n"
     "  --radius, --voxel, --min-neighbors, --threads   entropy options (0.5 m, 0.1 m, 5, 2)\n"
     "  --json         write all numbers as JSON\n"
     "  --plots        write PNG plots into this folder\n"
@@ -245,8 +245,21 @@ StatusOr<Trajectory> LoadEstimate(const Args& a, const fs::path& file, const Tra
   }
   if (format == "tum") return ReadTrajectoryTum(file);
   std::vector<Timestamp> stamps;
-  if (!a.kitti_times.empty()) {
-    SLAM_MMS_ASSIGN_OR_RETURN(stamps, ReadTimes(a.kitti_times));
+  // Without --kitti-times: <stem>_times.txt beside the file (slam_mms_run writes one beside every
+  // .kitti), else KITTI odometry's times.txt in the same folder.
+  fs::path times = a.kitti_times;
+  if (times.empty()) {
+    for (const fs::path& candidate : {file.parent_path() / (file.stem().string() + "_times.txt"),
+                                      file.parent_path() / "times.txt"}) {
+      std::error_code ec;
+      if (fs::is_regular_file(candidate, ec)) {
+        times = candidate;
+        break;
+      }
+    }
+  }
+  if (!times.empty()) {
+    SLAM_MMS_ASSIGN_OR_RETURN(stamps, ReadTimes(times));
   } else {
     SLAM_MMS_ASSIGN_OR_RETURN(const std::vector<Eigen::Isometry3d> poses, ReadPosesKitti(file));
     if (poses.size() != gt.size()) {

@@ -312,6 +312,20 @@ case $case_name in
              .methods.full.ate_rmse_m < 1.0 and .methods.gnss_ins.ate_rmse_m < 1.0' \
         "$tmp/out/report.json" >/dev/null || fail "sim metrics: $(cat "$tmp/out/report.json")"
     fi
+    # times.txt beside every .kitti: slam_mms_eval takes the .kitti alone and finds the same
+    # stamps and poses as from the .tum.
+    for m in full gnss_ins gnss_ins_smoothed lidar_only; do
+      [[ $(wc -l <"$tmp/out/${m}_times.txt") == $(wc -l <"$tmp/out/$m.kitti") ]] ||
+        fail "${m}_times.txt and $m.kitti have different line counts"
+    done
+    eval_bin=$(dirname "$bin")/slam_mms_eval
+    "$eval_bin" --gt "$tmp/out/ground_truth.tum" --est "k=$tmp/out/full.kitti" \
+      --est "t=$tmp/out/full.tum" --json "$tmp/eval.json" >"$tmp/eval.log" 2>&1 ||
+      fail "slam_mms_eval on full.kitti without --kitti-times: $(cat "$tmp/eval.log")"
+    if command -v jq >/dev/null; then
+      jq -e '(.trajectories.k.ate_rmse_m - .trajectories.t.ate_rmse_m | fabs) < 1e-6' \
+        "$tmp/eval.json" >/dev/null || fail "full.kitti and full.tum evaluate differently: $(cat "$tmp/eval.json")"
+    fi
     ;;
   dump_config)
     # --dump-config writes the effective options (defaults + --config) as YAML that --config reads

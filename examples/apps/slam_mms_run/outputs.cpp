@@ -29,6 +29,16 @@ std::string Cell(const std::optional<double>& v, const char* format) {
   return buf;
 }
 
+// The stamps of a .kitti file (KITTI odometry's times.txt: one time a line, here UTC seconds with
+// nanosecond digits), which the format itself does not hold.
+Status WriteKittiTimes(const Trajectory& trajectory, const std::filesystem::path& file) {
+  std::ofstream f(file);
+  for (const StampedPose& p : trajectory.poses()) f << FormatSecondsExact(p.stamp) << '\n';
+  f.flush();
+  if (!f) return UnavailableError("cannot write " + file.string());
+  return OkStatus();
+}
+
 }  // namespace
 
 Status WriteMethodFiles(const ModeRun& run, const std::filesystem::path& out_dir) {
@@ -36,6 +46,7 @@ Status WriteMethodFiles(const ModeRun& run, const std::filesystem::path& out_dir
   if (!run.trajectory.empty()) {
     KeepFirst(&first, WriteTrajectoryTum(run.trajectory, out_dir / (run.name + ".tum")));
     KeepFirst(&first, WriteTrajectoryKitti(run.trajectory, out_dir / (run.name + ".kitti")));
+    KeepFirst(&first, WriteKittiTimes(run.trajectory, out_dir / (run.name + "_times.txt")));
     KeepFirst(&first, WriteTrajectoryCsv(run.trajectory, out_dir / (run.name + "_cov.csv")));
   } else {
     SLAM_MMS_LOG(kWarning) << run.name << ": no pose estimated, no trajectory written";

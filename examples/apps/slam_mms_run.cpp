@@ -45,6 +45,7 @@
 #include "slam_mms_run/geo_outputs.hpp"
 #include "slam_mms_run/input.hpp"
 #include "slam_mms_run/outputs.hpp"
+#include "slam_mms_run/plot_outputs.hpp"
 #include "slam_mms_run/progress.hpp"
 #include "slam_mms_run/run_mode.hpp"
 
@@ -178,6 +179,18 @@ StatusOr<fs::path> SimulateDefaultDrive(const RunArgs& args, bool tty, bool* sto
                 summary.simulated_seconds);
   progress.Finish(static_cast<size_t>(summary.num_scans), note);
   return summary.drive_dir;
+}
+
+// Regular files under `dir`, relative to it (report.json's "outputs").
+std::vector<std::string> OutputFiles(const fs::path& dir) {
+  std::vector<std::string> files;
+  std::error_code ec;
+  for (fs::recursive_directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    std::error_code e2;
+    if (it->is_regular_file(e2)) files.push_back(fs::relative(it->path(), dir, e2).string());
+  }
+  std::sort(files.begin(), files.end());
+  return files;
 }
 
 // DriveRun::skipped_scans entries are "<source>: <reason>".
@@ -474,11 +487,6 @@ int main(int argc, char** argv) {
   report.gnss_outages = windows;
   for (const MethodEvaluation& e : evals) report.methods.emplace_back(e.name, e.report);
   report.ground_truth_map_mme = gt_map_mme;
-  const Status report_written = eval::WriteReportJson(report, args.out_dir / "report.json");
-  if (!report_written.ok()) {
-    SLAM_MMS_LOG(kError) << report_written.ToString();
-    if (fatal.ok()) fatal = report_written;
-  }
   WritePlots(runs, evals, gts.empty() ? nullptr : &gts.front().second, windows, reference,
              args.out_dir);
   const std::string table = SummaryTable(evals, gt_map_mme, report.input.ground_truth);
@@ -486,6 +494,25 @@ int main(int argc, char** argv) {
   ProgressReporter::BreakLine();
   std::printf("\n%s", table.c_str());
   remove_sim();
+  // report.json lists every file of the run (itself and report.html included), then report.html
+  // is written last: it embeds the plots and describes the files.
+  report.outputs = OutputFiles(args.out_dir);
+  for (const char* name : {"report.json", "report.html"}) {
+    if (std::find(report.outputs.begin(), report.outputs.end(), name) == report.outputs.end()) {
+      report.outputs.push_back(name);
+    }
+  }
+  std::sort(report.outputs.begin(), report.outputs.end());
+  const Status report_written = eval::WriteReportJson(report, args.out_dir / "report.json");
+  if (!report_written.ok()) {
+    SLAM_MMS_LOG(kError) << report_written.ToString();
+    if (fatal.ok()) fatal = report_written;
+  }
+  const Status html_written = WriteReportHtml(report, runs, evals, warnings, args.out_dir);
+  if (!html_written.ok()) {
+    SLAM_MMS_LOG(kError) << html_written.ToString();
+    if (fatal.ok()) fatal = html_written;
+  }
   const auto [out_bytes, out_files] = DiskUse(args.out_dir);
   std::printf("outputs in %s (%zu files, %.0f MB)\n", args.out_dir.c_str(), out_files,
               static_cast<double>(out_bytes) / 1e6);

@@ -44,6 +44,10 @@ void VoxelAccumulator::Reserve(size_t voxels) {
   while (2 * voxels > capacity) capacity *= 2;
   std::vector<Entry> old = std::move(table_);
   table_.assign(capacity, Entry());
+  if (track_) {  // the stamps grow with the voxels: no reallocation between table growths
+    first_time_ns_.reserve(capacity / 2);
+    first_scan_.reserve(capacity / 2);
+  }
   const size_t mask = capacity - 1;
   for (const Entry& e : old) {
     if (e.key == kEmpty) continue;

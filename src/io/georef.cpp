@@ -103,8 +103,12 @@ StatusOr<GeoReference> GeoReference::Create(const GeoOrigin& origin, const std::
 
   PJ* target_crs = proj_create(p.ctx, target.c_str());
   if (target_crs == nullptr) {
-    return InvalidArgumentError(where + what + " is unknown to PROJ (" + ContextError(p.ctx) +
-                                "); give a projected CRS such as EPSG:25832 or EPSG:32632");
+    // PROJ's own text for an unknown code is "Unknown error (code 4096)": not worth repeating.
+    const std::string detail = ContextError(p.ctx);
+    const bool useful = detail.find("Unknown error") == std::string::npos;
+    return InvalidArgumentError(where + what + " is unknown to PROJ" +
+                                (useful ? " (" + detail + ")" : std::string()) +
+                                "; give a projected CRS such as EPSG:25832 or EPSG:32632");
   }
   // Everything PROJ allocates below is released on every path.
   struct Guard {

@@ -5,12 +5,18 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <random>
 #include <set>
+#include <sstream>
 
+#include "slam_mms/io/kitti_drive_reader.hpp"
+#include "slam_mms/io/kitti_raw_reader.hpp"
 #include "slam_mms/io/map_io.hpp"
+#include "slam_mms/pipeline/drive_runner.hpp"
 #include "testing/test_data.hpp"
 
 namespace slam_mms {
@@ -107,6 +113,83 @@ TEST(GeoOutputOptionsTest, BadCrsOrTileSizeIsRefusedByName) {
   EXPECT_TRUE(o.Validate().ok());
   o.las_tile_size_m = -1.0;
   EXPECT_THAT(o.Validate().message(), HasSubstr("--las-tile-size"));
+}
+
+// Real KITTI 0013 (50 frames), gnss_ins: the WGS-84 CSV against the drive's own OXTS records,
+// whose conventions are independent of ours (roll + = left side up, pitch + = front down, yaw from
+// east counter-clockwise), and the LAS GPS times against the scans (2011: GPS = UTC + 15 s).
+TEST(GeoreferencedOutputsKittiTest, Wgs84CsvAgreesWithOxtsAndLasTimesWithTheScans) {
+  SLAM_MMS_REQUIRE_KITTI_RAW();
+  const fs::path drive = ::slam_mms::testing::KittiRawDriveDir();
+  auto reader = KittiDriveReader::Open(drive, KittiRawReader::Options());
+  ASSERT_TRUE(reader.ok()) << reader.status().ToString();
+  auto raw = KittiRawReader::Open(drive);
+  ASSERT_TRUE(raw.ok());
+  MappingSystem::Options o;
+  o.mode = MappingMode::kGnssIns;
+  o.T_body_lidar = (*reader)->streams().T_body_lidar;
+  const DriveRun run = RunDrive(**reader, o);
+  ASSERT_TRUE(run.status.ok()) << run.status.ToString();
+  ASSERT_EQ(run.trajectory.size(), 50u);
+  const fs::path out = ::slam_mms::testing::MakeTempDir("georef_kitti");
+  ASSERT_TRUE(WriteGeoreferencedOutputs("gnss_ins", run.mode, run.trajectory, run.map,
+                                        run.map_stamps, run.origin, GeoOutputOptions(), out)
+                  .ok());
+  std::ifstream in(out / "gnss_ins_wgs84.csv");
+  std::string line;
+  std::getline(in, line);
+  const std::vector<StampedOxts>& oxts = raw->OxtsRecords();
+  std::vector<double> horizontal, heading, pitch, roll;
+  while (std::getline(in, line)) {
+    std::vector<double> v;
+    std::stringstream ss(line);
+    std::string cell;
+    while (std::getline(ss, cell, ',')) v.push_back(cell.empty() ? NAN : std::stod(cell));
+    const auto t = static_cast<int64_t>(std::stoll(line.substr(0, line.find(','))));
+    // OXTS linearly interpolated at the pose's time.
+    auto it = std::lower_bound(oxts.begin(), oxts.end(), t, [](const StampedOxts& a, int64_t x) {
+      return a.stamp.nanoseconds() < x;
+    });
+    if (it == oxts.begin() || it == oxts.end()) continue;
+    const OxtsRecord& a = std::prev(it)->record;
+    const OxtsRecord& b = it->record;
+    const double w =
+        static_cast<double>(t - std::prev(it)->stamp.nanoseconds()) /
+        static_cast<double>(it->stamp.nanoseconds() - std::prev(it)->stamp.nanoseconds());
+    const auto lerp = [w](double x, double y) { return x + w * (y - x); };
+    const double dn = (v[2] - lerp(a.lat_deg, b.lat_deg)) * 111200.0;
+    const double de = (v[3] - lerp(a.lon_deg, b.lon_deg)) * 111200.0 * std::cos(v[2] * M_PI / 180);
+    horizontal.push_back(std::hypot(dn, de));
+    const double oxts_heading = 90.0 - lerp(a.yaw_rad, b.yaw_rad) * 180.0 / M_PI;
+    heading.push_back(std::abs(std::remainder(v[7] - oxts_heading, 360.0)));
+    pitch.push_back(std::abs(v[6] + lerp(a.pitch_rad, b.pitch_rad) * 180.0 / M_PI));
+    roll.push_back(std::abs(v[5] - lerp(a.roll_rad, b.roll_rad) * 180.0 / M_PI));
+  }
+  ASSERT_GT(horizontal.size(), 40u);
+  const auto median = [](std::vector<double> x) {
+    std::nth_element(x.begin(), x.begin() + x.size() / 2, x.end());
+    return x[x.size() / 2];
+  };
+  std::printf(
+      "KITTI 0013 gnss_ins vs OXTS (median): horizontal %.3f m, heading %.3f deg, pitch "
+      "%.3f deg, roll %.3f deg\n",
+      median(horizontal), median(heading), median(pitch), median(roll));
+  EXPECT_LT(median(horizontal), 0.3);
+  EXPECT_LT(median(heading), 0.5);
+  EXPECT_LT(median(pitch), 0.3);  // a sign error would give ~2 x 0.5 deg (the drive's pitch)
+  EXPECT_LT(median(roll), 0.3);
+
+  auto las = ReadLas(out / "map_gnss_ins.las");
+  ASSERT_TRUE(las.ok());
+  ASSERT_EQ(las->points_utm.size(), run.map.size());
+  const double first_s = run.trajectory.start().seconds();
+  const double last_s = (*reader)->ScanEnd((*reader)->NumScans() - 1).seconds();
+  for (size_t k = 0; k < las->gps_time.size(); k += 97) {
+    const double utc_s = las->gps_time[k] + 1e9 - 15.0 + 315964800.0;
+    ASSERT_GE(utc_s, first_s - 1e-5) << k;
+    ASSERT_LE(utc_s, last_s + 1e-5) << k;
+    ASSERT_LT(las->point_source_id[k], 50);
+  }
 }
 
 }  // namespace

@@ -409,8 +409,7 @@ void RegisterMappingSystem(py::module_& m) {
           "map_time_ns",
           [](const DriveRun& r) {
             py::array_t<int64_t> a(static_cast<py::ssize_t>(r.map_stamps.time_ns.size()));
-            std::copy(r.map_stamps.time_ns.begin(), r.map_stamps.time_ns.end(),
-                      a.mutable_data());
+            std::copy(r.map_stamps.time_ns.begin(), r.map_stamps.time_ns.end(), a.mutable_data());
             return a;
           },
           "Per map point: UTC ns of the first point observed in its voxel (empty if unknown).")

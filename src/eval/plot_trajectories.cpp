@@ -317,7 +317,7 @@ Status PlotTrajectoriesTopView(const NamedTrajectory& ground_truth,
             internal::TurboColor(std::max(e.error_m[k], e.error_m[k + 1]) / scale_max));
       }
       canvas.ColoredPolyline(e.est_xy, colors, 4);
-      title += ": error RMS " + Metres(e.rms_m) + ", max " + Metres(e.max_m);
+      title += ": RMS " + Metres(e.rms_m) + ", max " + Metres(e.max_m);
     } else {
       canvas.Polyline(XY(methods[i].trajectory), PaletteColor(i), 3);
       title += ": no pose matched to the ground truth";

@@ -151,10 +151,10 @@ std::vector<PoseSample> DefaultUrbanRouteSamples() {
 }
 
 std::vector<PoseSample> DemoUrbanRouteSamples() {
-  // One block (110 m x 80 m) driven anticlockwise, then its first street again (the revisit that
+  // One block (100 m x 70 m) driven anticlockwise, then its first street again (the revisit that
   // level 2 closes a loop on): four 90 deg turns, about 60 s of scans.
-  const std::vector<Leg> legs = {{{0.0, 0.0}, 9.0},  {{110.0, 0.0}, 8.5}, {{110.0, 80.0}, 9.0},
-                                 {{0.0, 80.0}, 8.5}, {{0.0, 0.0}, 8.0},   {{70.0, 0.0}, 0.0}};
+  const std::vector<Leg> legs = {{{0.0, 0.0}, 9.0},  {{100.0, 0.0}, 8.5}, {{100.0, 70.0}, 9.0},
+                                 {{0.0, 70.0}, 8.5}, {{0.0, 0.0}, 8.0},   {{60.0, 0.0}, 0.0}};
   return RouteSamples(legs, {});
 }
 

@@ -45,7 +45,3 @@ std::string SummaryTable(const std::vector<MethodEvaluation>& evals,
                          const std::optional<double>& gt_map_mme, const std::string& gt_kind);
 
 }  // namespace slam_mms::app
-
-// Transitional: the plots moved to plot_outputs.hpp; included here so that code including only
-// outputs.hpp still sees WritePlots (include plot_outputs.hpp directly, then drop this line).
-#include "slam_mms_run/plot_outputs.hpp"  // IWYU pragma: export

@@ -36,8 +36,8 @@ void ProgressReporter::BreakLine() {
   }
 }
 
-void InstallLogSink() {
-  SetLogSink([](LogLevel level, const std::string& message) {
+LogSink InstallLogSink() {
+  return SetLogSink([](LogLevel level, const std::string& message) {
     ProgressReporter::BreakLine();
     std::fprintf(stderr, "[%s] %s\n", LogLevelName(level), message.c_str());
     std::fflush(stderr);

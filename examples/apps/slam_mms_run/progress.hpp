@@ -10,6 +10,8 @@
 #include <cstddef>
 #include <string>
 
+#include "slam_mms/core/logging.hpp"
+
 namespace slam_mms::app {
 
 class ProgressReporter {
@@ -42,7 +44,8 @@ class ProgressReporter {
 bool StdoutIsTerminal();
 
 /// Installs a log sink printing "[level] message" to stderr that first breaks a progress bar.
-void InstallLogSink();
+/// Returns the sink it replaced.
+LogSink InstallLogSink();
 
 /// "1:05" style duration.
 std::string FormatDuration(double seconds);

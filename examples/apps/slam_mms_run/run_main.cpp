@@ -1,0 +1,553 @@
+// slam_mms_run, the main job (issue 8), as app::RunMain: slam_mms_run's main() and the Python
+// package's `python -m slam_mms run` both call it. A drive in (KITTI raw, a plain folder, a ROS 1
+// bag, or the embedded demo drive, simulated first); per method (full, gnss_ins,
+// gnss_ins_smoothed, lidar_only) trajectories, maps and geo-referenced files out, evaluated against
+// the ground truth (the simulator's, else OXTS) in report.json, plots, report.html and a summary
+// table. The flags are in cli.hpp and docs/user_guide.md.
+//
+// Errors: a scan that cannot be read is skipped with a warning naming its file; any other input or
+// processing error stops the run with a message naming file/line/field, after everything computed
+// so far is written (trajectories, maps, report with what exists); exit status 1. A bad command
+// line or config file: exit status 2, before any work. SIGINT/SIGTERM: the run stops after the
+// current scan, writes what was computed ("complete": false) and exits 128 + signal.
+
+#include "slam_mms_run/run_main.hpp"
+
+#include <signal.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cerrno>
+#include <csignal>
+#include <cstdio>
+#include <cstring>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "slam_mms/core/logging.hpp"
+#include "slam_mms/eval/ground_truth.hpp"
+#include "slam_mms/eval/map_entropy.hpp"
+#include "slam_mms/eval/report.hpp"
+#include "slam_mms/io/kitti_drive_reader.hpp"
+#include "slam_mms/io/map_io.hpp"
+#include "slam_mms/io/trajectory_io.hpp"
+#include "slam_mms/pipeline/mapping_system.hpp"
+#include "slam_mms/sim/drive_simulator.hpp"
+#include "slam_mms/version.hpp"
+#include "slam_mms_run/cli.hpp"
+#include "slam_mms_run/config_file.hpp"
+#include "slam_mms_run/geo_outputs.hpp"
+#include "slam_mms_run/input.hpp"
+#include "slam_mms_run/outputs.hpp"
+#include "slam_mms_run/plot_outputs.hpp"
+#include "slam_mms_run/progress.hpp"
+#include "slam_mms_run/run_mode.hpp"
+
+namespace slam_mms::app {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr int kExitError = 1;
+constexpr int kExitUsage = 2;
+// localizer.spill_dir's app default: the --out folder (see main).
+const fs::path kSpillToOutDir = "<out>";
+
+// SIGINT / SIGTERM: the first one sets the flag that RunDrive and the simulator poll before every
+// scan (the run then ends after the current scan, writes everything computed so far and exits
+// 128 + signal). A second one more than a second later ends the process at once; repeats within
+// the second are the same request delivered twice (`timeout` signals its child and then its
+// process group) and are ignored.
+std::atomic<bool> g_stop{false};
+volatile std::sig_atomic_t g_signal = 0;
+timespec g_first_signal{};
+static_assert(std::atomic<bool>::is_always_lock_free, "the stop flag is set in a signal handler");
+
+extern "C" void OnStopSignal(int sig) {
+  timespec now{};
+  clock_gettime(CLOCK_MONOTONIC, &now);  // async-signal-safe
+  if (!g_stop.load()) {
+    g_first_signal = now;
+    g_signal = sig;
+    g_stop.store(true);
+    return;
+  }
+  const double since = static_cast<double>(now.tv_sec - g_first_signal.tv_sec) +
+                       1e-9 * static_cast<double>(now.tv_nsec - g_first_signal.tv_nsec);
+  if (since > 1.0) {
+    signal(sig, SIG_DFL);
+    raise(sig);
+  }
+}
+
+// Installs the stop handlers for one RunMain call and puts the previous ones (and the previous
+// log sink) back at its end: RunMain also runs inside a Python process (python -m slam_mms run).
+class StopHandlers {
+ public:
+  StopHandlers() {
+    g_stop.store(false);
+    g_signal = 0;
+    struct sigaction sa {};
+    sa.sa_handler = OnStopSignal;
+    sigemptyset(&sa.sa_mask);
+    sa.sa_flags = 0;
+    sigaction(SIGINT, &sa, &old_int_);
+    sigaction(SIGTERM, &sa, &old_term_);
+  }
+  ~StopHandlers() {
+    sigaction(SIGINT, &old_int_, nullptr);
+    sigaction(SIGTERM, &old_term_, nullptr);
+  }
+  StopHandlers(const StopHandlers&) = delete;
+  StopHandlers& operator=(const StopHandlers&) = delete;
+
+ private:
+  struct sigaction old_int_ {};
+  struct sigaction old_term_ {};
+};
+
+class LogSinkGuard {
+ public:
+  LogSinkGuard() : previous_(InstallLogSink()) {}
+  ~LogSinkGuard() { SetLogSink(previous_); }
+  LogSinkGuard(const LogSinkGuard&) = delete;
+  LogSinkGuard& operator=(const LogSinkGuard&) = delete;
+
+ private:
+  LogSink previous_;
+};
+
+int StopExitCode() { return 128 + static_cast<int>(g_signal); }
+const char* StopSignalName() { return g_signal == SIGTERM ? "SIGTERM" : "SIGINT"; }
+
+// --out is created and a file written into it before any work, so that a folder that cannot be
+// written fails at once instead of after the run.
+Status CheckOutputDir(const fs::path& dir) {
+  std::error_code ec;
+  if (fs::exists(dir, ec) && !fs::is_directory(dir, ec)) {
+    return InvalidArgumentError("--out " + dir.string() + ": exists and is not a folder");
+  }
+  fs::create_directories(dir, ec);
+  if (ec) {
+    return InvalidArgumentError("--out " + dir.string() +
+                                ": cannot create the folder: " + ec.message());
+  }
+  if (!fs::is_directory(dir, ec)) {
+    return InvalidArgumentError("--out " + dir.string() + ": exists and is not a folder");
+  }
+  const fs::path probe = dir / (".slam_mms_write_probe_" + std::to_string(::getpid()));
+  errno = 0;
+  bool written = false;
+  {
+    std::ofstream f(probe, std::ios::binary | std::ios::trunc);
+    if (f) f << "slam_mms\n";
+    f.flush();
+    written = static_cast<bool>(f);
+  }
+  const int err = errno;
+  fs::remove(probe, ec);
+  if (!written) {
+    return InvalidArgumentError("--out " + dir.string() +
+                                ": not writable (cannot create a file in it" +
+                                (err != 0 ? std::string(": ") + std::strerror(err) : "") + ")");
+  }
+  return OkStatus();
+}
+
+// Bytes and files under `dir` (the disk use printed at the end).
+std::pair<uintmax_t, size_t> DiskUse(const fs::path& dir) {
+  uintmax_t bytes = 0;
+  size_t files = 0;
+  std::error_code ec;
+  for (fs::recursive_directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    std::error_code e2;
+    if (it->is_regular_file(e2)) {
+      const uintmax_t n = it->file_size(e2);
+      if (!e2) bytes += n;
+      ++files;
+    }
+  }
+  return {bytes, files};
+}
+
+int Fail(const Status& status, int code) {
+  ProgressReporter::BreakLine();
+  std::fprintf(stderr, "slam_mms_run: error: %s\n", status.message().c_str());
+  return code;
+}
+
+// Simulates the embedded drive (--sim-scenario, "demo" by default) into out/sim; returns the drive
+// folder. Stopped by a signal: the drive is left as written so far and *stopped is set.
+StatusOr<fs::path> SimulateDefaultDrive(const RunArgs& args, bool tty, bool* stopped) {
+  sim::DriveSimulator::Options so;
+  so.scenario = args.sim_scenario;
+  so.duration_s = args.sim_duration_s;
+  so.seed = args.sim_seed;
+  std::printf("[sim] simulating the %s drive (%s, seed %llu) into %s\n", args.sim_scenario.c_str(),
+              args.sim_duration_s > 0 ? (std::to_string(args.sim_duration_s) + " s").c_str()
+                                      : "whole route",
+              static_cast<unsigned long long>(args.sim_seed), (args.out_dir / "sim").c_str());
+  std::fflush(stdout);
+  SLAM_MMS_ASSIGN_OR_RETURN(sim::DriveSimulator simulator, sim::DriveSimulator::Create(so));
+  ProgressReporter progress("sim", static_cast<size_t>(simulator.num_scans()), tty);
+  SLAM_MMS_ASSIGN_OR_RETURN(
+      const sim::DriveSimulator::Summary summary,
+      simulator.Run(
+          args.out_dir / "sim", [&](int done, int) { progress.Update(done); }, &g_stop));
+  *stopped = summary.stopped;
+  char note[160];
+  std::snprintf(note, sizeof(note), "(%.0f m, %.1f s simulated)", summary.path_length_m,
+                summary.simulated_seconds);
+  progress.Finish(static_cast<size_t>(summary.num_scans), note);
+  return summary.drive_dir;
+}
+
+// Regular files under `dir`, relative to it (report.json's "outputs").
+std::vector<std::string> OutputFiles(const fs::path& dir) {
+  std::vector<std::string> files;
+  std::error_code ec;
+  for (fs::recursive_directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    std::error_code e2;
+    if (it->is_regular_file(e2)) files.push_back(fs::relative(it->path(), dir, e2).string());
+  }
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+// DriveRun::skipped_scans entries are "<source>: <reason>".
+eval::SkippedScan SplitSkippedScan(const std::string& entry) {
+  const size_t colon = entry.find(": ");
+  if (colon == std::string::npos) return {entry, ""};
+  eval::SkippedScan s{entry.substr(0, colon), entry.substr(colon + 2)};
+  // Reader messages often start with the file again.
+  if (s.reason.rfind(s.source + ": ", 0) == 0) s.reason = s.reason.substr(s.source.size() + 2);
+  return s;
+}
+
+bool SameOrigin(const GeodeticPoint& a, const GeodeticPoint& b) {
+  return a.latitude_deg == b.latitude_deg && a.longitude_deg == b.longitude_deg &&
+         a.height_m == b.height_m;
+}
+
+}  // namespace
+
+int RunMain(int argc, const char* const* argv) {
+  const LogSinkGuard log_sink;
+  SetMinLogLevel(LogLevel::kWarning);
+  StatusOr<RunArgs> parsed = ParseRunArgs(argc, argv);
+  if (!parsed.ok()) return Fail(parsed.status(), kExitUsage);
+  const RunArgs& args = *parsed;
+  SetMinLogLevel(args.log_level);
+  if (args.help) {
+    std::fputs(RunUsage().c_str(), stdout);
+    return 0;
+  }
+  if (args.version) {
+    std::printf("%s\n", RunVersion().c_str());
+    return 0;
+  }
+  // The app's defaults: finished submaps' clouds go to a private folder inside --out (removed at
+  // the end, also after a signal), so memory stays flat on long drives. In a config file
+  // `localizer.spill_dir: "<out>"` (what --dump-config writes) means that folder, `~` keeps them
+  // in memory, any other path is used as given.
+  MappingSystem::Options options;
+  options.localizer.spill_dir = kSpillToOutDir;
+  if (args.list_config_keys) {
+    std::fputs(OptionsToYaml(options).c_str(), stdout);
+    return 0;
+  }
+  const bool tty = StdoutIsTerminal();
+
+  // The config file, then the output options, checked before any work.
+  if (!args.config.empty()) {
+    const Status s = ApplyConfigFile(args.config, &options);
+    if (!s.ok()) return Fail(s, kExitUsage);
+  }
+  if (!args.dump_config.empty()) {
+    const Status s = WriteConfigFile(options, args.dump_config);
+    if (!s.ok()) return Fail(s, kExitUsage);
+    std::printf("options written to %s (--config reads it back)\n", args.dump_config.c_str());
+    return 0;
+  }
+  const std::string options_json = OptionsToJson(options);
+  if (options.localizer.spill_dir == kSpillToOutDir) options.localizer.spill_dir = args.out_dir;
+  GeoOutputOptions geo;
+  geo.crs = args.crs;
+  geo.las_tile_size_m = args.las_tile_size_m;
+  {
+    const Status s = CheckGeoOutputOptions(geo);
+    if (!s.ok()) return Fail(s, kExitUsage);
+    const Status writable = CheckOutputDir(args.out_dir);
+    if (!writable.ok()) return Fail(writable, kExitUsage);
+  }
+  const StopHandlers stop_handlers;
+  std::vector<std::string> warnings;  // also in report.json and report.html
+  auto warn = [&warnings](const std::string& text) {
+    ProgressReporter::BreakLine();
+    std::fprintf(stderr, "slam_mms_run: warning: %s\n", text.c_str());
+    warnings.push_back(text);
+  };
+
+  // The drive.
+  fs::path drive_dir = InputPath(args);
+  const bool simulated_input = drive_dir.empty();
+  const fs::path sim_dir = args.out_dir / "sim";
+  // The simulated drive is ~2 MB a scan: removed at the end unless --keep-sim.
+  auto remove_sim = [&]() {
+    if (!simulated_input || args.keep_sim) return;
+    const auto [bytes, files] = DiskUse(sim_dir);
+    std::error_code ec;
+    fs::remove_all(sim_dir, ec);
+    if (ec) {
+      warn("cannot remove the simulated drive " + sim_dir.string() + ": " + ec.message());
+    } else {
+      std::printf("[sim] removed the simulated drive (%zu files, %.0f MB; --keep-sim keeps it)\n",
+                  files, static_cast<double>(bytes) / 1e6);
+    }
+  };
+  if (simulated_input) {
+    bool sim_stopped = false;
+    StatusOr<fs::path> simulated = SimulateDefaultDrive(args, tty, &sim_stopped);
+    if (!simulated.ok()) return Fail(simulated.status(), kExitError);
+    if (sim_stopped) {
+      ProgressReporter::BreakLine();
+      std::fprintf(stderr, "slam_mms_run: %s during the simulation: nothing processed\n",
+                   StopSignalName());
+      remove_sim();
+      return StopExitCode();
+    }
+    drive_dir = *simulated;
+  }
+  StatusOr<std::unique_ptr<DriveReader>> opened = OpenRunInput(args, drive_dir);
+  if (!opened.ok()) return Fail(opened.status(), kExitError);
+  const DriveReader& reader = **opened;
+  if (reader.NumScans() == 0) {
+    return Fail(OutOfRangeError(reader.Describe() + ": no scan in the frame range"), kExitError);
+  }
+  options.T_body_lidar = reader.streams().T_body_lidar;
+  if (reader.streams().t_body_antenna_m) {
+    options.ins.gnss.t_body_antenna = *reader.streams().t_body_antenna_m;
+  }
+  options.gnss_outages = args.gnss_outages;
+  const Status valid = options.Validate();
+  if (!valid.ok()) return Fail(valid, kExitUsage);
+
+  // Ground truth: <gt_dir>/ground_truth/ (simulated drives, also converted to a folder or bag),
+  // else the OXTS poses of a KITTI raw drive.
+  const fs::path gt_dir = GroundTruthDir(args, drive_dir);
+  const bool sim_gt = eval::HasSimulatorGroundTruth(gt_dir);
+  const bool kitti_input = dynamic_cast<const KittiDriveReader*>(&reader) != nullptr;
+  const std::string gt_kind = sim_gt ? "simulator" : kitti_input ? "oxts" : "none";
+  const Timestamp first_scan = reader.ScanStart(0);
+  const double duration_s = reader.ScanEnd(reader.NumScans() - 1).SecondsSince(first_scan);
+  const DriveStreams& streams = reader.streams();
+  std::printf(
+      "[input] %s: %zu scans, %.1f s, IMU %zu samples, GNSS %zu fixes%s, ground truth: %s\n",
+      reader.Describe().c_str(), reader.NumScans(), duration_s, streams.imu.size(),
+      streams.gnss.size(),
+      streams.pos.empty()
+          ? ""
+          : (", external POS " + std::to_string(streams.pos.size()) + " records").c_str(),
+      gt_kind.c_str());
+  for (const auto& [start, duration] : args.gnss_outages) {
+    std::printf("[input] GNSS outage %.1f s .. %.1f s after the first scan\n", start,
+                start + duration);
+    char text[256];
+    if (start >= duration_s) {
+      std::snprintf(text, sizeof(text),
+                    "--gnss-outage %g:%g starts after the drive's last scan (%.1f s): it removes "
+                    "no GNSS fix",
+                    start, duration, duration_s);
+      warn(text);
+    } else if (start + duration > duration_s) {
+      std::snprintf(text, sizeof(text),
+                    "--gnss-outage %g:%g ends after the drive's last scan (%.1f s): the outage is "
+                    "%.1f s long, not %g s",
+                    start, duration, duration_s, duration_s - start, duration);
+      warn(text);
+    }
+  }
+  std::fflush(stdout);
+
+  // The methods, each with its own MappingSystem; files written as soon as a method ends.
+  std::vector<ModeRun> runs;
+  Status fatal;
+  for (const MappingMode mode : args.modes) {
+    if (g_stop.load()) break;
+    ModeRun run = RunMode(mode, options, reader, args.pos, tty, &g_stop);
+    Status written = WriteMethodFiles(run, args.out_dir);
+    if (run.origin && !geo.run_origin) {
+      // georef.json: the world frame of the first method that has an origin.
+      geo.run_origin = run.origin;
+      const Status g = WriteRunGeoref(*run.origin, geo, args.out_dir);
+      if (written.ok() && !g.ok()) written = g;
+    }
+    const Status geo_written = WriteGeoOutputs(run, geo, args.out_dir, run.map_stamps);
+    if (written.ok() && !geo_written.ok()) written = geo_written;
+    if (!run.status.ok()) fatal = run.status;
+    if (fatal.ok() && !written.ok()) fatal = written;
+    runs.push_back(std::move(run));
+    if (!fatal.ok()) break;  // stop the run; evaluate and report what exists
+  }
+  const bool stopped = g_stop.load();
+  if (stopped) {
+    warn(std::string(StopSignalName()) + ": the run was stopped after " +
+         std::to_string(runs.empty() ? 0 : runs.back().scans_processed) + " of " +
+         std::to_string(reader.NumScans()) + " scans of " +
+         (runs.empty() ? std::string("the first method") : runs.back().name) +
+         "; the outputs hold what was computed so far (report.json \"complete\": false)");
+  }
+
+  // Ground truth in each run's world frame (one load per distinct origin).
+  std::optional<GeodeticPoint> any_origin;
+  for (const ModeRun& r : runs) {
+    if (r.origin && !any_origin) any_origin = r.origin;
+  }
+  std::vector<std::pair<GeodeticPoint, eval::GroundTruth>> gts;
+  std::vector<const eval::GroundTruth*> gt_of_run(runs.size(), nullptr);
+  for (size_t i = 0; i < runs.size(); ++i) {
+    std::optional<GeodeticPoint> origin = runs[i].origin ? runs[i].origin : any_origin;
+    if (!origin) {
+      SLAM_MMS_LOG(kWarning) << runs[i].name << ": world origin unknown, no metrics";
+      continue;
+    }
+    bool found = false;
+    for (const auto& [o, gt] : gts) found = found || SameOrigin(o, *origin);
+    if (!found) {
+      StatusOr<eval::GroundTruth> gt = eval::LoadGroundTruth(gt_dir, reader, *origin);
+      if (!gt.ok()) {
+        if (gt.status().code() == StatusCode::kNotFound && gt_kind == "none") break;
+        SLAM_MMS_LOG(kError) << "ground truth: " << gt.status().ToString();
+        if (fatal.ok()) fatal = gt.status();
+        continue;
+      }
+      gts.emplace_back(*origin, std::move(gt).value());
+      // The ground truth in the run's world frame, so that slam_mms_eval can compare any output
+      // (e.g. <method>_level1.tum) with it.
+      const std::string name = gts.size() == 1
+                                   ? "ground_truth.tum"
+                                   : "ground_truth_" + std::to_string(gts.size()) + ".tum";
+      const Status written =
+          WriteTrajectoryTum(gts.back().second.T_world_body, args.out_dir / name);
+      if (!written.ok()) {
+        SLAM_MMS_LOG(kWarning) << written.ToString();
+      }
+    }
+  }
+  for (size_t i = 0; i < runs.size(); ++i) {
+    const std::optional<GeodeticPoint> origin = runs[i].origin ? runs[i].origin : any_origin;
+    for (const auto& [o, gt] : gts) {
+      if (origin && SameOrigin(o, *origin)) gt_of_run[i] = &gt;
+    }
+  }
+
+  // Outage windows are relative to the first scan the systems were given (scan 0 unless it was
+  // unreadable).
+  Timestamp reference = first_scan;
+  for (const ModeRun& r : runs) {
+    if (r.first_scan_start) {
+      reference = *r.first_scan_start;
+      break;
+    }
+  }
+  std::printf("[eval] metrics and map entropy ...\n");
+  std::fflush(stdout);
+  std::vector<eval::OutageWindow> windows;
+  for (const auto& [start, duration] : args.gnss_outages) windows.push_back({start, duration});
+  std::vector<MethodEvaluation> evals;
+  for (size_t i = 0; i < runs.size(); ++i) {
+    evals.push_back(EvaluateMethod(runs[i], gt_of_run[i], windows, reference, options.num_threads));
+  }
+  std::optional<double> gt_map_mme;
+  if (!gts.empty() && !gts.front().second.scene_map.empty()) {
+    StatusOr<MapCloud> scene = ReadPly(gts.front().second.scene_map);
+    if (scene.ok()) {
+      eval::MapEntropyOptions mo;
+      mo.num_threads = options.num_threads;
+      StatusOr<eval::MapEntropyResult> e = eval::ComputeMapEntropy(scene->cloud, mo);
+      if (e.ok() && std::isfinite(e->mean_map_entropy)) gt_map_mme = e->mean_map_entropy;
+    } else {
+      SLAM_MMS_LOG(kWarning) << "ground-truth map: " << scene.status().ToString();
+    }
+  }
+
+  // report.json (exact schema), plots, summary.
+  eval::EvalReport report;
+  report.input.drive = drive_dir.string();
+  for (const ModeRun& r : runs) {
+    report.input.scans =
+        std::max<int64_t>(report.input.scans, static_cast<int64_t>(r.scans_processed));
+  }
+  report.input.duration_s = duration_s;
+  report.input.ground_truth = gts.empty() ? gt_kind : gts.front().second.kind;
+  report.input.kind = simulated_input        ? "simulated"
+                      : !args.folder.empty() ? "folder"
+                      : !args.rosbag.empty() ? "rosbag"
+                                             : "kitti_raw";
+  report.input.scans_total = static_cast<int64_t>(reader.NumScans());
+  // The skipped scans are the reader's, the same for every method: the first run's list.
+  if (!runs.empty()) {
+    for (const std::string& entry : runs.front().skipped_scans) {
+      report.input.skipped_scans.push_back(SplitSkippedScan(entry));
+    }
+  }
+  report.command_line = args.command_line;
+  report.options_json = options_json;
+  if (geo.run_origin) {
+    StatusOr<std::string> georef = RunGeorefJson(*geo.run_origin, geo);
+    if (georef.ok()) {
+      report.georef_json = *georef;
+    } else {
+      SLAM_MMS_LOG(kWarning) << "georef: " << georef.status().ToString();
+    }
+  }
+  report.complete =
+      !stopped && fatal.ok() && !runs.empty() && runs.size() == args.modes.size() &&
+      std::all_of(runs.begin(), runs.end(), [](const ModeRun& r) { return r.complete; });
+  report.warnings = warnings;
+  report.gnss_outages = windows;
+  for (const MethodEvaluation& e : evals) report.methods.emplace_back(e.name, e.report);
+  report.ground_truth_map_mme = gt_map_mme;
+  WritePlots(runs, evals, gts.empty() ? nullptr : &gts.front().second, windows, reference,
+             args.out_dir);
+  const std::string table = SummaryTable(evals, gt_map_mme, report.input.ground_truth);
+  std::ofstream(args.out_dir / "summary.txt") << table;
+  ProgressReporter::BreakLine();
+  std::printf("\n%s", table.c_str());
+  remove_sim();
+  // report.json lists every file of the run (itself and report.html included), then report.html
+  // is written last: it embeds the plots and describes the files.
+  report.outputs = OutputFiles(args.out_dir);
+  for (const char* name : {"report.json", "report.html"}) {
+    if (std::find(report.outputs.begin(), report.outputs.end(), name) == report.outputs.end()) {
+      report.outputs.push_back(name);
+    }
+  }
+  std::sort(report.outputs.begin(), report.outputs.end());
+  const Status report_written = eval::WriteReportJson(report, args.out_dir / "report.json");
+  if (!report_written.ok()) {
+    SLAM_MMS_LOG(kError) << report_written.ToString();
+    if (fatal.ok()) fatal = report_written;
+  }
+  const Status html_written = WriteReportHtml(report, runs, evals, warnings, args.out_dir);
+  if (!html_written.ok()) {
+    SLAM_MMS_LOG(kError) << html_written.ToString();
+    if (fatal.ok()) fatal = html_written;
+  }
+  const auto [out_bytes, out_files] = DiskUse(args.out_dir);
+  std::printf("outputs in %s (%zu files, %.0f MB)\n", args.out_dir.c_str(), out_files,
+              static_cast<double>(out_bytes) / 1e6);
+  std::fflush(stdout);
+  if (!fatal.ok()) return Fail(fatal, kExitError);
+  if (stopped) return StopExitCode();
+  return 0;
+}
+
+}  // namespace slam_mms::app

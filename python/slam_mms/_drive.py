@@ -131,6 +131,21 @@ def _ground_truth_dir(path: pathlib.Path) -> pathlib.Path:
     return path.parent if path.is_file() else path
 
 
+# report.json's input.kind of each reader type (as slam_mms_run's, for a drive it did not simulate).
+_READER_KINDS = {"KittiRawReader": "kitti_raw", "FolderDriveReader": "folder",
+                 "RosbagDriveReader": "rosbag"}
+
+
+def _split_skipped(entry: str) -> Tuple[str, str]:
+    """DriveRun.skipped_scans' "<source>: <reason>" as (source, reason), as slam_mms_run splits it."""
+    source, sep, reason = entry.partition(": ")
+    if not sep:
+        return entry, ""
+    if reason.startswith(source + ": "):
+        reason = reason[len(source) + 2:]
+    return source, reason
+
+
 def _evaluate(result: DriveResult, drive: pathlib.Path, gnss_outages, num_threads: int,
               ground_truth_map: bool) -> dict:
     """slam_mms_run's evaluation of one method (examples/apps/slam_mms_run/outputs.cpp,
@@ -195,7 +210,9 @@ def _evaluate(result: DriveResult, drive: pathlib.Path, gnss_outages, num_thread
     text = _C.report_to_json(
         str(drive), run.scans_processed, duration_s, gt_kind or "none",
         [(float(s), float(d)) for s, d in gnss_outages],
-        [(_C.mapping_mode_name(run.mode), method)], gt_map_mme)
+        [(_C.mapping_mode_name(run.mode), method)], gt_map_mme,
+        kind=_READER_KINDS.get(type(reader).__name__, ""), scans_total=len(reader),
+        skipped_scans=[_split_skipped(s) for s in run.skipped_scans], complete=run.complete)
     result.extra["method_report"] = method
     result.extra["ground_truth_kind"] = gt_kind or "none"
     result.extra["ground_truth_map_mme"] = gt_map_mme

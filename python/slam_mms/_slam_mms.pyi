@@ -2133,6 +2133,9 @@ def read_ply(path: os.PathLike[str]) -> numpy.ndarray:
 def report_to_json(drive: str, scans: int, duration_s: float, ground_truth: str, gnss_outages: List[Tuple[float, float]], methods: List[Tuple[str, MethodReport]], ground_truth_map_mme: Optional[float] = None, *, kind: str = '', scans_total: int = -1, skipped_scans: List[Tuple[str, str]] = [], command_line: List[str] = [], options_json: str = '', georef_json: str = '', complete: bool = True, outputs: List[str] = []) -> str:
     """report.json text by the C++ writer (the schema of eval/report.hpp): kind (kitti_raw|folder|rosbag|simulated, '' = null), scans_total (< 0 = null), skipped_scans [(source, reason)], command_line, options_json / georef_json (JSON object texts, '' = null), complete, outputs (file names)."""
 
+def run_app(argv: List[str]) -> int:
+    """Runs slam_mms_run with argv (argv[0] the program name) in this process; returns its exit status (0 done, 1 input or processing error, 2 bad command line or config, 130/143 stopped by SIGINT/SIGTERM). Progress goes to stdout, messages to stderr."""
+
 def set_min_log_level(level: LogLevel) -> None:
     """Messages below this level are not even formatted by the library (default INFO)."""
 

@@ -130,5 +130,6 @@ void RegisterMappingSystem(py::module_& m);  // mapping_system.cpp: MappingSyste
 void RegisterReaders(py::module_& m);        // readers.cpp: DriveReader and its adaptors
 void RegisterEval(py::module_& m);           // eval.cpp: ATE, relative error, entropy, report
 void RegisterSim(py::module_& m);            // sim.cpp: simulate_drive
+void RegisterApp(py::module_& m);            // app.cpp: slam_mms_run itself (run_app)
 
 }  // namespace slam_mms::python

@@ -67,15 +67,6 @@ class PyMappingSystem {
   PendingError pending_;
 };
 
-py::array_t<double> Vec3Rows(const std::vector<Eigen::Vector3d>& v) {
-  py::array_t<double> a({static_cast<py::ssize_t>(v.size()), py::ssize_t{3}});
-  auto r = a.mutable_unchecked<2>();
-  for (size_t i = 0; i < v.size(); ++i) {
-    for (int k = 0; k < 3; ++k) r(static_cast<py::ssize_t>(i), k) = v[i](k);
-  }
-  return a;
-}
-
 py::list AvailabilityList(const std::vector<GnssAvailabilityInterval>& intervals) {
   py::list out;
   for (const auto& i : intervals) {

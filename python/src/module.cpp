@@ -13,4 +13,5 @@ PYBIND11_MODULE(_slam_mms, m) {
   RegisterMappingSystem(m);
   RegisterEval(m);
   RegisterSim(m);
+  RegisterApp(m);
 }

@@ -96,7 +96,7 @@ def _python_env():
 # Files whose bytes depend on the run's timing or on threads: per-scan stage times, scans/s and
 # peak RSS, and the covariances of full/lidar_only (their last bits vary from run to run of the
 # app itself; compared to 1e-9 relative).
-_TIMED = {"report.json", "summary.txt", "full_scans.csv", "gnss_ins_scans.csv",
+_TIMED = {"report.json", "report.html", "summary.txt", "full_scans.csv", "gnss_ins_scans.csv",
           "lidar_only_scans.csv", "full_cov.csv", "lidar_only_cov.csv", "gnss_ins_cov.csv"}
 
 

@@ -137,6 +137,8 @@ DriveRun RunDrive(const DriveReader& reader, const MappingSystem::Options& base_
   const size_t n_pos = pos.size(), n_scan = run.scans_total;
   size_t i_imu = 0, i_gnss = 0, i_pos = 0, i_scan = 0;
   bool stopped = false;
+  size_t results_seen = 0;  // for on_submap
+  int submaps_started = 0;
   while (status.ok() && (i_imu < n_imu || i_gnss < n_gnss || i_pos < n_pos || i_scan < n_scan)) {
     constexpr int64_t kNever = std::numeric_limits<int64_t>::max();
     const int64_t t_imu = i_imu < n_imu ? in.imu[i_imu].stamp.nanoseconds() : kNever;
@@ -191,6 +193,14 @@ DriveRun RunDrive(const DriveReader& reader, const MappingSystem::Options& base_
         }
         ++i_scan;
         if (callbacks.on_scan) callbacks.on_scan(i_scan, n_scan);
+        if (callbacks.on_submap) {
+          const std::vector<LocalizationResult>& results = system->results();
+          for (; results_seen < results.size(); ++results_seen) {
+            if (results[results_seen].new_submap && ++submaps_started > 1) {
+              callbacks.on_submap(*system, submaps_started - 1);
+            }
+          }
+        }
         break;
       }
     }

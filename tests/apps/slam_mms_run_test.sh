@@ -4,7 +4,8 @@
 # Cases: kitti_frames, truncated_bin, bad_oxts, bad_config, bad_cli, sim_all, folder_input,
 # rosbag_input (these two convert the real frames with slam_mms_convert, next to the app, and also
 # run slam_mms_bench_e2e on them where it is built), sigint, sigterm (a signal mid-run: partial
-# outputs, no spill folder, exit 130/143), unwritable_out, outage_outside.
+# outputs, no spill folder, exit 130/143), resume (a SIGKILLed run continued), unwritable_out,
+# outage_outside.
 # Conventions (issue 22): dump_config (--dump-config/--config round trip), app_conventions
 # (--version of every app, --opt=value forms, slam_mms_eval's JSON).
 # Exit 0 = pass, 77 = skipped (real KITTI data absent), anything else = fail (with a message).
@@ -269,6 +270,57 @@ case $case_name in
     else
       grep -q '"complete": *false' "$tmp/out/report.json" || fail "report lacks \"complete\": false"
     fi
+    ;;
+  resume)
+    # A run killed (SIGKILL) while lidar_only runs: full, gnss_ins and gnss_ins_smoothed finished
+    # and are checkpointed, lidar_only's trajectory so far was written at its first finished
+    # submap. --resume reads the three back (their files untouched), runs lidar_only again and
+    # completes; a different command line or no checkpoint is refused.
+    args=(--out "$tmp/out" --mode all --sim-duration 7 --gnss-outage 2:2 --checkpoint-every 1)
+    "$bin" "${args[@]}" >"$tmp/log1" 2>&1 &
+    pid=$!
+    # state METHOD: its state in the checkpoint's run.json ("" when absent).
+    state() {
+      python3 -c 'import json, sys
+try:
+    print(json.load(open(sys.argv[1]))["methods"].get(sys.argv[2], {}).get("state", ""))
+except (OSError, ValueError):
+    print("")' "$tmp/out/checkpoint/run.json" "$1"
+    }
+    for _ in $(seq 1 3000); do  # at most 300 s
+      [[ $(state lidar_only) == in_progress ]] && break
+      kill -0 $pid 2>/dev/null || break
+      sleep 0.1
+    done
+    kill -KILL $pid 2>/dev/null
+    wait $pid 2>/dev/null
+    [[ $(state lidar_only) == in_progress ]] ||
+      fail "lidar_only never checkpointed its progress: $(cat "$tmp/out/checkpoint/run.json"; tail -5 "$tmp/log1")"
+    for m in full gnss_ins gnss_ins_smoothed; do
+      [[ $(state $m) == complete ]] || fail "$m not checkpointed: $(cat "$tmp/out/checkpoint/run.json")"
+    done
+    [[ -s $tmp/out/lidar_only.tum ]] || fail "no partial lidar_only.tum after the kill"
+    [[ -e $tmp/out/report.json ]] && fail "a killed run wrote report.json"
+    cp "$tmp/out/full.tum" "$tmp/full_before.tum"
+    run "$tmp/log2" "${args[@]}" --gnss-outage 3:1 --resume
+    [[ $? == 2 ]] || fail "--resume of a different run: expected exit status 2"
+    grep -q "different run: gnss_outages" "$tmp/log2" || fail "mismatch message: $(cat "$tmp/log2")"
+    run "$tmp/log2" "${args[@]}" --resume || fail "--resume: exit status $?: $(tail -20 "$tmp/log2")"
+    for m in full gnss_ins gnss_ins_smoothed; do
+      grep -q "\[$m\] finished in the checkpointed run" "$tmp/log2" || fail "$m was run again"
+    done
+    grep -q "\[lidar_only\] done: 70/70" "$tmp/log2" || fail "lidar_only did not run to the end: $(cat "$tmp/log2")"
+    cmp "$tmp/full_before.tum" "$tmp/out/full.tum" || fail "--resume rewrote full.tum"
+    check_report "$tmp/out/report.json" full gnss_ins gnss_ins_smoothed lidar_only
+    if command -v jq >/dev/null; then
+      jq -e '.complete == true and ([.methods[] | .ate_rmse_m | type] == ["number","number","number","number"])' \
+        "$tmp/out/report.json" >/dev/null || fail "report after --resume: $(cat "$tmp/out/report.json")"
+    fi
+    [[ -e $tmp/out/checkpoint ]] && fail "the checkpoint of a completed run was left behind"
+    [[ -e $tmp/out/sim ]] && fail "the simulated drive was left behind"
+    run "$tmp/log3" "${args[@]}" --resume
+    [[ $? == 2 ]] || fail "--resume without a checkpoint: expected exit status 2"
+    grep -q "no checkpoint" "$tmp/log3" || fail "no-checkpoint message: $(cat "$tmp/log3")"
     ;;
   unwritable_out)
     # Found before any work, in well under a second (also as root: /proc refuses new files).

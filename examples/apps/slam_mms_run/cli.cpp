@@ -117,8 +117,11 @@ Options:
   --crs EPSG:nnnn         output CRS of the LAS maps and the <method>_<crs>.csv trajectories
                           (default: WGS 84 / UTM zone of the world origin).
   --las-tile-size M       split LAS maps into square tiles of M metres (default 0 = one file).
-  --resume                continue a killed run from the checkpoint in --out.
-  --checkpoint-every N    write a checkpoint every N finished submaps (default 10; 0 = never).
+  --resume                continue a killed run from DIR/checkpoint (same command line): its
+                          finished methods are read back, the rest run (a method that was running
+                          starts again from the first scan).
+  --checkpoint-every N    while a method runs, write its trajectory so far every N finished
+                          submaps (default 10; 0 = never); finished methods are always recorded.
   --sim-scenario NAME     the drive simulated without input data: demo (default: one city block
                           with four turns and a revisit, ~60 s), default (190 s) or long.
   --sim-duration S        seconds of that drive to simulate (default 0 = all of it).

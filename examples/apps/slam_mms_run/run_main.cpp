@@ -40,6 +40,7 @@
 #include "slam_mms/pipeline/mapping_system.hpp"
 #include "slam_mms/sim/drive_simulator.hpp"
 #include "slam_mms/version.hpp"
+#include "slam_mms_run/checkpoint.hpp"
 #include "slam_mms_run/cli.hpp"
 #include "slam_mms_run/config_file.hpp"
 #include "slam_mms_run/geo_outputs.hpp"
@@ -221,6 +222,58 @@ std::vector<std::string> OutputFiles(const fs::path& dir) {
   return files;
 }
 
+// The drive a killed run simulated into `sim_dir` (its ground_truth/scenario.json, the
+// simulator's last file, exists); empty when there is none.
+fs::path CompleteSimulatedDrive(const fs::path& sim_dir) {
+  std::error_code ec;
+  for (fs::directory_iterator date(sim_dir, ec), end; !ec && date != end; date.increment(ec)) {
+    std::error_code e2;
+    for (fs::directory_iterator d(date->path(), e2), end2; !e2 && d != end2; d.increment(e2)) {
+      std::error_code e3;
+      if (fs::exists(d->path() / "ground_truth" / "scenario.json", e3)) return d->path();
+    }
+  }
+  return {};
+}
+
+// What makes two runs the same run (checkpoint.hpp): each value a JSON text.
+RunFingerprint MakeFingerprint(const RunArgs& args, const fs::path& input,
+                               const std::string& options_json) {
+  auto quote = [](const std::string& s) {
+    std::string q = "\"";
+    for (const char c : s) {
+      if (c == '"' || c == '\\') q += '\\';
+      q += c;
+    }
+    return q + "\"";
+  };
+  RunFingerprint f;
+  std::error_code ec;
+  f["input"] = input.empty() ? quote("simulated") : quote(fs::absolute(input, ec).string());
+  f["frames"] =
+      "[" + std::to_string(args.first_frame) + ", " + std::to_string(args.last_frame) + "]";
+  f["topics"] = "[" + quote(args.lidar_topic) + ", " + quote(args.imu_topic) + ", " +
+                quote(args.gnss_topic) + "]";
+  f["extrinsics"] = quote(args.extrinsics.string());
+  f["options"] = options_json;
+  std::string outages = "[";
+  for (const auto& [start, duration] : args.gnss_outages) {
+    char w[80];
+    std::snprintf(w, sizeof(w), "%s[%.17g, %.17g]", outages.size() > 1 ? ", " : "", start,
+                  duration);
+    outages += w;
+  }
+  f["gnss_outages"] = outages + "]";
+  f["pos"] = quote(PosWorkflowName(args.pos));
+  if (input.empty()) {
+    char sim[160];
+    std::snprintf(sim, sizeof(sim), "[%s, %llu, %.17g]", quote(args.sim_scenario).c_str(),
+                  static_cast<unsigned long long>(args.sim_seed), args.sim_duration_s);
+    f["sim"] = sim;
+  }
+  return f;
+}
+
 // DriveRun::skipped_scans entries are "<source>: <reason>".
 eval::SkippedScan SplitSkippedScan(const std::string& entry) {
   const size_t colon = entry.find(": ");
@@ -312,7 +365,13 @@ int RunMain(int argc, const char* const* argv) {
                   files, static_cast<double>(bytes) / 1e6);
     }
   };
-  if (simulated_input) {
+  if (simulated_input && args.resume) {
+    // A killed run leaves its simulated drive; scenario.json is the simulator's last file.
+    drive_dir = CompleteSimulatedDrive(sim_dir);
+    if (!drive_dir.empty())
+      std::printf("[sim] --resume: the simulated drive in %s\n", drive_dir.c_str());
+  }
+  if (simulated_input && drive_dir.empty()) {
     bool sim_stopped = false;
     StatusOr<fs::path> simulated = SimulateDefaultDrive(args, tty, &sim_stopped);
     if (!simulated.ok()) return Fail(simulated.status(), kExitError);
@@ -338,6 +397,15 @@ int RunMain(int argc, const char* const* argv) {
   options.gnss_outages = args.gnss_outages;
   const Status valid = options.Validate();
   if (!valid.ok()) return Fail(valid, kExitUsage);
+
+  // The checkpoint (checkpoint.hpp): a fresh one, or the killed run's with --resume.
+  const RunFingerprint fingerprint =
+      MakeFingerprint(args, simulated_input ? fs::path() : drive_dir, options_json);
+  StatusOr<Checkpoint> checkpoint = args.resume ? Checkpoint::Resume(args.out_dir, fingerprint)
+                                                : Checkpoint::Start(args.out_dir, fingerprint);
+  if (!checkpoint.ok()) {
+    return Fail(checkpoint.status(), args.resume ? kExitUsage : kExitError);
+  }
 
   // Ground truth: <gt_dir>/ground_truth/ (simulated drives, also converted to a folder or bag),
   // else the OXTS poses of a KITTI raw drive.
@@ -381,7 +449,27 @@ int RunMain(int argc, const char* const* argv) {
   Status fatal;
   for (const MappingMode mode : args.modes) {
     if (g_stop.load()) break;
-    ModeRun run = RunMode(mode, options, reader, args.pos, tty, &g_stop);
+    const std::string name = MappingModeName(mode);
+    if (args.resume && checkpoint->HasFinished(name)) {
+      // Finished before the run was killed: its files are in --out; read it back for the report.
+      StatusOr<ModeRun> loaded = checkpoint->LoadFinished(name);
+      if (!loaded.ok()) return Fail(loaded.status(), kExitError);
+      std::printf("[%s] finished in the checkpointed run: %zu poses read back\n", name.c_str(),
+                  loaded->trajectory.size());
+      if (loaded->origin && !geo.run_origin) geo.run_origin = loaded->origin;
+      runs.push_back(std::move(loaded).value());
+      continue;
+    }
+    // Every --checkpoint-every finished submaps: the trajectory so far and the progress.
+    auto on_submap = [&](const MappingSystem& system, int submaps) {
+      if (args.checkpoint_every_submaps <= 0 || submaps % args.checkpoint_every_submaps != 0) {
+        return;
+      }
+      Status s = WriteTrajectoryTum(system.FinalTrajectory(), args.out_dir / (name + ".tum"));
+      if (s.ok()) s = checkpoint->SaveProgress(name, system.results().size(), submaps);
+      if (!s.ok()) SLAM_MMS_LOG(kWarning) << "checkpoint: " << s.ToString();
+    };
+    ModeRun run = RunMode(mode, options, reader, args.pos, tty, &g_stop, on_submap);
     Status written = WriteMethodFiles(run, args.out_dir);
     if (run.origin && !geo.run_origin) {
       // georef.json: the world frame of the first method that has an origin.
@@ -393,6 +481,10 @@ int RunMain(int argc, const char* const* argv) {
     if (written.ok() && !geo_written.ok()) written = geo_written;
     if (!run.status.ok()) fatal = run.status;
     if (fatal.ok() && !written.ok()) fatal = written;
+    if (run.complete && written.ok()) {
+      const Status c = checkpoint->SaveFinished(run);
+      if (!c.ok()) warn("checkpoint: " + c.message() + " (--resume would run " + name + " again)");
+    }
     runs.push_back(std::move(run));
     if (!fatal.ok()) break;  // stop the run; evaluate and report what exists
   }
@@ -524,6 +616,12 @@ int RunMain(int argc, const char* const* argv) {
   remove_sim();
   // report.json lists every file of the run (itself and report.html included), then report.html
   // is written last: it embeds the plots and describes the files.
+  if (report.complete) {
+    checkpoint->Remove();  // nothing to resume
+  } else {
+    std::printf("[checkpoint] %s: `--resume` with the same command line continues this run\n",
+                checkpoint->dir().c_str());
+  }
   report.outputs = OutputFiles(args.out_dir);
   for (const char* name : {"report.json", "report.html"}) {
     if (std::find(report.outputs.begin(), report.outputs.end(), name) == report.outputs.end()) {

@@ -20,8 +20,8 @@ bool ResetPeakRss() {
 }
 
 ModeRun RunMode(MappingMode mode, const MappingSystem::Options& base_options,
-                const DriveReader& reader, PosWorkflow pos, bool tty,
-                const std::atomic<bool>* stop) {
+                const DriveReader& reader, PosWorkflow pos, bool tty, const std::atomic<bool>* stop,
+                std::function<void(const MappingSystem&, int)> on_submap) {
   ModeRun run;
   run.mode = mode;
   run.name = MappingModeName(mode);
@@ -34,6 +34,7 @@ ModeRun RunMode(MappingMode mode, const MappingSystem::Options& base_options,
   DriveRunCallbacks callbacks;
   callbacks.on_scan = [&](size_t fed, size_t) { progress.Update(fed); };
   callbacks.stop = stop;
+  callbacks.on_submap = std::move(on_submap);
   DriveRunOptions run_options;
   run_options.pos = pos;
   DriveRun d = RunDrive(reader, options, callbacks, run_options);

@@ -85,6 +85,9 @@ struct DriveRunCallbacks {
   std::function<void(size_t fed, size_t total)> on_scan;
   /// Polled before every scan; true ends the run cleanly (see the file comment).
   const std::atomic<bool>* stop = nullptr;
+  /// Each time level 1 starts a new submap (so one more is finished), with the system (e.g. to
+  /// write its FinalTrajectory() so far) and the submaps finished so far; may be empty.
+  std::function<void(const MappingSystem& system, int submaps_finished)> on_submap;
 };
 
 /// Runs `options.mode` over `reader`. options.T_body_lidar is used as given (set it from

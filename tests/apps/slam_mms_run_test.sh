@@ -364,6 +364,19 @@ except (OSError, ValueError):
              .methods.full.ate_rmse_m < 1.0 and .methods.gnss_ins.ate_rmse_m < 1.0' \
         "$tmp/out/report.json" >/dev/null || fail "sim metrics: $(cat "$tmp/out/report.json")"
     fi
+    # report.html: self-contained, every image a PNG that decodes, every listed file exists.
+    python3 - "$tmp/out" <<'PY' || fail "report.html check failed"
+import base64, pathlib, re, sys
+out = pathlib.Path(sys.argv[1])
+html = (out / "report.html").read_text()
+imgs = re.findall(r'<img[^>]*src="data:image/png;base64,([^"]+)"', html)
+assert len(imgs) >= 4, f"{len(imgs)} embedded images"
+for b in imgs:
+    assert base64.b64decode(b)[:8] == b"\x89PNG\r\n\x1a\n", "an image is not a PNG"
+assert not re.search(r'src="(?!data:)', html), "an image refers to a file"
+for name in ("full.tum", "map_full.las", "georef.json", "full_wgs84.csv"):
+    assert name in html and (out / name).is_file(), name
+PY
     # times.txt beside every .kitti: slam_mms_eval takes the .kitti alone and finds the same
     # stamps and poses as from the .tum.
     for m in full gnss_ins gnss_ins_smoothed lidar_only; do

@@ -20,15 +20,6 @@ namespace {
 
 constexpr double kRadToDeg = 180.0 / M_PI;
 
-Status WriteText(const fs::path& file, const std::string& text) {
-  std::ofstream out(file, std::ios::binary | std::ios::trunc);
-  if (!out) return UnavailableError("cannot create " + file.string());
-  out.write(text.data(), static_cast<std::streamsize>(text.size()));
-  out.close();
-  if (!out) return UnavailableError("cannot write " + file.string());
-  return OkStatus();
-}
-
 std::string Header(const io_internal::CsvSchema& schema, size_t num_optional) {
   std::vector<std::string> names = schema.required;
   names.insert(names.end(), schema.optional.begin(),
@@ -72,12 +63,12 @@ Status WriteScans(const DriveReader& reader, const fs::path& dir, const FolderWr
     if (!scan.ok()) return scan.status().WithContext("WriteDriveFolder: " + reader.ScanSource(i));
     char name[40];
     std::snprintf(name, sizeof(name), "%010zu%s", i, Extension(o.scan_format));
-    SLAM_MMS_RETURN_IF_ERROR(
-        WriteText(scans_dir / name,
-                  io_internal::FormatScanFile(scan->cloud, kind, ascii, o.write_point_time)));
+    SLAM_MMS_RETURN_IF_ERROR(io_internal::WriteFileBytes(
+        scans_dir / name,
+        io_internal::FormatScanFile(scan->cloud, kind, ascii, o.write_point_time)));
     csv += CsvLine({name, Ns(reader.ScanStart(i)), Ns(reader.ScanEnd(i))});
   }
-  return WriteText(dir / "scans.csv", csv);
+  return io_internal::WriteFileBytes(dir / "scans.csv", csv);
 }
 
 Status WriteStreams(const DriveStreams& s, const fs::path& dir, const FolderWriteOptions& o) {
@@ -87,7 +78,7 @@ Status WriteStreams(const DriveStreams& s, const fs::path& dir, const FolderWrit
                     FormatDouble(m.accel_mps2.z()), FormatDouble(m.gyro_radps.x()),
                     FormatDouble(m.gyro_radps.y()), FormatDouble(m.gyro_radps.z())});
   }
-  SLAM_MMS_RETURN_IF_ERROR(WriteText(dir / "imu.csv", imu));
+  SLAM_MMS_RETURN_IF_ERROR(io_internal::WriteFileBytes(dir / "imu.csv", imu));
 
   if (!s.gnss.empty() && o.gnss_format == FolderWriteOptions::GnssFormat::kCsv) {
     std::string gnss = Header(io_internal::GnssCsvSchema(), 1);
@@ -97,11 +88,11 @@ Status WriteStreams(const DriveStreams& s, const fs::path& dir, const FolderWrit
                        FormatDouble(f.height_m), h, h, FormatDouble(f.sigma_vertical_m),
                        io_internal::GnssFixCsvName(f.type), std::to_string(f.num_satellites)});
     }
-    SLAM_MMS_RETURN_IF_ERROR(WriteText(dir / "gnss.csv", gnss));
+    SLAM_MMS_RETURN_IF_ERROR(io_internal::WriteFileBytes(dir / "gnss.csv", gnss));
   } else if (!s.gnss.empty()) {
     std::string nmea;
     for (const GnssFix& f : s.gnss) nmea += io_internal::FormatNmeaEpoch(f, o.nmea_time_decimals);
-    SLAM_MMS_RETURN_IF_ERROR(WriteText(dir / "gnss.nmea", nmea));
+    SLAM_MMS_RETURN_IF_ERROR(io_internal::WriteFileBytes(dir / "gnss.nmea", nmea));
   }
 
   DriveExtrinsics e;
@@ -118,7 +109,7 @@ Status WriteStreams(const DriveStreams& s, const fs::path& dir, const FolderWrit
         CsvLine({Ns(x.stamp), FormatDouble(rpy[0]), FormatDouble(rpy[1]), FormatDouble(rpy[2]),
                  FormatDouble(x.v_world_mps.x()), FormatDouble(x.v_world_mps.y()),
                  FormatDouble(x.v_world_mps.z())});
-    SLAM_MMS_RETURN_IF_ERROR(WriteText(dir / "initial_state.csv", text));
+    SLAM_MMS_RETURN_IF_ERROR(io_internal::WriteFileBytes(dir / "initial_state.csv", text));
   }
 
   if (!s.pos.empty()) {
@@ -151,7 +142,7 @@ Status WriteStreams(const DriveStreams& s, const fs::path& dir, const FolderWrit
       }
       text += CsvLine(row);
     }
-    SLAM_MMS_RETURN_IF_ERROR(WriteText(dir / "pos.csv", text));
+    SLAM_MMS_RETURN_IF_ERROR(io_internal::WriteFileBytes(dir / "pos.csv", text));
   }
   return OkStatus();
 }

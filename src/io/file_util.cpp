@@ -11,6 +11,15 @@
 
 namespace slam_mms::io_internal {
 
+Status WriteFileBytes(const std::filesystem::path& file, std::string_view bytes) {
+  std::ofstream out(file, std::ios::binary | std::ios::trunc);
+  if (!out) return UnavailableError("cannot create " + file.string());
+  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  out.close();
+  if (!out) return UnavailableError("cannot write " + file.string());
+  return OkStatus();
+}
+
 StatusOr<std::string> ReadFileBytes(const std::filesystem::path& file) {
   // An ifstream opens a folder on Linux and reports an absurd size: say what it is instead.
   std::error_code ec;

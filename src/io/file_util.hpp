@@ -21,6 +21,10 @@ std::vector<std::string> SplitLines(std::string_view bytes);
 /// Whole file contents as bytes.
 StatusOr<std::string> ReadFileBytes(const std::filesystem::path& file);
 
+/// Writes `bytes` as the whole file (created or truncated); kUnavailable naming the file when it
+/// cannot be created or written.
+[[nodiscard]] Status WriteFileBytes(const std::filesystem::path& file, std::string_view bytes);
+
 /// True when the line has only whitespace.
 bool IsBlank(const std::string& line);
 

@@ -17,6 +17,7 @@
 #include <optional>
 #include <utility>
 
+#include "io/file_util.hpp"
 #include "slam_mms/io/trajectory_io.hpp"
 
 namespace slam_mms {
@@ -449,12 +450,7 @@ StatusOr<std::string> GeoReferenceJson(const GeoReference& geo) {
 
 Status WriteGeorefJson(const GeoReference& geo, const fs::path& file) {
   SLAM_MMS_ASSIGN_OR_RETURN(const std::string text, GeoReferenceJson(geo));
-  std::ofstream out(file, std::ios::binary | std::ios::trunc);
-  if (!out) return UnavailableError("cannot create " + file.string());
-  out << text;
-  out.close();
-  if (!out) return UnavailableError("cannot write " + file.string());
-  return OkStatus();
+  return io_internal::WriteFileBytes(file, text);
 }
 
 // ---- trajectory CSVs ----
@@ -520,15 +516,6 @@ void AppendAttitudeAndSigmas(std::string* line, const Eigen::Vector3d& attitude_
   for (int k = 0; k < 3; ++k) *line += sigma_att_deg ? Fmt(",%.6g", (*sigma_att_deg)[k]) : ",";
 }
 
-Status WriteText(const fs::path& file, const std::string& text) {
-  std::ofstream out(file, std::ios::binary | std::ios::trunc);
-  if (!out) return UnavailableError("cannot create " + file.string());
-  out.write(text.data(), static_cast<std::streamsize>(text.size()));
-  out.close();
-  if (!out) return UnavailableError("cannot write " + file.string());
-  return OkStatus();
-}
-
 }  // namespace
 
 Status WriteTrajectoryWgs84Csv(const Trajectory& trajectory, const GeoReference& geo,
@@ -547,7 +534,7 @@ Status WriteTrajectoryWgs84Csv(const Trajectory& trajectory, const GeoReference&
     text += line;
     text += '\n';
   }
-  return WriteText(file, text);
+  return io_internal::WriteFileBytes(file, text);
 }
 
 Status WriteTrajectoryProjectedCsv(const Trajectory& trajectory, const GeoReference& geo,
@@ -581,7 +568,7 @@ Status WriteTrajectoryProjectedCsv(const Trajectory& trajectory, const GeoRefere
     text += line;
     text += '\n';
   }
-  return WriteText(file, text);
+  return io_internal::WriteFileBytes(file, text);
 }
 
 }  // namespace slam_mms

@@ -20,15 +20,6 @@ std::string NumberedName(size_t n, const char* ext) {
   return buf;
 }
 
-Status WriteTextFile(const fs::path& file, const std::string& text) {
-  std::ofstream out(file, std::ios::binary | std::ios::trunc);
-  if (!out) return UnavailableError("cannot create " + file.string());
-  out << text;
-  out.close();
-  if (!out) return DataLossError("cannot write " + file.string());
-  return OkStatus();
-}
-
 // One OXTS folder: data/%010d.txt + timestamps.txt.
 struct OxtsFolder {
   fs::path dir;
@@ -44,7 +35,7 @@ struct OxtsFolder {
       return UnavailableError("cannot create " + (dir / "data").string() + ": " + ec.message());
     stamps.open(dir / "timestamps.txt", std::ios::binary | std::ios::trunc);
     if (!stamps) return UnavailableError("cannot create " + (dir / "timestamps.txt").string());
-    return WriteTextFile(dir / "dataformat.txt", OxtsDataFormatText());
+    return io_internal::WriteFileBytes(dir / "dataformat.txt", OxtsDataFormatText());
   }
 
   Status Add(Timestamp stamp, const OxtsRecord& record, const char* what) {
@@ -59,8 +50,8 @@ struct OxtsFolder {
                                     " has a non-finite field");
       }
     }
-    SLAM_MMS_RETURN_IF_ERROR(
-        WriteTextFile(dir / "data" / NumberedName(count, ".txt"), FormatOxtsLine(record) + "\n"));
+    SLAM_MMS_RETURN_IF_ERROR(io_internal::WriteFileBytes(dir / "data" / NumberedName(count, ".txt"),
+                                                         FormatOxtsLine(record) + "\n"));
     stamps << stamp.ToKittiString() << '\n';
     if (!stamps) return DataLossError("cannot write " + (dir / "timestamps.txt").string());
     last = stamp;
@@ -158,10 +149,10 @@ Status KittiRawWriter::WriteCalibration(const Eigen::Isometry3d& T_lidar_body) {
     imu += buf;
   }
   imu += "\n";
-  SLAM_MMS_RETURN_IF_ERROR(WriteTextFile(parent / "calib_imu_to_velo.txt", imu));
+  SLAM_MMS_RETURN_IF_ERROR(io_internal::WriteFileBytes(parent / "calib_imu_to_velo.txt", imu));
   // Placeholders: KITTI's velo->cam axes permutation (camera x right, y down, z forward) without
   // offset, and a KITTI-like pinhole camera 0.
-  SLAM_MMS_RETURN_IF_ERROR(WriteTextFile(
+  SLAM_MMS_RETURN_IF_ERROR(io_internal::WriteFileBytes(
       parent / "calib_velo_to_cam.txt",
       "calib_time: slam_mms placeholder\n"
       "R: 0.000000e+00 -1.000000e+00 0.000000e+00 0.000000e+00 0.000000e+00 -1.000000e+00 "
@@ -169,7 +160,7 @@ Status KittiRawWriter::WriteCalibration(const Eigen::Isometry3d& T_lidar_body) {
       "T: 0.000000e+00 0.000000e+00 0.000000e+00\n"
       "delta_f: 0.000000e+00 0.000000e+00\n"
       "delta_c: 0.000000e+00 0.000000e+00\n"));
-  return WriteTextFile(
+  return io_internal::WriteFileBytes(
       parent / "calib_cam_to_cam.txt",
       "calib_time: slam_mms placeholder\n"
       "corner_dist: 0.000000e+00\n"

@@ -20,15 +20,6 @@ using io_internal::SplitWhitespace;
 
 namespace {
 
-Status WriteAll(const fs::path& file, const std::string& text) {
-  std::ofstream out(file, std::ios::binary | std::ios::trunc);
-  if (!out) return UnavailableError("cannot create " + file.string());
-  out << text;
-  out.close();
-  if (!out) return DataLossError("cannot write " + file.string());
-  return OkStatus();
-}
-
 std::string Where(const std::string& file, size_t line_index) {
   return file + ":" + std::to_string(line_index + 1);
 }
@@ -162,7 +153,7 @@ Status WriteTrajectoryTum(const Trajectory& trajectory, const fs::path& file) {
     text += PoseQuaternionText(p.T_world_body, ' ');
     text += '\n';
   }
-  return WriteAll(file, text);
+  return io_internal::WriteFileBytes(file, text);
 }
 
 StatusOr<Trajectory> ReadTrajectoryTum(const fs::path& file) {
@@ -213,7 +204,7 @@ Status WriteTrajectoryKitti(const Trajectory& trajectory, const fs::path& file) 
     }
     text += '\n';
   }
-  return WriteAll(file, text);
+  return io_internal::WriteFileBytes(file, text);
 }
 
 StatusOr<std::vector<Eigen::Isometry3d>> ReadPosesKitti(const fs::path& file) {
@@ -292,7 +283,7 @@ Status WriteTrajectoryCsv(const Trajectory& trajectory, const fs::path& file) {
     }
     text += '\n';
   }
-  return WriteAll(file, text);
+  return io_internal::WriteFileBytes(file, text);
 }
 
 StatusOr<Trajectory> ReadTrajectoryCsv(const fs::path& file) {

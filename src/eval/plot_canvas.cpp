@@ -189,20 +189,117 @@ void PlotCanvas::DrawAxes(const std::string& x_label, const std::string& y_label
   if (!y_label.empty() && ly >= 0 && ly + rotated.rows <= image_.rows) {
     rotated.copyTo(image_(cv::Rect(lx, ly, rotated.cols, rotated.rows)));
   }
-  // Title.
+  // Title: fitted to the figure's width (two lines only with room above the axes), each line
+  // centred over the axes and kept kTitleMarginPx inside the figure, the last line's baseline
+  // where a one-line title's is.
   if (title.empty()) return;
   const bool small = top_px_ < 56;
-  double title_scale = small ? 0.6 : 0.8;
-  sz = cv::getTextSize(title, kFont, title_scale, small ? 1 : 2, &base);
-  // Shrink a title wider than the figure (down to 60 %).
-  if (sz.width > image_.cols - 8) {
-    title_scale *= std::max(0.6, static_cast<double>(image_.cols - 8) / sz.width);
-    sz = cv::getTextSize(title, kFont, title_scale, small ? 1 : 2, &base);
+  const TextLayout t = FitText(title, image_.cols - 2 * kTitleMarginPx, small ? 0.6 : 0.8,
+                               small ? 0.42 : 0.5, small ? 1 : 2, top_px_ >= kTopPx ? 2 : 1);
+  const int last_baseline = area_.y - (small ? 9 : 22);
+  for (size_t i = 0; i < t.lines.size(); ++i) {
+    sz = cv::getTextSize(t.lines[i], kFont, t.scale, t.thickness, &base);
+    const int tx = std::max(kTitleMarginPx, std::min(area_.x + area_.width / 2 - sz.width / 2,
+                                                     image_.cols - kTitleMarginPx - sz.width));
+    const int ty = last_baseline - static_cast<int>(t.lines.size() - 1 - i) * t.line_step_px;
+    Text(t.lines[i], {tx, ty}, t.scale, kBlack, t.thickness);
   }
-  // Centred over the axes, kept inside the figure.
-  const int tx =
-      std::max(2, std::min(area_.x + area_.width / 2 - sz.width / 2, image_.cols - 4 - sz.width));
-  Text(title, {tx, area_.y - (small ? 9 : 22)}, title_scale, kBlack, small ? 1 : 2);
+}
+
+namespace {
+
+int TextWidth(const std::string& s, double scale, int thickness) {
+  int base = 0;
+  return cv::getTextSize(s, kFont, scale, thickness, &base).width;
+}
+
+int ThicknessAt(double scale, int thickness) { return scale < 0.65 ? 1 : thickness; }
+
+// The widest of `lines` at `scale`.
+int WidestLine(const std::vector<std::string>& lines, double scale, int thickness) {
+  int w = 0;
+  for (const std::string& l : lines) {
+    w = std::max(w, TextWidth(l, scale, ThicknessAt(scale, thickness)));
+  }
+  return w;
+}
+
+// The largest scale in [lo, hi] (steps of 0.02) at which every line fits; < 0 if none.
+double LargestFittingScale(const std::vector<std::string>& lines, int max_width_px, double hi,
+                           double lo, int thickness) {
+  for (double s = hi; s >= lo - 1e-9; s -= 0.02) {
+    if (WidestLine(lines, s, thickness) <= max_width_px) return s;
+  }
+  return -1.0;
+}
+
+std::string Trimmed(const std::string& s) {
+  const size_t b = s.find_first_not_of(' ');
+  if (b == std::string::npos) return "";
+  return s.substr(b, s.find_last_not_of(' ') - b + 1);
+}
+
+// `s` cut so that it and a trailing "..." fit `max_width_px`.
+std::string Elided(const std::string& s, int max_width_px, double scale, int thickness) {
+  if (TextWidth(s, scale, thickness) <= max_width_px) return s;
+  std::string cut = s;
+  while (!cut.empty() && TextWidth(Trimmed(cut) + "...", scale, thickness) > max_width_px) {
+    cut.pop_back();
+  }
+  return Trimmed(cut) + "...";
+}
+
+}  // namespace
+
+TextLayout FitText(const std::string& text, int max_width_px, double scale, double min_scale,
+                   int thickness, int max_lines) {
+  min_scale = std::min(min_scale, scale);
+  TextLayout t;
+  auto finish = [&](std::vector<std::string> lines, double s) {
+    t.scale = s;
+    t.thickness = ThicknessAt(s, thickness);
+    for (std::string& l : lines) l = Elided(l, max_width_px, s, t.thickness);
+    t.lines = std::move(lines);
+    t.width_px = WidestLine(t.lines, s, thickness);
+    int base = 0;
+    t.line_step_px = cv::getTextSize("Ag", kFont, s, t.thickness, &base).height + 7;
+    return t;
+  };
+  // One line, a little smaller at most.
+  const std::vector<std::string> one = {text};
+  double s =
+      LargestFittingScale(one, max_width_px, scale, std::max(min_scale, 0.85 * scale), thickness);
+  if (s > 0.0) return finish(one, s);
+  // Two lines: at ": ", else at the space that balances the lines best.
+  std::vector<std::string> two;
+  if (max_lines >= 2) {
+    const size_t colon = text.find(": ");
+    if (colon != std::string::npos && colon > 0) {
+      two = {Trimmed(text.substr(0, colon)), Trimmed(text.substr(colon + 2))};
+    }
+    const double two_hi = std::min(scale, 0.7);
+    if (two.empty() || LargestFittingScale(two, max_width_px, two_hi, min_scale, thickness) < 0.0) {
+      int best_w = std::numeric_limits<int>::max();
+      for (size_t i = text.find(' '); i != std::string::npos; i = text.find(' ', i + 1)) {
+        const std::vector<std::string> cand = {Trimmed(text.substr(0, i)),
+                                               Trimmed(text.substr(i + 1))};
+        if (cand[0].empty() || cand[1].empty()) continue;
+        const int w = WidestLine(cand, min_scale, thickness);
+        if (w < best_w) {
+          best_w = w;
+          two = cand;
+        }
+      }
+    }
+    if (!two.empty()) {
+      s = LargestFittingScale(two, max_width_px, two_hi, min_scale, thickness);
+      if (s > 0.0) return finish(two, s);
+    }
+  }
+  // One line as small as allowed, else elided (two lines elided where they were found).
+  s = LargestFittingScale(one, max_width_px, scale, min_scale, thickness);
+  if (s > 0.0) return finish(one, s);
+  return finish(two.empty() ? one : two, min_scale);
 }
 
 void PlotCanvas::Polyline(const std::vector<cv::Point2d>& data_pts, const cv::Scalar& color,

@@ -55,6 +55,23 @@ std::vector<double> NiceTicks(double lo, double hi, int target, double* step_out
 /// Tick label text with just enough decimals for `step`.
 std::string FormatTick(double value, double step);
 
+/// Text laid out to fit a width (FitText): its lines, font scale and thickness.
+struct TextLayout {
+  std::vector<std::string> lines;
+  double scale = 0.0;
+  int thickness = 1;
+  int width_px = 0;      // the widest line [px]
+  int line_step_px = 0;  // baseline to baseline [px]
+};
+
+/// `text` laid out for the Hershey simplex font within `max_width_px`: one line at the largest
+/// scale in [0.85 * scale, scale] that fits; else (max_lines >= 2) two lines, broken at the first
+/// ": " (dropped) or else at the space that balances them, at the largest scale in [min_scale,
+/// min(scale, 0.7)] that fits; else one line at the largest scale down to min_scale. A line still
+/// too wide at min_scale is cut and ends in "...". Thickness drops to 1 below scale 0.65.
+TextLayout FitText(const std::string& text, int max_width_px, double scale, double min_scale,
+                   int thickness, int max_lines);
+
 struct LegendEntry {
   std::string label;
   cv::Scalar color;
@@ -73,6 +90,8 @@ class PlotCanvas {
 
   /// Margins around the axes box [px].
   static constexpr int kLeftPx = 105, kTopPx = 64, kBottomPx = 78;
+  /// The title's distance from the figure's left and right edges [px].
+  static constexpr int kTitleMarginPx = 14;
   /// The figure size that fits data spanning dx x dy at equal scale inside at most
   /// max_width x max_height (one dimension shrinks; never below 480 x 360).
   static cv::Size FitEqualAspect(double dx, double dy, int max_width_px, int max_height_px,
@@ -99,7 +118,9 @@ class PlotCanvas {
   /// Grid lines and the axes frame (call before drawing data).
   void DrawGrid();
   /// Tick labels, axis labels and the title (call after the data so the frame is on top). An
-  /// empty label or title is not drawn.
+  /// empty label or title is not drawn. The title stays kTitleMarginPx inside the figure's left
+  /// and right edges (FitText: smaller, on two lines with a top margin of kTopPx or more, or
+  /// elided).
   void DrawAxes(const std::string& x_label, const std::string& y_label, const std::string& title);
 
   /// A polyline in data coordinates, clipped to the axes box.

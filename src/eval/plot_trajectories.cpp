@@ -406,10 +406,12 @@ Status PlotTrajectoriesTopView(const NamedTrajectory& ground_truth,
 
   const std::string title =
       options.title.empty() ? "Trajectories from above, coloured by position error" : options.title;
-  int base = 0;
-  const cv::Size sz = cv::getTextSize(title, cv::FONT_HERSHEY_SIMPLEX, 0.9, 2, &base);
-  cv::putText(figure, title, {std::max(4, figure.cols / 2 - sz.width / 2), 32},
-              cv::FONT_HERSHEY_SIMPLEX, 0.9, kBlackColor, 2, cv::LINE_AA);
+  // One line, smaller or elided where the figure is narrow.
+  const internal::TextLayout t = internal::FitText(
+      title, figure.cols - 2 * PlotCanvas::kTitleMarginPx, 0.9, 0.5, 2, /*max_lines=*/1);
+  cv::putText(figure, t.lines.front(),
+              {std::max(PlotCanvas::kTitleMarginPx, figure.cols / 2 - t.width_px / 2), 32},
+              cv::FONT_HERSHEY_SIMPLEX, t.scale, kBlackColor, t.thickness, cv::LINE_AA);
   return internal::SavePng(figure, png_file);
 }
 

@@ -7,6 +7,7 @@
 #include <cstring>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <random>
 
 #include "eval/plot_canvas.hpp"
@@ -358,6 +359,164 @@ TEST(PlotsTest, GnssStatusTrackAndStrip) {
       "gnss_ins", {{kT0, kT0.PlusSeconds(30.0), GnssAvailability::kValid}}, scans, kT0);
   ASSERT_TRUE(PlotGnssStatus({ok}, {}, dir / "gnss_ok.png", o).ok());
   EXPECT_LT(CountColor(Load(dir / "gnss_ok.png"), cv::Scalar(0, 94, 213), 2), 700);
+  Cleanup(dir);
+}
+
+// ---- Titles fit their panels.
+
+TEST(PlotsTest, FitTextKeepsEveryLineInsideTheWidth) {
+  const std::vector<std::string> titles = {
+      "full: RMS 0.049 m, max 0.090 m",
+      "gnss_ins_smoothed: RMS 0.24 m, max 0.44 m",
+      "a_very_long_method_name_from_a_host_application: RMS 123.4 m, max 1234.5 m",
+      "Zoom: largest error of gnss_ins_smoothed, 0.44 m at t = 123.4 s",
+      "no_space_in_this_title_at_all_so_it_cannot_be_broken_anywhere_into_two_lines",
+      "x"};
+  for (const std::string& title : titles) {
+    for (int width : {120, 200, 300, 358, 466, 700, 1400}) {
+      for (int max_lines : {1, 2}) {
+        const internal::TextLayout t = internal::FitText(title, width, 0.8, 0.5, 2, max_lines);
+        SCOPED_TRACE(title + " in " + std::to_string(width) + " px");
+        ASSERT_FALSE(t.lines.empty());
+        EXPECT_LE(static_cast<int>(t.lines.size()), max_lines);
+        EXPECT_GE(t.scale, 0.5 - 1e-9);
+        EXPECT_LE(t.scale, 0.8 + 1e-9);
+        EXPECT_LE(t.width_px, width);
+        for (const std::string& line : t.lines) {
+          int base = 0;
+          EXPECT_LE(
+              cv::getTextSize(line, cv::FONT_HERSHEY_SIMPLEX, t.scale, t.thickness, &base).width,
+              width)
+              << line;
+          EXPECT_FALSE(line.empty());
+        }
+      }
+    }
+  }
+  // A title that fits keeps its size and line.
+  const internal::TextLayout fits =
+      internal::FitText("full: RMS 0.049 m, max 0.090 m", 1400, 0.8, 0.5, 2, 2);
+  ASSERT_EQ(fits.lines.size(), 1u);
+  EXPECT_EQ(fits.lines[0], "full: RMS 0.049 m, max 0.090 m");
+  EXPECT_DOUBLE_EQ(fits.scale, 0.8);
+  EXPECT_EQ(fits.thickness, 2);
+  // Too wide for one readable line: the method name over its numbers, both whole.
+  const internal::TextLayout two =
+      internal::FitText("gnss_ins_smoothed: RMS 0.24 m, max 0.44 m", 300, 0.8, 0.5, 2, 2);
+  ASSERT_EQ(two.lines.size(), 2u);
+  EXPECT_EQ(two.lines[0], "gnss_ins_smoothed");
+  EXPECT_EQ(two.lines[1], "RMS 0.24 m, max 0.44 m");
+  EXPECT_GT(two.line_step_px, 10);
+  // Too wide even at the smallest scale: cut, ending in "...".
+  const internal::TextLayout cut = internal::FitText(titles[4], 200, 0.8, 0.5, 2, 2);
+  ASSERT_EQ(cut.lines.size(), 1u);
+  EXPECT_DOUBLE_EQ(cut.scale, 0.5);
+  EXPECT_EQ(cut.lines[0].substr(cut.lines[0].size() - 3), "...");
+  EXPECT_EQ(cut.lines[0].substr(0, 10), titles[4].substr(0, 10));
+}
+
+// The axes boxes of a figure of small multiples as (left edge, top): columns with a vertical run
+// of >= 60 px of the frame's grey with y ticks (6 px of the same grey, between the frame's top and
+// bottom lines) left of it.
+std::vector<cv::Point> AxesLeftTops(const cv::Mat& img) {
+  const cv::Vec3b grey(60, 60, 60);
+  auto is_grey = [&](int r, int c) { return img.at<cv::Vec3b>(r, c) == grey; };
+  std::vector<cv::Point> out;
+  for (int c = 6; c < img.cols; ++c) {
+    int run = 0;
+    for (int r = 0; r <= img.rows; ++r) {
+      if (r < img.rows && is_grey(r, c)) {
+        ++run;
+        continue;
+      }
+      if (run >= 60) {
+        int ticks = 0;
+        for (int y = r - run + 1; y < r - 1; ++y) {
+          bool tick = true;
+          for (int k = 1; k <= 6; ++k) tick = tick && is_grey(y, c - k);
+          ticks += tick ? 1 : 0;
+        }
+        if (ticks >= 2) out.emplace_back(c, r - run);
+      }
+      run = 0;
+    }
+  }
+  return out;
+}
+
+int NonWhite(const cv::Mat& img, const cv::Rect& rect) {
+  int n = 0;
+  const cv::Rect r = rect & cv::Rect(0, 0, img.cols, img.rows);
+  for (int y = r.y; y < r.br().y; ++y) {
+    for (int x = r.x; x < r.br().x; ++x) n += img.at<cv::Vec3b>(y, x) != cv::Vec3b(255, 255, 255);
+  }
+  return n;
+}
+
+// Once around a 100 m x `north_m` block at 10 m/s, 10 Hz (the demo drive's: 70 m), drifting north.
+Trajectory Block(double north_m, double drift_per_s) {
+  Trajectory t;
+  const int n = static_cast<int>(200.0 + 2.0 * north_m);
+  for (int i = 0; i <= n; ++i) {
+    const double d = i;  // metres along the loop
+    Eigen::Vector3d p = d < 100.0             ? Eigen::Vector3d(d, 0.0, 0.0)
+                        : d < 100.0 + north_m ? Eigen::Vector3d(100.0, d - 100.0, 0.0)
+                        : d < 200.0 + north_m ? Eigen::Vector3d(200.0 + north_m - d, north_m, 0.0)
+                                              : Eigen::Vector3d(0.0, n - d, 0.0);
+    p.y() += drift_per_s * 0.1 * i;
+    EXPECT_TRUE(t.Add(kT0.PlusSeconds(0.1 * i), MakeIsometry(Eigen::Matrix3d::Identity(), p)).ok());
+  }
+  return t;
+}
+
+TEST(PlotsTest, PanelTitlesStayInsideTheirPanels) {
+  const std::filesystem::path dir = OutDir();
+  const NamedTrajectory gt{"ground truth", Drive(0.0, 0.0)};
+  // The app's four methods, and a host's long names (too long for one line in a panel).
+  const std::vector<std::vector<std::string>> name_sets = {
+      {"full", "gnss_ins", "gnss_ins_smoothed", "lidar_only"},
+      {"full_with_loop_closures_v2", "gnss_ins_smoothed_relaxed",
+       "a_very_long_method_name_without_any_break", "lidar_only"}};
+  int case_index = 0;
+  for (const std::vector<std::string>& names : name_sets) {
+    // Panels in two columns (a figure of eight, the demo's block) and in three (a square block).
+    for (double north_m : {0.0, 70.0, 100.0}) {
+      const bool block = north_m > 0.0;
+      const NamedTrajectory block_gt{"ground truth", Block(north_m, 0.0)};
+      std::vector<NamedTrajectory> methods;
+      for (size_t i = 0; i < names.size(); ++i) {
+        methods.push_back({names[i], block ? Block(north_m, 0.01 + 0.03 * i)
+                                           : Drive(0.01 + 0.04 * i, 0.2 + 0.2 * i)});
+      }
+      const std::filesystem::path png = dir / ("titles_" + std::to_string(case_index++) + ".png");
+      ASSERT_TRUE(
+          PlotTrajectoriesTopView(block ? block_gt : gt, methods, {{12.0, 8.0}}, kT0, png).ok());
+      const cv::Mat img = Load(png);
+      const std::vector<cv::Point> boxes = AxesLeftTops(img);
+      SCOPED_TRACE(png.filename().string());
+      ASSERT_EQ(boxes.size(), names.size() + 1);  // the method panels and the zoom
+      for (size_t i = 0; i < boxes.size(); ++i) {
+        const int left = boxes[i].x - internal::PlotCanvas::kLeftPx;
+        const int top = boxes[i].y - internal::PlotCanvas::kTopPx;
+        ASSERT_GE(left, 0);
+        ASSERT_GE(top, 0);
+        // The panel's right edge: the next panel's left in the same row, else the figure's.
+        int right = img.cols;
+        for (const cv::Point& b : boxes) {
+          const int l = b.x - internal::PlotCanvas::kLeftPx;
+          if (b.y == boxes[i].y && l > left) right = std::min(right, l);
+        }
+        // The title band down to the (last) baseline, above the colour bar's label.
+        const cv::Rect band(left, top, right - left, internal::PlotCanvas::kTopPx - 21);
+        // A title is drawn, and no title pixel lies within 10 px of the panel's sides (so two
+        // neighbours' titles are 20 px apart or more).
+        EXPECT_GT(NonWhite(img, band), 150) << "panel " << i;
+        EXPECT_EQ(NonWhite(img, {left, top, 10, band.height}), 0) << "panel " << i << " left";
+        EXPECT_EQ(NonWhite(img, {right - 10, top, 10, band.height}), 0)
+            << "panel " << i << " right";
+      }
+    }
+  }
   Cleanup(dir);
 }
 

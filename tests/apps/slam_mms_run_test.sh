@@ -270,6 +270,23 @@ case $case_name in
     else
       grep -q '"complete": *false' "$tmp/out/report.json" || fail "report lacks \"complete\": false"
     fi
+    # A signal while the drive is simulated: the simulator stops after its current scan, nothing
+    # is processed, the partial drive is removed, same exit status.
+    "$bin" --out "$tmp/out2" --mode full --sim-duration 30 >"$tmp/log2" 2>&1 &
+    pid=$!
+    for _ in $(seq 1 600); do  # until the simulator writes scans, at most 60 s
+      compgen -G "$tmp/out2/sim/*/*/velodyne_points/data/*.bin" >/dev/null && break
+      kill -0 $pid 2>/dev/null || break
+      sleep 0.1
+    done
+    kill -$sig $pid
+    wait $pid
+    status=$?
+    [[ $status == "$code" ]] || fail "SIG$sig in the simulation: expected $code, got $status: $(tail -5 "$tmp/log2")"
+    grep -q "SIG$sig during the simulation: nothing processed" "$tmp/log2" ||
+      fail "no message for a stop in the simulation: $(tail -5 "$tmp/log2")"
+    [[ -e $tmp/out2/sim ]] && fail "the partial simulated drive was left behind"
+    [[ -e $tmp/out2/full.tum ]] && fail "a method ran after a stop in the simulation"
     ;;
   resume)
     # A run killed (SIGKILL) while lidar_only runs: full, gnss_ins and gnss_ins_smoothed finished

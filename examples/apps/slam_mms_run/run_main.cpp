@@ -163,18 +163,25 @@ Status CheckOutputDir(const fs::path& dir) {
 }
 
 // Bytes and files under `dir` (the disk use printed at the end).
-std::pair<uintmax_t, size_t> DiskUse(const fs::path& dir) {
-  uintmax_t bytes = 0;
-  size_t files = 0;
+// Calls fn(path, size) for every regular file under `dir` (unreadable entries are passed over).
+template <typename Fn>
+void ForEachFile(const fs::path& dir, Fn fn) {
   std::error_code ec;
   for (fs::recursive_directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
     std::error_code e2;
-    if (it->is_regular_file(e2)) {
-      const uintmax_t n = it->file_size(e2);
-      if (!e2) bytes += n;
-      ++files;
-    }
+    if (!it->is_regular_file(e2)) continue;
+    const uintmax_t n = it->file_size(e2);
+    fn(it->path(), e2 ? uintmax_t{0} : n);
   }
+}
+
+std::pair<uintmax_t, size_t> DiskUse(const fs::path& dir) {
+  uintmax_t bytes = 0;
+  size_t files = 0;
+  ForEachFile(dir, [&](const fs::path&, uintmax_t n) {
+    bytes += n;
+    ++files;
+  });
   return {bytes, files};
 }
 
@@ -213,11 +220,10 @@ StatusOr<fs::path> SimulateDefaultDrive(const RunArgs& args, bool tty, bool* sto
 // Regular files under `dir`, relative to it (report.json's "outputs").
 std::vector<std::string> OutputFiles(const fs::path& dir) {
   std::vector<std::string> files;
-  std::error_code ec;
-  for (fs::recursive_directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
-    std::error_code e2;
-    if (it->is_regular_file(e2)) files.push_back(fs::relative(it->path(), dir, e2).string());
-  }
+  ForEachFile(dir, [&](const fs::path& file, uintmax_t) {
+    std::error_code ec;
+    files.push_back(fs::relative(file, dir, ec).string());
+  });
   std::sort(files.begin(), files.end());
   return files;
 }
@@ -467,7 +473,9 @@ int RunMain(int argc, const char* const* argv) {
       }
       Status s = WriteTrajectoryTum(system.FinalTrajectory(), args.out_dir / (name + ".tum"));
       if (s.ok()) s = checkpoint->SaveProgress(name, system.results().size(), submaps);
-      if (!s.ok()) SLAM_MMS_LOG(kWarning) << "checkpoint: " << s.ToString();
+      if (!s.ok()) {
+        SLAM_MMS_LOG(kWarning) << "checkpoint: " << s.ToString();
+      }
     };
     ModeRun run = RunMode(mode, options, reader, args.pos, tty, &g_stop, on_submap);
     Status written = WriteMethodFiles(run, args.out_dir);

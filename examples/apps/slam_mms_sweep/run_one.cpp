@@ -1,0 +1,337 @@
+#include "slam_mms_sweep/run_one.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <optional>
+
+#include "slam_mms/core/logging.hpp"
+#include "slam_mms/eval/ground_truth.hpp"
+#include "slam_mms/eval/relative_error.hpp"
+#include "slam_mms/eval/trajectory_error.hpp"
+#include "slam_mms/pipeline/open_drive.hpp"
+#include "slam_mms/sim/drive_simulator.hpp"
+#include "slam_mms_run/config_file.hpp"
+#include "slam_mms_run/outputs.hpp"
+#include "slam_mms_run/progress.hpp"
+#include "slam_mms_run/run_mode.hpp"
+
+namespace slam_mms::sweep {
+namespace fs = std::filesystem;
+using Json = nlohmann::json;
+
+namespace {
+
+Json Opt(const std::optional<double>& v) {
+  return v && std::isfinite(*v) ? Json(*v) : Json(nullptr);
+}
+
+bool Finite(const Eigen::Isometry3d& T) { return T.matrix().allFinite(); }
+
+Status WriteJson(const Json& j, const fs::path& path) {
+  const fs::path tmp = path.string() + ".tmp";
+  {
+    std::ofstream out(tmp);
+    out << j.dump(2) << "\n";
+    if (!out) return InternalError("cannot write " + tmp.string());
+  }
+  std::error_code ec;
+  fs::rename(tmp, path, ec);
+  if (ec) return InternalError("cannot rename " + tmp.string() + ": " + ec.message());
+  return OkStatus();
+}
+
+StatusOr<Json> ReadJson(const fs::path& path) {
+  std::ifstream in(path);
+  if (!in) return NotFoundError("cannot read " + path.string());
+  try {
+    return Json::parse(in);
+  } catch (const Json::exception& e) {
+    return DataLossError(path.string() + ": " + e.what());
+  }
+}
+
+void ApplyScenario(const SweepRun& run, sim::DriveSimulator::Options* o) {
+  using sim::GnssState;
+  switch (run.scenario) {
+    case GnssScenario::kFixed:
+      o->gnss.best_state = GnssState::kRtkFixed;
+      o->gnss.urban_canyon_scale = 0.0;
+      break;
+    case GnssScenario::kCanyon:
+    case GnssScenario::kOutage: o->gnss.best_state = GnssState::kRtkFixed; break;
+    case GnssScenario::kFloat:
+      o->gnss.best_state = GnssState::kRtkFloat;
+      o->gnss.urban_canyon_scale = 0.0;
+      break;
+    case GnssScenario::kSps:
+      o->gnss.best_state = GnssState::kSps;
+      o->gnss.urban_canyon_scale = 0.0;
+      break;
+  }
+}
+
+int Fail(const fs::path& run_dir, const Json& spec, const Status& s) {
+  std::fprintf(stderr, "slam_mms_sweep --run-one: %s\n", s.ToString().c_str());
+  Json j{{"spec", spec}, {"error", s.ToString()}};
+  (void)WriteJson(j, run_dir / "result.json");
+  return 1;
+}
+
+// The largest position error after aligning the estimate's first pose with the ground truth's
+// (the relative-pose error from the start): the drift of the method itself, without the error of
+// the initial state it was given. Null without ground truth.
+std::optional<double> MaxDriftFromStart(const Trajectory& estimate, const eval::GroundTruth* gt) {
+  if (gt == nullptr || estimate.size() < 2) return std::nullopt;
+  StatusOr<eval::MatchedPoses> m = eval::MatchByTimestamp(estimate, gt->T_world_body);
+  if (!m.ok() || m->size() < 2) return std::nullopt;
+  const Eigen::Isometry3d gt0_inv = m->T_world_gt[0].inverse();
+  const Eigen::Isometry3d est0_inv = m->T_world_est[0].inverse();
+  double worst = 0.0;
+  for (size_t i = 1; i < m->size(); ++i) {
+    const Eigen::Isometry3d d =
+        (gt0_inv * m->T_world_gt[i]).inverse() * (est0_inv * m->T_world_est[i]);
+    worst = std::max(worst, d.translation().norm());
+  }
+  return worst;
+}
+
+// One method's numbers (see the file comment of run_one.hpp).
+Json MethodJson(const app::ModeRun& run, const app::MethodEvaluation& ev,
+                const eval::GroundTruth* gt) {
+  const eval::MethodReport& m = ev.report;
+  bool finite = true;
+  for (const StampedPose& p : run.trajectory.poses()) finite = finite && Finite(p.T_world_body);
+  for (const LocalizationResult& r : run.results) finite = finite && Finite(r.T_world_body);
+  for (const Eigen::Vector3f& p : run.map.points()) finite = finite && p.allFinite();
+  size_t registered = 0, degenerate = 0;
+  for (const LocalizationResult& r : run.results) {
+    if (!r.registered) continue;
+    ++registered;
+    if (r.degenerate) ++degenerate;
+  }
+  std::optional<double> max_err;
+  if (ev.ate) max_err = ev.ate->ate_max_m;
+  return Json{
+      {"status", run.status.ok() ? "ok" : run.status.ToString()},
+      {"complete", run.complete},
+      {"finite", finite},
+      {"scans_processed", run.scans_processed},
+      {"scans_total", run.scans_total},
+      {"skipped_scans", run.skipped_scans.size()},
+      {"ate_rmse_m", Opt(m.ate_rmse_m)},
+      {"rot_rmse_deg", Opt(m.rot_rmse_deg)},
+      {"t_rel_pct", Opt(m.t_rel_pct)},
+      {"r_rel_deg_per_100m", Opt(m.r_rel_deg_per_100m)},
+      {"max_pos_err_m", Opt(max_err)},
+      {"max_drift_from_start_m", Opt(MaxDriftFromStart(run.trajectory, gt))},
+      {"max_pos_err_in_outage_m", Opt(m.max_pos_err_in_outage_m)},
+      {"max_rot_err_in_outage_deg", Opt(m.max_rot_err_in_outage_deg)},
+      {"mme", Opt(m.mme)},
+      {"degenerate_fraction",
+       registered > 0 ? Json(static_cast<double>(degenerate) / registered) : Json(nullptr)},
+      {"scans_per_s", run.scans_per_s},
+      {"wall_s", run.wall_s},
+  };
+}
+
+StatusOr<MappingSystem::Options> BaseOptions(const fs::path& config) {
+  MappingSystem::Options options;
+  if (!config.empty()) SLAM_MMS_RETURN_IF_ERROR(app::ApplyConfigFile(config, &options));
+  return options;
+}
+
+}  // namespace
+
+Json SpecToJson(const SweepRun& r, const RunSettings& s) {
+  Json j{{"id", r.id},
+         {"drive", r.drive},
+         {"oxts_dir", r.oxts_dir.string()},
+         {"oxts_start_s", r.oxts_start_s},
+         {"duration_s", r.duration_s},
+         {"seed", r.seed},
+         {"scenario", GnssScenarioName(r.scenario)},
+         {"outage", r.outage ? Json::array({r.outage->first, r.outage->second}) : Json(nullptr)},
+         {"motion",
+          {{"path_m", r.motion.path_m},
+           {"mean_speed_mps", r.motion.mean_speed_mps},
+           {"start_speed_mps", r.motion.start_speed_mps},
+           {"max_speed_mps", r.motion.max_speed_mps},
+           {"stationary_fraction", r.motion.stationary_fraction},
+           {"max_yaw_rate_dps", r.motion.max_yaw_rate_dps},
+           {"total_turn_deg", r.motion.total_turn_deg},
+           {"classes", r.motion.classes}}},
+         {"modes", s.modes},
+         {"config", s.config.string()},
+         {"keep_drive", s.keep_drive},
+         {"num_threads", s.num_threads}};
+  return j;
+}
+
+Status SpecFromJson(const Json& j, SweepRun* r, RunSettings* s) {
+  try {
+    r->id = j.at("id").get<std::string>();
+    r->drive = j.at("drive").get<std::string>();
+    r->oxts_dir = j.at("oxts_dir").get<std::string>();
+    r->oxts_start_s = j.at("oxts_start_s").get<double>();
+    r->duration_s = j.at("duration_s").get<double>();
+    r->seed = j.at("seed").get<uint64_t>();
+    if (!ParseGnssScenario(j.at("scenario").get<std::string>(), &r->scenario)) {
+      return InvalidArgumentError("spec: field scenario: unknown '" +
+                                  j.at("scenario").get<std::string>() + "'");
+    }
+    r->outage.reset();
+    if (!j.at("outage").is_null()) {
+      r->outage =
+          std::make_pair(j.at("outage").at(0).get<double>(), j.at("outage").at(1).get<double>());
+    }
+    const Json& m = j.at("motion");
+    r->motion.path_m = m.at("path_m").get<double>();
+    r->motion.mean_speed_mps = m.at("mean_speed_mps").get<double>();
+    r->motion.start_speed_mps = m.at("start_speed_mps").get<double>();
+    r->motion.max_speed_mps = m.at("max_speed_mps").get<double>();
+    r->motion.stationary_fraction = m.at("stationary_fraction").get<double>();
+    r->motion.max_yaw_rate_dps = m.at("max_yaw_rate_dps").get<double>();
+    r->motion.total_turn_deg = m.at("total_turn_deg").get<double>();
+    r->motion.classes = m.at("classes").get<std::string>();
+    s->modes = j.at("modes").get<std::vector<std::string>>();
+    s->config = j.at("config").get<std::string>();
+    s->keep_drive = j.at("keep_drive").get<bool>();
+    s->num_threads = j.at("num_threads").get<int>();
+  } catch (const Json::exception& e) {
+    return InvalidArgumentError(std::string("spec: ") + e.what());
+  }
+  return OkStatus();
+}
+
+int RunOne(const fs::path& run_dir) {
+  app::InstallLogSink();
+  StatusOr<Json> spec_json = ReadJson(run_dir / "spec.json");
+  if (!spec_json.ok()) return Fail(run_dir, Json(), spec_json.status());
+  SweepRun run;
+  RunSettings settings;
+  Status parsed = SpecFromJson(*spec_json, &run, &settings);
+  if (!parsed.ok()) return Fail(run_dir, *spec_json, parsed);
+  std::vector<MappingMode> modes;
+  for (const std::string& name : settings.modes) {
+    MappingMode mode;
+    if (!ParseMappingMode(name, &mode)) {
+      return Fail(run_dir, *spec_json, InvalidArgumentError("spec: unknown mode " + name));
+    }
+    modes.push_back(mode);
+  }
+
+  // The drive.
+  sim::DriveSimulator::Options so;
+  so.oxts_drive_dir = run.oxts_dir;
+  so.oxts_start_s = run.oxts_start_s;
+  so.duration_s = run.duration_s;
+  so.seed = run.seed;
+  so.write_scene_cloud = false;
+  so.num_threads = settings.num_threads;
+  ApplyScenario(run, &so);
+  const auto t0 = std::chrono::steady_clock::now();
+  StatusOr<sim::DriveSimulator> simulator = sim::DriveSimulator::Create(so);
+  if (!simulator.ok()) return Fail(run_dir, *spec_json, simulator.status());
+  const fs::path sim_dir = run_dir / "sim";
+  StatusOr<sim::DriveSimulator::Summary> summary = simulator->Run(sim_dir);
+  if (!summary.ok()) return Fail(run_dir, *spec_json, summary.status());
+  const double sim_wall =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  Json result{{"spec", *spec_json},
+              {"sim",
+               {{"scans", summary->num_scans},
+                {"path_m", summary->path_length_m},
+                {"fraction_fixed", summary->fraction_fixed},
+                {"fraction_float", summary->fraction_float},
+                {"fraction_sps", summary->fraction_sps},
+                {"fraction_none", summary->fraction_none},
+                {"wall_s", sim_wall}}}};
+
+  // The methods, as slam_mms_run runs them.
+  StatusOr<std::unique_ptr<DriveReader>> reader = OpenDrive(summary->drive_dir, {});
+  if (!reader.ok()) return Fail(run_dir, *spec_json, reader.status());
+  StatusOr<MappingSystem::Options> base = BaseOptions(settings.config);
+  if (!base.ok()) return Fail(run_dir, *spec_json, base.status());
+  MappingSystem::Options options = *base;
+  options.T_body_lidar = (*reader)->streams().T_body_lidar;
+  if ((*reader)->streams().t_body_antenna_m) {
+    options.ins.gnss.t_body_antenna = *(*reader)->streams().t_body_antenna_m;
+  }
+  std::vector<eval::OutageWindow> outages;
+  if (run.outage) {
+    options.gnss_outages.push_back(*run.outage);
+    outages.push_back({run.outage->first, run.outage->second});
+  }
+  const Timestamp reference = (*reader)->ScanStart(0);
+  Json methods = Json::object();
+  std::optional<eval::GroundTruth> gt;
+  for (const MappingMode mode : modes) {
+    app::ModeRun mr = app::RunMode(mode, options, **reader, PosWorkflow::kForward, false);
+    if (!gt && mr.origin) {
+      StatusOr<eval::GroundTruth> loaded =
+          eval::LoadGroundTruth(summary->drive_dir, **reader, *mr.origin);
+      if (!loaded.ok()) return Fail(run_dir, *spec_json, loaded.status());
+      gt = std::move(loaded).value();
+    }
+    const app::MethodEvaluation ev = app::EvaluateMethod(
+        mr, gt ? &*gt : nullptr, outages, mr.first_scan_start ? *mr.first_scan_start : reference,
+        settings.num_threads);
+    methods[mr.name] = MethodJson(mr, ev, gt ? &*gt : nullptr);
+  }
+  result["methods"] = methods;
+  if (!settings.keep_drive) {
+    std::error_code ec;
+    fs::remove_all(sim_dir, ec);
+  }
+  const Status written = WriteJson(result, run_dir / "result.json");
+  if (!written.ok()) {
+    std::fprintf(stderr, "slam_mms_sweep --run-one: %s\n", written.ToString().c_str());
+    return 1;
+  }
+  return 0;
+}
+
+int RealOne(const fs::path& run_dir, const fs::path& drive_dir, const fs::path& config) {
+  app::InstallLogSink();
+  Json spec{{"drive", drive_dir.string()}, {"config", config.string()}};
+  StatusOr<std::unique_ptr<DriveReader>> reader = OpenDrive(drive_dir, {});
+  if (!reader.ok()) return Fail(run_dir, spec, reader.status());
+  StatusOr<MappingSystem::Options> base = BaseOptions(config);
+  if (!base.ok()) return Fail(run_dir, spec, base.status());
+  MappingSystem::Options options = *base;
+  options.T_body_lidar = (*reader)->streams().T_body_lidar;
+  app::ModeRun mr =
+      app::RunMode(MappingMode::kLidarOnly, options, **reader, PosWorkflow::kForward, false);
+  if (!mr.status.ok()) return Fail(run_dir, spec, mr.status);
+  if (!mr.origin) return Fail(run_dir, spec, FailedPreconditionError("lidar_only: no origin"));
+  StatusOr<eval::GroundTruth> gt = eval::LoadGroundTruth(drive_dir, **reader, *mr.origin);
+  if (!gt.ok()) return Fail(run_dir, spec, gt.status());
+  eval::RelativeErrorOptions ro;
+  ro.segment_lengths_m = {10, 20, 25, 30, 40, 50};
+  StatusOr<eval::RelativeErrorResult> rel =
+      eval::ComputeRelativeError(mr.trajectory, gt->T_world_body, ro);
+  if (!rel.ok()) return Fail(run_dir, spec, rel.status());
+  Json t = Json::object(), r = Json::object();
+  for (const eval::SegmentLengthError& s : rel->per_length) {
+    const std::string key = std::to_string(static_cast<int>(s.length_m));
+    t[key] = s.num_segments > 0 ? Json(s.t_rel_pct) : Json(nullptr);
+    r[key] = s.num_segments > 0 ? Json(s.r_rel_deg_per_100m) : Json(nullptr);
+  }
+  Json result{{"spec", spec},
+              {"real",
+               {{"drive", drive_dir.filename().string()},
+                {"frames", mr.scans_processed},
+                {"path_m", rel->ground_truth_path_length_m},
+                {"t_rel_pct", rel->t_rel_pct},
+                {"r_rel_deg_per_100m", rel->r_rel_deg_per_100m},
+                {"t_rel_pct_by_length", t},
+                {"r_rel_deg_per_100m_by_length", r},
+                {"scans_per_s", mr.scans_per_s}}}};
+  const Status written = WriteJson(result, run_dir / "result.json");
+  return written.ok() ? 0 : 1;
+}
+
+}  // namespace slam_mms::sweep

@@ -1,0 +1,50 @@
+#pragma once
+// One run of the robustness sweep, in its own process (slam_mms_sweep --run-one DIR): simulates
+// the run's window of a real KITTI motion into DIR/sim, runs each mapping method on it exactly as
+// slam_mms_run does (RunMode, the library defaults or --config), evaluates each against the
+// simulator's ground truth (EvaluateMethod, slam_mms_run's metrics), and writes DIR/result.json.
+// A crash or hang therefore costs one run, never the sweep.
+//
+// DIR/spec.json holds the run (SpecToJson); DIR/result.json:
+//   {"spec": {...}, "sim": {"scans", "path_m", "fraction_fixed", ..., "wall_s"},
+//    "methods": {"<mode>": {"status", "complete", "finite", "scans_processed", "scans_total",
+//        "skipped_scans", "ate_rmse_m", "rot_rmse_deg", "t_rel_pct", "r_rel_deg_per_100m",
+//        "max_pos_err_m", "max_drift_from_start_m" (the largest position error once the first
+//        poses are aligned: the method's own drift), "max_pos_err_in_outage_m",
+//        "max_rot_err_in_outage_deg", "mme", "degenerate_fraction", "scans_per_s", "wall_s"}}}
+// Metrics that do not exist (no segment, no pose in an outage) are null.
+//
+// The real-frame check (slam_mms_sweep --real-one DIR): lidar_only on the real KITTI frames,
+// relative error over 10..50 m segments against the OXTS poses, into DIR/result.json as
+//   {"real": {"drive", "frames", "t_rel_pct_by_length": {...}, "r_rel_deg_per_100m_by_length":
+//   {...}, "status"}}.
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "slam_mms/core/status.hpp"
+#include "slam_mms_sweep/plan.hpp"
+
+namespace slam_mms::sweep {
+
+/// What a child process needs besides the run.
+struct RunSettings {
+  std::vector<std::string> modes = {"gnss_ins", "gnss_ins_smoothed", "full", "lidar_only"};
+  std::filesystem::path config;  ///< A slam_mms_run --config YAML; empty = library defaults.
+  bool keep_drive = false;       ///< Keep DIR/sim.
+  int num_threads = 2;           ///< Simulator and map-entropy threads.
+};
+
+nlohmann::json SpecToJson(const SweepRun& run, const RunSettings& settings);
+Status SpecFromJson(const nlohmann::json& j, SweepRun* run, RunSettings* settings);
+
+/// The child's work; returns the process exit status (0 = result.json written).
+int RunOne(const std::filesystem::path& run_dir);
+
+/// The real-frame lidar_only check; `drive_dir` = .../kitti_raw/2011_09_26/<drive>_sync.
+int RealOne(const std::filesystem::path& run_dir, const std::filesystem::path& drive_dir,
+            const std::filesystem::path& config);
+
+}  // namespace slam_mms::sweep

@@ -12,6 +12,7 @@
 //                                      --oxts the first record unless --origin is given)
 //   --elevation-bias DEG               KITTI-like 0.205 deg low points (default 0)
 //   --lead-in S                        IMU/POS records before the first scan (default 1)
+//   --oxts-start S                     with --oxts: start the lead-in S seconds into the drive
 //   --threads N (default 2)  --no-scene-cloud  --scene-voxel M  --drive-id N  --date YYYY_MM_DD
 // --oxts also accepts a KITTI OXTS archive <drive>_sync.tar.gz (unpacked with `tar` to a temp dir).
 #include <CLI/CLI.hpp>
@@ -42,7 +43,8 @@ int Usage(const std::string& error) {
          "       [--gnss-outage START_S:DURATION_S]... [--imu-grade "
          "perfect|consumer|tactical|navigation]\n"
          "       [--gnss-quality fixed|float|sps] [--urban-canyon SCALE] [--origin LAT,LON,H]\n"
-         "       [--elevation-bias DEG] [--lead-in S] [--threads N] [--no-scene-cloud] "
+         "       [--elevation-bias DEG] [--lead-in S] [--oxts-start S] [--threads N] "
+         "[--no-scene-cloud] "
          "[--scene-voxel M]\n"
          "       [--drive-id N] [--date YYYY_MM_DD]\n"
          "       slam_mms_sim --version | --help\n"
@@ -101,6 +103,7 @@ int main(int argc, char** argv) {
   app.add_flag("--version", version);
   app.add_option("--scenario", o.scenario);
   app.add_option("--oxts", o.oxts_drive_dir);
+  app.add_option("--oxts-start", o.oxts_start_s);
   app.add_option("--seed", o.seed);
   app.add_option("--duration", o.duration_s);
   app.add_option("--out", out);

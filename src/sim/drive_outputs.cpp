@@ -86,6 +86,7 @@ Status WriteScenarioJson(const DriveSimulator::Options& o, const DriveSimulator&
   j["generator"] = "slam_mms_sim";
   j["scenario"] = o.oxts_drive_dir.empty() ? o.scenario : "oxts";
   j["oxts_drive_dir"] = o.oxts_drive_dir.string();
+  j["oxts_start_s"] = o.oxts_start_s;
   j["seed"] = o.seed;
   j["duration_s"] = o.duration_s;
   j["lead_in_s"] = o.lead_in_s;

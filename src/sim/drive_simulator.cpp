@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <unordered_map>
 
@@ -44,6 +45,9 @@ Status DriveSimulator::Options::Validate() const {
     return fail("duration_s", std::to_string(duration_s), "must be > 0 for scenario \"long\"");
   if (!(duration_s >= 0.0)) return fail("duration_s", std::to_string(duration_s), "must be >= 0");
   if (!(lead_in_s >= 0.0)) return fail("lead_in_s", std::to_string(lead_in_s), "must be >= 0");
+  if (!(oxts_start_s >= 0.0) || !std::isfinite(oxts_start_s)) {
+    return fail("oxts_start_s", std::to_string(oxts_start_s), "must be finite and >= 0");
+  }
   if (!(std::abs(origin_latitude_deg) <= 90.0))
     return fail("origin_latitude_deg", std::to_string(origin_latitude_deg), "must be in [-90, 90]");
   if (!(std::abs(origin_longitude_deg) <= 180.0))
@@ -120,6 +124,24 @@ StatusOr<DriveSimulator> DriveSimulator::Create(const Options& options_in) {
                             o.origin_height_m, o.origin_from_oxts));
     epoch = loaded.epoch;
     samples = std::move(loaded.samples);
+    if (o.oxts_start_s > 0.0) {
+      // The span simulated: from oxts_start_s, to 5 s past the last scan (spline margin).
+      const double begin = samples.empty() ? 0.0 : samples.front().t_s + o.oxts_start_s;
+      const double end = o.duration_s > 0.0 ? begin + o.lead_in_s + o.duration_s + 5.0
+                                            : std::numeric_limits<double>::infinity();
+      std::vector<PoseSample> kept;
+      for (const PoseSample& p : samples) {
+        if (p.t_s >= begin - 1e-9 && p.t_s <= end) kept.push_back(p);
+      }
+      if (kept.size() < 4) {
+        return InvalidArgumentError(
+            "DriveSimulator: oxts_start_s = " + std::to_string(o.oxts_start_s) + " leaves " +
+            std::to_string(kept.size()) + " OXTS records of " + o.oxts_drive_dir.string() +
+            " (need >= 4; the drive spans " +
+            std::to_string(samples.back().t_s - samples.front().t_s) + " s)");
+      }
+      samples = std::move(kept);
+    }
     o.origin_latitude_deg = loaded.origin_latitude_deg;
     o.origin_longitude_deg = loaded.origin_longitude_deg;
     o.origin_height_m = loaded.origin_height_m;

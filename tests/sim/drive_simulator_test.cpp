@@ -233,5 +233,37 @@ TEST(DriveSimulatorTest, ReadsRealKittiOxtsMotion) {
   EXPECT_EQ(s->num_scans, 3);
 }
 
+// oxts_start_s: the window starts that far into the real motion, the origin stays the drive's
+// first record, and the trajectory there is the one fitted over the whole drive.
+TEST(DriveSimulatorTest, OxtsStartOffsetsTheWindowIntoTheRealMotion) {
+  SLAM_MMS_REQUIRE_KITTI_RAW();
+  const fs::path drive = testing::KittiRawDriveDir();
+  DriveSimulator::Options whole;
+  whole.oxts_drive_dir = drive;
+  whole.duration_s = 0.3;
+  whole.lead_in_s = 0.5;
+  auto full = DriveSimulator::Create(whole);
+  ASSERT_TRUE(full.ok()) << full.status().ToString();
+  DriveSimulator::Options later = whole;
+  later.oxts_start_s = 2.0;
+  auto cut = DriveSimulator::Create(later);
+  ASSERT_TRUE(cut.ok()) << cut.status().ToString();
+  EXPECT_DOUBLE_EQ(cut->options().origin_latitude_deg, full->options().origin_latitude_deg);
+  EXPECT_NEAR(cut->first_scan_s() - full->first_scan_s(), 2.0, 0.01);
+  const double t = cut->first_scan_s() + 0.1;
+  const Eigen::Vector3d p_cut = cut->trajectory().Pose(t).translation();
+  const Eigen::Vector3d p_full = full->trajectory().Pose(t).translation();
+  EXPECT_GT(p_cut.norm(), 5.0) << "drive 0013 moves in its first 2.6 s";
+  EXPECT_LT((p_cut - p_full).norm(), 0.05);
+  // A start past the drive's end is an error naming the field.
+  DriveSimulator::Options past = whole;
+  past.oxts_start_s = 1e4;
+  auto none = DriveSimulator::Create(past);
+  ASSERT_FALSE(none.ok());
+  EXPECT_NE(none.status().message().find("oxts_start_s"), std::string::npos);
+  past.oxts_start_s = -1.0;
+  EXPECT_FALSE(DriveSimulator::Create(past).ok());
+}
+
 }  // namespace
 }  // namespace slam_mms::sim

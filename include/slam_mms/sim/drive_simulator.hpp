@@ -52,6 +52,11 @@ class DriveSimulator {
     std::string scenario = "default";
     /// An unpacked KITTI OXTS drive folder (<drive>_sync with oxts/): real motion.
     std::filesystem::path oxts_drive_dir;
+    /// With oxts_drive_dir: seconds after the first OXTS record at which the simulated span (the
+    /// lead-in, then the scans) begins (>= 0). Where > 0, records before it, and more than 5 s
+    /// after the last scan where duration_s > 0, are not used (0: every record is fitted, as
+    /// before). The world origin stays the first record's.
+    double oxts_start_s = 0.0;
     uint64_t seed = 1;
     double duration_s = 0.0;  ///< Seconds of scans from the first scan; 0 = the whole drive.
     double lead_in_s = 1.0;   ///< IMU/POS records before the first scan [s] (>= 0).

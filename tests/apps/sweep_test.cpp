@@ -1,0 +1,223 @@
+// The robustness sweep's rules and plan (examples/apps/slam_mms_sweep/{rules,plan}.cpp, compiled
+// into this test), registered in tests/CMakeLists.txt. The sweep itself runs as the ctest
+// apps_slam_mms_sweep_ci.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "slam_mms_sweep/plan.hpp"
+#include "slam_mms_sweep/rules.hpp"
+#include "testing/test_data.hpp"
+
+namespace slam_mms::sweep {
+namespace {
+
+namespace fs = std::filesystem;
+using Json = nlohmann::json;
+
+Json Method(double ate, double rot) {
+  return Json{{"status", "ok"},
+              {"complete", true},
+              {"finite", true},
+              {"scans_processed", 80},
+              {"scans_total", 80},
+              {"ate_rmse_m", ate},
+              {"rot_rmse_deg", rot},
+              {"t_rel_pct", 0.5},
+              {"max_drift_from_start_m", 0.05},
+              {"degenerate_fraction", 0.0},
+              {"mme", -3.0}};
+}
+
+// A passing run: RTK fixed all the way, moving, full better than gnss_ins.
+RunRecord GoodRun() {
+  RunRecord r;
+  r.spec = Json{{"id", "x"},
+                {"drive", "d"},
+                {"seed", 1},
+                {"scenario", "fixed"},
+                {"outage", nullptr},
+                {"modes", {"gnss_ins", "full", "lidar_only"}},
+                {"motion", {{"classes", "city"}}}};
+  r.result = Json{{"sim", {{"path_m", 80.0}, {"fraction_fixed", 1.0}}},
+                  {"methods",
+                   {{"gnss_ins", Method(0.030, 0.10)},
+                    {"full", Method(0.031, 0.12)},
+                    {"lidar_only", Method(0.3, 0.2)}}}};
+  r.result["methods"]["gnss_ins"]["mme"] = -2.5;
+  return r;
+}
+
+std::string Verdict(const RunRecord& r, const std::string& rule) {
+  for (const RuleOutcome& o : EvaluateRules(r)) {
+    if (o.rule == rule) return o.verdict;
+  }
+  return "missing";
+}
+
+TEST(SweepRulesTest, AGoodRunPassesEveryRuleThatApplies) {
+  const RunRecord r = GoodRun();
+  EXPECT_EQ(Verdict(r, "sane"), "pass");
+  EXPECT_EQ(Verdict(r, "lidar_tracks"), "pass");
+  EXPECT_EQ(Verdict(r, "full_vs_pos_rtk"), "pass");
+  EXPECT_EQ(Verdict(r, "standing_still"), "n/a");
+  EXPECT_EQ(Verdict(r, "full_map_sharper"), "pass");
+}
+
+TEST(SweepRulesTest, CrashHangNanAndIncompleteRunsAreNotSane) {
+  RunRecord crash = GoodRun();
+  crash.process_error = "crash: signal 11";
+  crash.result = nullptr;
+  EXPECT_EQ(Verdict(crash, "sane"), "FAIL");
+  EXPECT_EQ(Verdict(crash, "lidar_tracks"), "n/a");
+  RunRecord nan = GoodRun();
+  nan.result["methods"]["full"]["finite"] = false;
+  EXPECT_EQ(Verdict(nan, "sane"), "FAIL");
+  RunRecord short_run = GoodRun();
+  short_run.result["methods"]["lidar_only"]["scans_processed"] = 79;
+  EXPECT_EQ(Verdict(short_run, "sane"), "FAIL");
+  RunRecord failed = GoodRun();
+  failed.result["methods"]["gnss_ins"]["status"] = "kDataLoss: x";
+  EXPECT_EQ(Verdict(failed, "sane"), "FAIL");
+  RunRecord missing = GoodRun();
+  missing.result["methods"].erase("full");
+  EXPECT_EQ(Verdict(missing, "sane"), "FAIL");
+}
+
+TEST(SweepRulesTest, LidarTracksUsesTRelDegeneracyAndDriftLimits) {
+  RunRecord r = GoodRun();
+  r.result["methods"]["lidar_only"]["t_rel_pct"] = 1.01;
+  EXPECT_EQ(Verdict(r, "lidar_tracks"), "FAIL");
+  // Flagged degenerate: 3 % of the distance (80 m -> 2.4 m) instead.
+  r.result["methods"]["lidar_only"]["degenerate_fraction"] = 0.5;
+  r.result["methods"]["lidar_only"]["max_drift_from_start_m"] = 2.3;
+  EXPECT_EQ(Verdict(r, "lidar_tracks"), "pass");
+  r.result["methods"]["lidar_only"]["max_drift_from_start_m"] = 2.5;
+  EXPECT_EQ(Verdict(r, "lidar_tracks"), "FAIL");
+  // No 10 m segment (standing): 1 % of the distance + 0.1 m.
+  RunRecord s = GoodRun();
+  s.result["sim"]["path_m"] = 0.5;
+  s.result["methods"]["lidar_only"]["t_rel_pct"] = nullptr;
+  s.result["methods"]["lidar_only"]["max_drift_from_start_m"] = 0.10;
+  EXPECT_EQ(Verdict(s, "lidar_tracks"), "pass");
+  s.result["methods"]["lidar_only"]["max_drift_from_start_m"] = 0.11;
+  EXPECT_EQ(Verdict(s, "lidar_tracks"), "FAIL");
+}
+
+TEST(SweepRulesTest, FullVsPosAppliesOnlyToRtkFixedWithoutOutage) {
+  RunRecord r = GoodRun();
+  r.result["methods"]["full"]["ate_rmse_m"] = 0.051;  // limit max(0.033, 0.05)
+  EXPECT_EQ(Verdict(r, "full_vs_pos_rtk"), "FAIL");
+  r.result["methods"]["full"]["ate_rmse_m"] = 0.049;
+  EXPECT_EQ(Verdict(r, "full_vs_pos_rtk"), "pass");
+  r.result["methods"]["full"]["rot_rmse_deg"] = 0.151;  // limit 0.10 + 0.05
+  EXPECT_EQ(Verdict(r, "full_vs_pos_rtk"), "FAIL");
+  r.result["sim"]["fraction_fixed"] = 0.9;
+  EXPECT_EQ(Verdict(r, "full_vs_pos_rtk"), "n/a");
+  r.result["sim"]["fraction_fixed"] = 1.0;
+  r.spec["outage"] = Json::array({3.0, 4.0});
+  EXPECT_EQ(Verdict(r, "full_vs_pos_rtk"), "n/a");
+}
+
+TEST(SweepRulesTest, StandingStillAndMapSharpness) {
+  RunRecord r = GoodRun();
+  r.spec["motion"]["classes"] = "standing";
+  r.result["methods"]["full"]["rot_rmse_deg"] = 0.16;
+  EXPECT_EQ(Verdict(r, "standing_still"), "FAIL");
+  r.result["methods"]["full"]["rot_rmse_deg"] = 0.14;
+  EXPECT_EQ(Verdict(r, "standing_still"), "pass");
+  r.result["methods"]["full"]["mme"] = -2.5;  // equal is not sharper
+  EXPECT_EQ(Verdict(r, "full_map_sharper"), "FAIL");
+}
+
+TEST(SweepRulesTest, RealFramesAgainstThePeer) {
+  RunRecord real;
+  real.result = Json::object();
+  real.result["real"]["t_rel_pct_by_length"]["10"] = 3.0;
+  real.result["real"]["r_rel_deg_per_100m_by_length"]["25"] = 0.80;
+  EXPECT_EQ(EvaluateRealRule(real).verdict, "pass");
+  real.result["real"]["r_rel_deg_per_100m_by_length"]["25"] = 0.95;
+  EXPECT_EQ(EvaluateRealRule(real).verdict, "FAIL");
+  RunRecord crashed;
+  crashed.process_error = "crash: signal 6";
+  EXPECT_EQ(EvaluateRealRule(crashed).verdict, "FAIL");
+}
+
+TEST(SweepRulesTest, TablesNameEveryFailureByRunSeedAndRule) {
+  RunRecord bad = GoodRun();
+  bad.spec["id"] = "drive_x_r0_fixed";
+  bad.spec["seed"] = 42;
+  bad.result["methods"]["lidar_only"]["t_rel_pct"] = 2.0;
+  const fs::path dir = testing::MakeTempDir("sweep_tables");
+  int failures = 0;
+  ASSERT_TRUE(WriteSweepTables({GoodRun(), bad}, nullptr, "cmd", dir, &failures).ok());
+  EXPECT_EQ(failures, 1);
+  std::ifstream md(dir / "sweep.md");
+  const std::string text((std::istreambuf_iterator<char>(md)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("`drive_x_r0_fixed` (drive d, seed 42), rule **lidar_tracks**"),
+            std::string::npos)
+      << text;
+  EXPECT_NE(text.find("2 runs over 1 distinct KITTI motions"), std::string::npos);
+  std::ifstream csv(dir / "sweep.csv");
+  std::string header, row1, row2;
+  std::getline(csv, header);
+  std::getline(csv, row1);
+  std::getline(csv, row2);
+  EXPECT_NE(header.find("lidar_only.t_rel_pct"), std::string::npos);
+  EXPECT_NE(row2.find(",FAIL,"), std::string::npos) << row2;
+  fs::remove_all(dir);
+}
+
+// The plan on the real OXTS archives: deterministic, a run is the same alone and in the sweep,
+// windows inside the drive, the CI subset one run per motion class.
+TEST(SweepPlanTest, PlanIsDeterministicAndIndependentOfTheSelection) {
+  const fs::path oxts = testing::SharedDataDir() / "kitti_oxts";
+  if (!fs::exists(oxts / "INDEX.tsv")) GTEST_SKIP() << "no " << oxts << " (../shared/data)";
+  const fs::path unpack = testing::MakeTempDir("sweep_plan");
+  PlanOptions o;
+  o.oxts_archives = oxts;
+  o.unpack_dir = unpack;
+  o.max_drives = 6;
+  o.duration_s = 8.0;
+  auto plan = BuildPlan(o);
+  ASSERT_TRUE(plan.ok()) << plan.status().ToString();
+  ASSERT_EQ(plan->size(), 6u);
+  PlanOptions one = o;
+  one.max_drives = 0;
+  one.drives = {(*plan)[4].drive};
+  auto alone = BuildPlan(one);
+  ASSERT_TRUE(alone.ok()) << alone.status().ToString();
+  ASSERT_EQ(alone->size(), 1u);
+  EXPECT_EQ((*alone)[0].id, (*plan)[4].id);
+  EXPECT_EQ((*alone)[0].seed, (*plan)[4].seed);
+  EXPECT_DOUBLE_EQ((*alone)[0].oxts_start_s, (*plan)[4].oxts_start_s);
+  for (const SweepRun& r : *plan) {
+    EXPECT_GE(r.oxts_start_s, 0.0);
+    EXPECT_FALSE(r.motion.classes.empty());
+    EXPECT_EQ(r.outage.has_value(), r.scenario == GnssScenario::kOutage);
+  }
+  one.drives = {"2011_09_26_drive_9999"};
+  EXPECT_FALSE(BuildPlan(one).ok());
+  fs::remove_all(unpack);
+}
+
+TEST(SweepPlanTest, WindowMotionClassesFromTheRealMotion) {
+  const fs::path oxts = testing::SharedDataDir() / "kitti_oxts";
+  if (!fs::exists(oxts / "INDEX.tsv")) GTEST_SKIP() << "no " << oxts << " (../shared/data)";
+  const fs::path unpack = testing::MakeTempDir("sweep_motion");
+  auto dir = UnpackDrive(oxts, "2011_09_26_drive_0013_sync", unpack);
+  ASSERT_TRUE(dir.ok()) << dir.status().ToString();
+  auto m = WindowMotion(*dir, "2011_09_26_drive_0013_sync", 0.0, 5.0);
+  ASSERT_TRUE(m.ok()) << m.status().ToString();
+  // Drive 0013 starts rolling through Karlsruhe at about 12 m/s (about 60 m in its first 5 s).
+  EXPECT_GT(m->path_m, 40.0);
+  EXPECT_LT(m->path_m, 80.0);
+  EXPECT_NE(m->classes.find("start-at-speed"), std::string::npos) << m->classes;
+  fs::remove_all(unpack);
+}
+
+}  // namespace
+}  // namespace slam_mms::sweep

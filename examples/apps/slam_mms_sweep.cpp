@@ -11,10 +11,12 @@
 //
 // Each run is a child process (slam_mms_sweep --run-one DIR/runs/<id>), so a crash or a hang
 // (killed after --timeout) fails that run's `sane` rule and the sweep goes on. A run whose
-// result.json exists for the same spec is reused (a killed sweep continues where it was; --rerun
-// runs everything again). Outputs: DIR/sweep.md, sweep.csv, sweep.json, runs/<id>/{spec.json,
-// result.json, log.txt}. Exit: 0 every rule passed, 1 some rule failed (--fail-on rules) or a
-// run was not sane (--fail-on sanity), 2 bad command line, 3 the sweep itself failed.
+// result.json exists for the same spec and the same executable is reused (a killed sweep
+// continues where it was; --rerun runs everything again). Runs start interleaved (every fourth
+// first), so that a sweep stopped early still spans the drive list. Outputs: DIR/sweep.md,
+// sweep.csv, sweep.json, runs/<id>/{spec.json, result.json, log.txt}. Exit: 0 every rule passed, 1
+// some rule failed (--fail-on rules) or a run was not sane (--fail-on sanity), 2 bad command line,
+// 3 the sweep itself failed.
 #include <fcntl.h>
 #include <signal.h>
 #include <spawn.h>
@@ -22,6 +24,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstdio>
@@ -259,6 +262,14 @@ int main(int argc, char** argv) {
 
   // Specs, reuse of finished runs, then the children.
   const std::string self = fs::canonical("/proc/self/exe").string();
+  // The executable's identity in every spec: a result of another build is never reused.
+  std::string binary = self;
+  {
+    std::error_code e1, e2;
+    const auto size = fs::file_size(self, e1);
+    const auto mtime = fs::last_write_time(self, e2).time_since_epoch().count();
+    binary += " " + std::to_string(e1 ? 0 : size) + " " + std::to_string(e2 ? 0 : mtime);
+  }
   std::vector<RunRecord> records(runs->size());
   std::vector<std::vector<std::string>> args(runs->size() + 1);
   std::vector<fs::path> logs(runs->size() + 1);
@@ -267,6 +278,7 @@ int main(int argc, char** argv) {
     const fs::path dir = out / "runs" / (*runs)[i].id;
     fs::create_directories(dir, ec);
     records[i].spec = SpecToJson((*runs)[i], settings);
+    records[i].spec["binary"] = binary;
     const Json old = ReadJsonOrNull(dir / "result.json");
     if (!rerun && old.is_object() && old.contains("methods") && old["spec"] == records[i].spec) {
       records[i].result = old;
@@ -278,6 +290,8 @@ int main(int argc, char** argv) {
     logs[i] = dir / "log.txt";
     todo.push_back(i);
   }
+  // Interleaved order (every 4th run first): a sweep stopped early still covers the whole list.
+  std::stable_sort(todo.begin(), todo.end(), [](size_t a, size_t b) { return a % 4 < b % 4; });
   std::printf("[sweep] %zu to run, %zu reused from earlier sweeps\n", todo.size(),
               runs->size() - todo.size());
   // The real frames (issue 15: lidar_only drift on real data vs the public peer).

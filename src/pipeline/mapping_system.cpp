@@ -363,7 +363,17 @@ struct MappingSystem::Impl {
     const auto& submaps = loc->submaps();
     while (submaps_reported < submaps.size() && submaps[submaps_reported].finished) {
       const int32_t id = submaps[submaps_reported].id;
-      SLAM_MMS_RETURN_IF_ERROR(level2->OnSubmapFinished(loc.get(), id, gnss_returned_pending));
+      // The POS attitude at the submap's reference, for level 2's roll/pitch prior.
+      std::optional<SubmapManager::PosAttitude> attitude;
+      if (ins.initialized() || external_pos) {
+        StatusOr<InsState> s = ins.StateAt(submaps[submaps_reported].start);
+        if (s.ok()) {
+          attitude = SubmapManager::PosAttitude{s->T_world_body.linear(),
+                                                s->cov_T_world_body.topLeftCorner<3, 3>()};
+        }
+      }
+      SLAM_MMS_RETURN_IF_ERROR(
+          level2->OnSubmapFinished(loc.get(), id, gnss_returned_pending, attitude));
       gnss_returned_pending = false;
       ++submaps_reported;
     }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <deque>
 #include <optional>
 #include <string>
@@ -181,7 +182,8 @@ void SubmapManager::AddGnssMeasurement(const GnssMeasurement& measurement,
 }
 
 Status SubmapManager::OnSubmapFinished(Localizer* localizer, int32_t submap_id,
-                                       bool gnss_returned_after_outage) {
+                                       bool gnss_returned_after_outage,
+                                       const std::optional<PosAttitude>& pos_attitude) {
   Impl& m = *impl_;
   const SubmapRecord* rec = FindSubmap(*localizer, submap_id);
   if (rec == nullptr) {
@@ -199,8 +201,18 @@ Status SubmapManager::OnSubmapFinished(Localizer* localizer, int32_t submap_id,
     Vector6d d;
     const double s_rp = m.opt.attitude_prior_sigma_rad;
     d << s_rp * s_rp, s_rp * s_rp, 1.0, 1e4, 1e4, 1e4;
-    SLAM_MMS_RETURN_IF_ERROR(
-        m.graph->AddPosePrior(submap_id, rec->T_world_submap, Matrix6d(d.asDiagonal())));
+    Eigen::Isometry3d T_prior = rec->T_world_submap;
+    if (pos_attitude && pos_attitude->cov_rotation.allFinite() &&
+        pos_attitude->R_world_body.allFinite()) {
+      // The POS's roll and pitch with its own variances (floored at (1e-5 rad)^2: never exact).
+      T_prior.linear() = pos_attitude->R_world_body;
+      d(0) = std::max(pos_attitude->cov_rotation(0, 0), 1e-10);
+      d(1) = std::max(pos_attitude->cov_rotation(1, 1), 1e-10);
+      SLAM_MMS_LOG(kDebug) << "level 2: submap " << submap_id << " roll/pitch prior from the POS, "
+                           << std::sqrt(d(0)) * 180.0 / M_PI << " / "
+                           << std::sqrt(d(1)) * 180.0 / M_PI << " deg";
+    }
+    SLAM_MMS_RETURN_IF_ERROR(m.graph->AddPosePrior(submap_id, T_prior, Matrix6d(d.asDiagonal())));
   }
   const SubmapRecord* prev = m.last_id >= 0 ? FindSubmap(*localizer, m.last_id) : nullptr;
   if (prev != nullptr) {

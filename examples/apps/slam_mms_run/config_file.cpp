@@ -368,6 +368,7 @@ const std::vector<std::pair<std::string, KeyHandler>>& Handlers() {
     SLAM_MMS_KEY_D("level2.reckon_sigma_trans_m", o->level2.reckon_sigma_trans_m);
     SLAM_MMS_KEY_D("level2.gnss_sigma_scale", o->level2.gnss_sigma_scale);
     SLAM_MMS_KEY_D("level2.gnss_correlation_s", o->level2.gnss_correlation_s);
+    SLAM_MMS_KEY_D("level2.attitude_prior_sigma_rad", o->level2.attitude_prior_sigma_rad);
     SLAM_MMS_KEY_I("level2.max_iterations", o->level2.max_iterations);
     SLAM_MMS_KEY_I("level2.num_threads", o->level2.num_threads);
 #undef SLAM_MMS_KEY_D

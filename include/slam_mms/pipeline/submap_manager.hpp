@@ -12,6 +12,7 @@
 
 #include <Eigen/Geometry>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "slam_mms/core/status.hpp"
@@ -43,7 +44,13 @@ class SubmapManager {
     /// at least 1. 0 treats every fix as independent. >= 0. On the default drive with a 60 s
     /// outage, 10 s brings the largest error in the outage from 0.81 to 0.45 m (docs/results.md).
     double gnss_correlation_s = 10.0;
-    /// With GNSS: a roll/pitch prior on each submap from level 1 (1 sigma) [rad]; 0 disables it.
+    /// With GNSS: a roll/pitch prior on each submap reference. Where the POS attitude at the
+    /// reference is given (OnSubmapFinished's `pos_attitude`), the prior is the POS's roll and
+    /// pitch with the POS's own covariance (gravity-levelled, a few hundredths of a degree): a
+    /// weaker prior let the GNSS noise rotate the submaps where the motion holds no rotation
+    /// information (standing, stop-and-go: 0.19 deg of pitch error against the POS's 0.01 on a
+    /// sweep drive, docs/sweep.md). Else level 1's roll and pitch with this sigma [rad]. 0
+    /// disables the prior.
     double attitude_prior_sigma_rad = 0.0175;
     int max_iterations = 100;
     int num_threads = 2;
@@ -65,7 +72,14 @@ class SubmapManager {
                           const Eigen::Vector3d& t_body_antenna);
   /// Level 1 finished `submap_id`: add its factors, test loops, solve when triggered; then the
   /// Localizer's submaps are moved to the new estimates.
-  Status OnSubmapFinished(Localizer* localizer, int32_t submap_id, bool gnss_returned_after_outage);
+  /// `pos_attitude` (may be absent): the POS attitude at the submap's start and its 3x3 rotation
+  /// covariance (right perturbation, body axes, rad^2) for the roll/pitch prior.
+  struct PosAttitude {
+    Eigen::Matrix3d R_world_body = Eigen::Matrix3d::Identity();
+    Eigen::Matrix3d cov_rotation = Eigen::Matrix3d::Identity();
+  };
+  Status OnSubmapFinished(Localizer* localizer, int32_t submap_id, bool gnss_returned_after_outage,
+                          const std::optional<PosAttitude>& pos_attitude = std::nullopt);
   /// The final solve.
   Status Finish(Localizer* localizer);
   const Stats& stats() const;

@@ -2,6 +2,7 @@
 #include "slam_mms/sim/drive_simulator.hpp"
 
 #include <GeographicLib/LocalCartesian.hpp>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -117,6 +118,7 @@ StatusOr<DriveSimulator> DriveSimulator::Create(const Options& options_in) {
   o.world.seed = MixSeed(o.seed, 10);
   Timestamp epoch;
   std::vector<PoseSample> samples;
+  double span_begin_s = -std::numeric_limits<double>::infinity();  // oxts_start_s, if any
   if (!o.oxts_drive_dir.empty()) {
     SLAM_MMS_ASSIGN_OR_RETURN(
         OxtsPoseSamples loaded,
@@ -129,10 +131,15 @@ StatusOr<DriveSimulator> DriveSimulator::Create(const Options& options_in) {
       const double begin = samples.empty() ? 0.0 : samples.front().t_s + o.oxts_start_s;
       const double end = o.duration_s > 0.0 ? begin + o.lead_in_s + o.duration_s + 5.0
                                             : std::numeric_limits<double>::infinity();
+      // From the last record at or before `begin` (the spline then covers it).
       std::vector<PoseSample> kept;
-      for (const PoseSample& p : samples) {
-        if (p.t_s >= begin - 1e-9 && p.t_s <= end) kept.push_back(p);
+      for (size_t i = 0; i < samples.size(); ++i) {
+        const bool next_after = i + 1 < samples.size() && samples[i + 1].t_s > begin + 1e-9;
+        if ((samples[i].t_s >= begin - 1e-9 || next_after) && samples[i].t_s <= end) {
+          kept.push_back(samples[i]);
+        }
       }
+      span_begin_s = begin;
       if (kept.size() < 4) {
         return InvalidArgumentError(
             "DriveSimulator: oxts_start_s = " + std::to_string(o.oxts_start_s) + " leaves " +
@@ -168,7 +175,7 @@ StatusOr<DriveSimulator> DriveSimulator::Create(const Options& options_in) {
   // Timeline: the first scan after the lead-in, then scans back to back.
   Hdl64Lidar lidar(o.lidar);
   const double period = lidar.PeriodSeconds();
-  impl->first_scan_s = traj.start_s() + o.lead_in_s;
+  impl->first_scan_s = std::max(traj.start_s(), span_begin_s) + o.lead_in_s;
   const double usable = traj.end_s() - 0.05 - impl->first_scan_s - lidar.LastFiringOffsetSeconds();
   if (usable < 0.0) {
     return InvalidArgumentError("DriveSimulator: the trajectory (" +

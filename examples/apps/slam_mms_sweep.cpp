@@ -314,16 +314,22 @@ int main(int argc, char** argv) {
     if (all_records[i].result.is_null()) {
       all_records[i].result = ReadJsonOrNull(out / "runs" / (*runs)[i].id / "result.json");
     }
-    if (g_stop.load() && all_records[i].result.is_null() && all_records[i].process_error.empty()) {
-      all_records[i].process_error = "not run: the sweep was interrupted";
-    }
   }
   if (with_real) {
     real = all_records[runs->size()];
     real.result = ReadJsonOrNull(out / "runs" / "real_2011_09_26_drive_0013" / "result.json");
   }
-  std::vector<RunRecord> finished(all_records.begin(),
-                                  all_records.begin() + static_cast<long>(runs->size()));
+  // An interrupted sweep's tables hold the runs that finished (the others are counted).
+  std::vector<RunRecord> finished;
+  size_t not_run = 0;
+  for (size_t i = 0; i < runs->size(); ++i) {
+    const bool ran = !all_records[i].result.is_null() || !all_records[i].process_error.empty();
+    if (g_stop.load() && !ran) {
+      ++not_run;
+      continue;
+    }
+    finished.push_back(all_records[i]);
+  }
 
   std::string command;
   for (int i = 0; i < argc; ++i) command += (i ? " " : "") + std::string(argv[i]);
@@ -342,7 +348,8 @@ int main(int argc, char** argv) {
   std::printf("[sweep] %zu runs, %d rule failures (%d runs not sane), %.0f s; table in %s\n",
               finished.size(), failures, insane, wall, (out / "sweep.md").c_str());
   if (g_stop.load()) {
-    std::printf("[sweep] interrupted: the tables hold the runs finished so far\n");
+    std::printf("[sweep] interrupted: the tables hold the %zu runs finished, %zu were not run\n",
+                finished.size(), not_run);
     return 130;
   }
   if (fail_on == "rules" && failures > 0) return 1;

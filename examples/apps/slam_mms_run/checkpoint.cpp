@@ -1,12 +1,11 @@
 #include "slam_mms_run/checkpoint.hpp"
 
-#include <fstream>
 #include <nlohmann/json.hpp>
-#include <sstream>
 #include <utility>
 #include <vector>
 
 #include "slam_mms/io/map_io.hpp"
+#include "slam_mms_run/json_file.hpp"
 
 namespace slam_mms::app {
 namespace {
@@ -198,31 +197,6 @@ Status ReadRun(const Json& j, const std::string& where, ModeRun* run) {
   return OkStatus();
 }
 
-StatusOr<Json> ReadJsonFile(const fs::path& file) {
-  std::ifstream in(file);
-  if (!in) return NotFoundError("cannot open " + file.string());
-  std::stringstream text;
-  text << in.rdbuf();
-  Json j = Json::parse(text.str(), nullptr, /*allow_exceptions=*/false);
-  if (j.is_discarded()) return DataLossError(file.string() + ": not valid JSON");
-  return j;
-}
-
-Status WriteJsonFile(const Json& j, const fs::path& file) {
-  // Written beside and renamed: a kill while writing never leaves a half file behind.
-  const fs::path tmp = file.string() + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::trunc);
-    out << j.dump(1) << '\n';
-    out.flush();
-    if (!out) return UnavailableError("cannot write " + tmp.string());
-  }
-  std::error_code ec;
-  fs::rename(tmp, file, ec);
-  if (ec) return UnavailableError("cannot rename " + tmp.string() + ": " + ec.message());
-  return OkStatus();
-}
-
 Json FingerprintJson(const RunFingerprint& fingerprint) {
   Json j = Json::object();
   for (const auto& [k, v] : fingerprint) {
@@ -302,7 +276,7 @@ StatusOr<ModeRun> Checkpoint::LoadFinished(const std::string& name) const {
 }
 
 Status Checkpoint::SaveFinished(const ModeRun& run) {
-  SLAM_MMS_RETURN_IF_ERROR(WriteJsonFile(RunJson(run), dir_ / (run.name + ".json")));
+  SLAM_MMS_RETURN_IF_ERROR(WriteJsonFile(RunJson(run), dir_ / (run.name + ".json"), 1));
   if (!run.map.empty()) {
     MapCloud map;
     map.cloud = run.map;
@@ -332,7 +306,7 @@ Status Checkpoint::WriteRunJson() const {
   j["format_version"] = kFormatVersion;
   j["fingerprint"] = Json::parse(fingerprint_json_);
   j["methods"] = Json::parse(methods_json_);
-  return WriteJsonFile(j, dir_ / "run.json");
+  return WriteJsonFile(j, dir_ / "run.json", 1);
 }
 
 }  // namespace slam_mms::app

@@ -4,7 +4,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <optional>
 
 #include "slam_mms/core/logging.hpp"
@@ -14,6 +13,7 @@
 #include "slam_mms/pipeline/open_drive.hpp"
 #include "slam_mms/sim/drive_simulator.hpp"
 #include "slam_mms_run/config_file.hpp"
+#include "slam_mms_run/json_file.hpp"
 #include "slam_mms_run/outputs.hpp"
 #include "slam_mms_run/progress.hpp"
 #include "slam_mms_run/run_mode.hpp"
@@ -29,29 +29,6 @@ Json Opt(const std::optional<double>& v) {
 }
 
 bool Finite(const Eigen::Isometry3d& T) { return T.matrix().allFinite(); }
-
-Status WriteJson(const Json& j, const fs::path& path) {
-  const fs::path tmp = path.string() + ".tmp";
-  {
-    std::ofstream out(tmp);
-    out << j.dump(2) << "\n";
-    if (!out) return InternalError("cannot write " + tmp.string());
-  }
-  std::error_code ec;
-  fs::rename(tmp, path, ec);
-  if (ec) return InternalError("cannot rename " + tmp.string() + ": " + ec.message());
-  return OkStatus();
-}
-
-StatusOr<Json> ReadJson(const fs::path& path) {
-  std::ifstream in(path);
-  if (!in) return NotFoundError("cannot read " + path.string());
-  try {
-    return Json::parse(in);
-  } catch (const Json::exception& e) {
-    return DataLossError(path.string() + ": " + e.what());
-  }
-}
 
 void ApplyScenario(const SweepRun& run, sim::DriveSimulator::Options* o) {
   using sim::GnssState;
@@ -76,7 +53,7 @@ void ApplyScenario(const SweepRun& run, sim::DriveSimulator::Options* o) {
 int Fail(const fs::path& run_dir, const Json& spec, const Status& s) {
   std::fprintf(stderr, "slam_mms_sweep --run-one: %s\n", s.ToString().c_str());
   Json j{{"spec", spec}, {"error", s.ToString()}};
-  (void)WriteJson(j, run_dir / "result.json");
+  (void)app::WriteJsonFile(j, run_dir / "result.json", 2);
   return 1;
 }
 
@@ -208,7 +185,7 @@ Status SpecFromJson(const Json& j, SweepRun* r, RunSettings* s) {
 
 int RunOne(const fs::path& run_dir) {
   app::InstallLogSink();
-  StatusOr<Json> spec_json = ReadJson(run_dir / "spec.json");
+  StatusOr<Json> spec_json = app::ReadJsonFile(run_dir / "spec.json");
   if (!spec_json.ok()) return Fail(run_dir, Json(), spec_json.status());
   SweepRun run;
   RunSettings settings;
@@ -286,7 +263,7 @@ int RunOne(const fs::path& run_dir) {
     std::error_code ec;
     fs::remove_all(sim_dir, ec);
   }
-  const Status written = WriteJson(result, run_dir / "result.json");
+  const Status written = app::WriteJsonFile(result, run_dir / "result.json", 2);
   if (!written.ok()) {
     std::fprintf(stderr, "slam_mms_sweep --run-one: %s\n", written.ToString().c_str());
     return 1;
@@ -330,7 +307,7 @@ int RealOne(const fs::path& run_dir, const fs::path& drive_dir, const fs::path& 
                 {"t_rel_pct_by_length", t},
                 {"r_rel_deg_per_100m_by_length", r},
                 {"scans_per_s", mr.scans_per_s}}}};
-  const Status written = WriteJson(result, run_dir / "result.json");
+  const Status written = app::WriteJsonFile(result, run_dir / "result.json", 2);
   return written.ok() ? 0 : 1;
 }
 

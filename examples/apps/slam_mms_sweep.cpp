@@ -30,12 +30,12 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "slam_mms/version.hpp"
+#include "slam_mms_run/json_file.hpp"
 #include "slam_mms_sweep/plan.hpp"
 #include "slam_mms_sweep/rules.hpp"
 #include "slam_mms_sweep/run_one.hpp"
@@ -50,27 +50,10 @@ using namespace slam_mms::sweep;
 std::atomic<bool> g_stop{false};
 void OnSignal(int) { g_stop.store(true); }
 
-std::vector<std::string> SplitList(const std::string& s) {
-  std::vector<std::string> out;
-  size_t begin = 0;
-  while (begin <= s.size()) {
-    const size_t end = s.find(',', begin);
-    const std::string part = s.substr(begin, end == std::string::npos ? end : end - begin);
-    if (!part.empty()) out.push_back(part);
-    if (end == std::string::npos) break;
-    begin = end + 1;
-  }
-  return out;
-}
-
+// result.json or spec.json, or null where it is missing or unreadable (the run then runs again).
 Json ReadJsonOrNull(const fs::path& p) {
-  std::ifstream in(p);
-  if (!in) return nullptr;
-  try {
-    return Json::parse(in);
-  } catch (const Json::exception&) {
-    return nullptr;
-  }
+  slam_mms::StatusOr<Json> j = slam_mms::app::ReadJsonFile(p);
+  return j.ok() ? *j : Json(nullptr);
 }
 
 struct Child {
@@ -173,9 +156,9 @@ int main(int argc, char** argv) {
   CLI::App app("slam_mms_sweep: the robustness sweep over real KITTI motions (issue 15)",
                "slam_mms_sweep");
   fs::path out, data, config;
-  std::string drives, scenarios = "fixed,canyon,outage,float,sps",
-                      modes = "gnss_ins,gnss_ins_smoothed,full,lidar_only", subset,
-                      fail_on = "rules";
+  std::vector<std::string> drives, scenarios = {"fixed", "canyon", "outage", "float", "sps"},
+                                   modes = {"gnss_ins", "gnss_ins_smoothed", "full", "lidar_only"};
+  std::string subset, fail_on = "rules";
   PlanOptions plan;
   int jobs = 1;
   double timeout_s = 1800.0;
@@ -184,12 +167,13 @@ int main(int argc, char** argv) {
   app.add_option("--data", data,
                  "the shared data folder (kitti_oxts/, kitti_raw/); default "
                  "$SLAM_MMS_SHARED_DATA, else ../shared/data");
-  app.add_option("--drives", drives, "comma-separated drives (default: all in INDEX.tsv)");
+  app.add_option("--drives", drives, "comma-separated drives (default: all in INDEX.tsv)")
+      ->delimiter(',');
   app.add_option("--max-drives", plan.max_drives, "only the first N drives");
   app.add_option("--runs-per-drive", plan.runs_per_drive, "windows x seeds per drive (default 1)");
   app.add_option("--duration", plan.duration_s, "seconds of scans per run (default 12)");
-  app.add_option("--scenarios", scenarios, "GNSS scenarios cycled over the drives");
-  app.add_option("--modes", modes, "methods run on each drive");
+  app.add_option("--scenarios", scenarios, "GNSS scenarios cycled over the drives")->delimiter(',');
+  app.add_option("--modes", modes, "methods run on each drive")->delimiter(',');
   app.add_option("--subset", subset, "ci: only the first run of each motion class")
       ->check(CLI::IsMember({"ci"}));
   app.add_option("--jobs", jobs, "runs at a time (default 1; each uses 2 threads)");
@@ -225,16 +209,16 @@ int main(int argc, char** argv) {
                  (plan.oxts_archives / "INDEX.tsv").c_str());
     return 77;
   }
-  plan.drives = SplitList(drives);
+  plan.drives = drives;
   plan.scenarios.clear();
-  for (const std::string& s : SplitList(scenarios)) {
+  for (const std::string& s : scenarios) {
     GnssScenario g;
     if (!ParseGnssScenario(s, &g)) return Usage("--scenarios: unknown scenario '" + s + "'");
     plan.scenarios.push_back(g);
   }
   plan.ci_subset = subset == "ci";
   RunSettings settings;
-  settings.modes = SplitList(modes);
+  settings.modes = modes;
   settings.config = config.empty() ? fs::path() : fs::absolute(config);
   settings.keep_drive = keep;
   std::error_code ec;
@@ -252,8 +236,10 @@ int main(int argc, char** argv) {
                ? 2
                : 3;
   }
+  std::string mode_list;
+  for (const std::string& m : modes) mode_list += (mode_list.empty() ? "" : ",") + m;
   std::printf("[sweep] %zu runs planned (%.1f s each, modes %s)\n", runs->size(), plan.duration_s,
-              modes.c_str());
+              mode_list.c_str());
 
   struct sigaction sa {};
   sa.sa_handler = OnSignal;
@@ -270,72 +256,67 @@ int main(int argc, char** argv) {
     const auto mtime = fs::last_write_time(self, e2).time_since_epoch().count();
     binary += " " + std::to_string(e1 ? 0 : size) + " " + std::to_string(e2 ? 0 : mtime);
   }
-  std::vector<RunRecord> records(runs->size());
-  std::vector<std::vector<std::string>> args(runs->size() + 1);
-  std::vector<fs::path> logs(runs->size() + 1);
+  // One record, folder and child command line per run; the last slot is the real frames'.
+  const size_t n = runs->size();
+  std::vector<RunRecord> records(n + 1);
+  std::vector<fs::path> dirs(n + 1);
+  std::vector<std::vector<std::string>> args(n + 1);
   std::vector<size_t> todo;
-  for (size_t i = 0; i < runs->size(); ++i) {
-    const fs::path dir = out / "runs" / (*runs)[i].id;
-    fs::create_directories(dir, ec);
+  for (size_t i = 0; i < n; ++i) {
+    dirs[i] = out / "runs" / (*runs)[i].id;
+    fs::create_directories(dirs[i], ec);
     records[i].spec = SpecToJson((*runs)[i], settings);
     records[i].spec["binary"] = binary;
-    const Json old = ReadJsonOrNull(dir / "result.json");
+    const Json old = ReadJsonOrNull(dirs[i] / "result.json");
     if (!rerun && old.is_object() && old.contains("methods") && old["spec"] == records[i].spec) {
       records[i].result = old;
       continue;
     }
-    std::ofstream(dir / "spec.json") << records[i].spec.dump(2) << "\n";
-    fs::remove(dir / "result.json", ec);
-    args[i] = {"--run-one", dir.string()};
-    logs[i] = dir / "log.txt";
+    fs::remove(dirs[i] / "result.json", ec);
+    const slam_mms::Status spec_written =
+        slam_mms::app::WriteJsonFile(records[i].spec, dirs[i] / "spec.json", 2);
+    if (!spec_written.ok()) {
+      records[i].process_error = spec_written.ToString();
+      continue;
+    }
+    args[i] = {"--run-one", dirs[i].string()};
     todo.push_back(i);
   }
   // Interleaved order (every 4th run first): a sweep stopped early still covers the whole list.
   std::stable_sort(todo.begin(), todo.end(), [](size_t a, size_t b) { return a % 4 < b % 4; });
-  std::printf("[sweep] %zu to run, %zu reused from earlier sweeps\n", todo.size(),
-              runs->size() - todo.size());
-  // The real frames (issue 15: lidar_only drift on real data vs the public peer).
-  RunRecord real;
+  std::printf("[sweep] %zu to run, %zu reused from earlier sweeps\n", todo.size(), n - todo.size());
+  // The real frames (issue 15: lidar_only drift on real data vs the public peer), run last.
   const fs::path real_drive = data / "kitti_raw" / "2011_09_26" / "2011_09_26_drive_0013_sync";
   const bool with_real = !no_real && fs::exists(real_drive);
-  std::vector<RunRecord> all_records = records;
   if (with_real) {
-    const fs::path dir = out / "runs" / "real_2011_09_26_drive_0013";
-    fs::create_directories(dir, ec);
-    fs::remove(dir / "result.json", ec);
-    args[runs->size()] = {"--real-one", dir.string(), real_drive.string()};
-    if (!settings.config.empty()) args[runs->size()].push_back(settings.config.string());
-    logs[runs->size()] = dir / "log.txt";
-    all_records.push_back(real);
-    todo.push_back(runs->size());
+    dirs[n] = out / "runs" / "real_2011_09_26_drive_0013";
+    fs::create_directories(dirs[n], ec);
+    fs::remove(dirs[n] / "result.json", ec);
+    args[n] = {"--real-one", dirs[n].string(), real_drive.string()};
+    if (!settings.config.empty()) args[n].push_back(settings.config.string());
+    todo.push_back(n);
   }
-  RunChildren(self, args, logs, jobs, timeout_s, &all_records, todo);
-  for (size_t i = 0; i < runs->size(); ++i) {
-    if (all_records[i].result.is_null()) {
-      all_records[i].result = ReadJsonOrNull(out / "runs" / (*runs)[i].id / "result.json");
-    }
-  }
-  if (with_real) {
-    real = all_records[runs->size()];
-    real.result = ReadJsonOrNull(out / "runs" / "real_2011_09_26_drive_0013" / "result.json");
-  }
+  std::vector<fs::path> logs(n + 1);
+  for (const size_t i : todo) logs[i] = dirs[i] / "log.txt";
+  RunChildren(self, args, logs, jobs, timeout_s, &records, todo);
+  for (const size_t i : todo) records[i].result = ReadJsonOrNull(dirs[i] / "result.json");
   // An interrupted sweep's tables hold the runs that finished (the others are counted).
   std::vector<RunRecord> finished;
   size_t not_run = 0;
-  for (size_t i = 0; i < runs->size(); ++i) {
-    const bool ran = !all_records[i].result.is_null() || !all_records[i].process_error.empty();
+  for (size_t i = 0; i < n; ++i) {
+    const bool ran = !records[i].result.is_null() || !records[i].process_error.empty();
     if (g_stop.load() && !ran) {
       ++not_run;
       continue;
     }
-    finished.push_back(all_records[i]);
+    finished.push_back(records[i]);
   }
 
   std::string command;
   for (int i = 0; i < argc; ++i) command += (i ? " " : "") + std::string(argv[i]);
   int failures = 0;
   const slam_mms::Status written =
-      WriteSweepTables(finished, with_real ? &real : nullptr, command, out, &failures);
+      WriteSweepTables(finished, with_real ? &records[n] : nullptr, command, out, &failures);
   if (!written.ok()) {
     std::fprintf(stderr, "slam_mms_sweep: %s\n", written.ToString().c_str());
     return 3;

@@ -210,7 +210,9 @@ TEST(SweepPlanTest, WindowMotionClassesFromTheRealMotion) {
   const fs::path unpack = testing::MakeTempDir("sweep_motion");
   auto dir = UnpackDrive(oxts, "2011_09_26_drive_0013_sync", unpack);
   ASSERT_TRUE(dir.ok()) << dir.status().ToString();
-  auto m = WindowMotion(*dir, "2011_09_26_drive_0013_sync", 0.0, 5.0);
+  auto samples = sim::LoadOxtsPoseSamples(*dir, 0.0, 0.0, 0.0, true);
+  ASSERT_TRUE(samples.ok()) << samples.status().ToString();
+  auto m = WindowMotion(samples->samples, "2011_09_26_drive_0013_sync", 0.0, 5.0);
   ASSERT_TRUE(m.ok()) << m.status().ToString();
   // Drive 0013 starts rolling through Karlsruhe at about 12 m/s (about 60 m in its first 5 s).
   EXPECT_GT(m->path_m, 40.0);

@@ -7,8 +7,6 @@
 #include <fstream>
 #include <sstream>
 
-#include "slam_mms/sim/reference_trajectory.hpp"
-
 namespace slam_mms::sweep {
 namespace fs = std::filesystem;
 
@@ -82,12 +80,9 @@ StatusOr<fs::path> UnpackDrive(const fs::path& oxts_archives, const std::string&
   return dir;
 }
 
-StatusOr<MotionStats> WindowMotion(const fs::path& oxts_dir, const std::string& drive,
-                                   double start_s, double duration_s) {
-  SLAM_MMS_ASSIGN_OR_RETURN(sim::OxtsPoseSamples loaded,
-                            sim::LoadOxtsPoseSamples(oxts_dir, 0.0, 0.0, 0.0, true));
-  const std::vector<sim::PoseSample>& all = loaded.samples;
-  if (all.size() < 2) return DataLossError(oxts_dir.string() + ": fewer than 2 OXTS records");
+StatusOr<MotionStats> WindowMotion(const std::vector<sim::PoseSample>& all,
+                                   const std::string& drive, double start_s, double duration_s) {
+  if (all.size() < 2) return DataLossError(drive + ": fewer than 2 OXTS records");
   const double t0 = all.front().t_s + start_s, t1 = t0 + duration_s;
   std::vector<const sim::PoseSample*> w;
   for (const sim::PoseSample& p : all) {
@@ -188,8 +183,8 @@ StatusOr<std::vector<SweepRun>> BuildPlan(const PlanOptions& o) {
       if (run.scenario == GnssScenario::kOutage) {
         run.outage = std::make_pair(0.3 * duration, 0.4 * duration);
       }
-      SLAM_MMS_ASSIGN_OR_RETURN(
-          run.motion, WindowMotion(dir, run.drive, run.oxts_start_s + o.lead_in_s, duration));
+      SLAM_MMS_ASSIGN_OR_RETURN(run.motion, WindowMotion(loaded.samples, run.drive,
+                                                         run.oxts_start_s + o.lead_in_s, duration));
       std::string short_name = run.drive.substr(0, run.drive.size() - 5);  // without _sync
       run.id = short_name + "_r" + std::to_string(r) + "_" + GnssScenarioName(run.scenario);
       runs.push_back(std::move(run));

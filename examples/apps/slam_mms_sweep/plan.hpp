@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "slam_mms/core/status.hpp"
+#include "slam_mms/sim/reference_trajectory.hpp"
 
 namespace slam_mms::sweep {
 
@@ -82,10 +83,11 @@ StatusOr<std::filesystem::path> UnpackDrive(const std::filesystem::path& oxts_ar
                                             const std::string& drive,
                                             const std::filesystem::path& unpack_dir);
 
-/// The motion of [start_s, start_s + duration_s] of an unpacked drive (seconds after its first
-/// record); `drive` names it for the campus class.
-StatusOr<MotionStats> WindowMotion(const std::filesystem::path& oxts_dir, const std::string& drive,
-                                   double start_s, double duration_s);
+/// The motion of [start_s, start_s + duration_s] (seconds after the first sample) of a drive's
+/// OXTS samples (sim::LoadOxtsPoseSamples); `drive` names it for the campus class. Fails on fewer
+/// than 2 samples.
+StatusOr<MotionStats> WindowMotion(const std::vector<sim::PoseSample>& samples,
+                                   const std::string& drive, double start_s, double duration_s);
 
 /// The runs (drives unpacked on the way). Fails on an unknown drive or an unreadable archive.
 StatusOr<std::vector<SweepRun>> BuildPlan(const PlanOptions& options);

@@ -363,22 +363,29 @@ struct MappingSystem::Impl {
     const auto& submaps = loc->submaps();
     while (submaps_reported < submaps.size() && submaps[submaps_reported].finished) {
       const int32_t id = submaps[submaps_reported].id;
-      // The POS attitude at the submap's reference, for level 2's roll/pitch prior, where GNSS
-      // held the POS over the whole submap (in and after an outage its attitude error outgrows
-      // its covariance: on the demo drive with a 30 s outage, using it there raised full's ATE
-      // from 0.30 to 0.33 m); elsewhere level 2 keeps level 1's roll/pitch, loosely.
+      // The POS attitude for level 2's attitude prior, at the submap's first scan where GNSS
+      // holds the POS at full weight (in an outage its attitude error outgrows its covariance: on
+      // the demo drive with a 30 s outage, using it there raised full's ATE from 0.30 to 0.33 m;
+      // down-weighted fixes leave tilt errors of 0.2-0.3 deg, docs/results.md). It is taken to the
+      // submap frame through level 1's relative pose: R_world_submap = R_world_body *
+      // R_submap_body^T, and a right perturbation d of the body is R_submap_body * d of the
+      // submap. The first scan may precede the POS (the POS can start inside it) and its first
+      // fix. Without one, level 2 keeps level 1's roll/pitch, loosely, and a free yaw.
       const SubmapRecord& rec = submaps[submaps_reported];
       const GnssPrior& gp = ins.gnss_prior();
-      const bool pos_held =
-          external_pos || (gp.AvailabilityAt(rec.start) == GnssAvailability::kValid &&
-                           gp.AvailabilityAt(rec.end) == GnssAvailability::kValid);
       std::optional<SubmapManager::PosAttitude> attitude;
-      if (pos_held && (ins.initialized() || external_pos)) {
-        StatusOr<InsState> s = ins.StateAt(rec.start);
-        if (s.ok()) {
-          attitude = SubmapManager::PosAttitude{s->T_world_body.linear(),
-                                                s->cov_T_world_body.topLeftCorner<3, 3>()};
+      for (size_t j = 0; j < rec.scan_stamps.size() && !attitude; ++j) {
+        const Timestamp t = rec.scan_stamps[j];
+        if (!external_pos &&
+            !(ins.initialized() && gp.AvailabilityAt(t) == GnssAvailability::kValid)) {
+          continue;
         }
+        StatusOr<InsState> s = ins.StateAt(t);
+        if (!s.ok()) continue;
+        const Eigen::Matrix3d R_sb = rec.T_submap_scan[j].linear();
+        attitude = SubmapManager::PosAttitude{
+            s->T_world_body.linear() * R_sb.transpose(),
+            R_sb * s->cov_T_world_body.topLeftCorner<3, 3>() * R_sb.transpose()};
       }
       SLAM_MMS_RETURN_IF_ERROR(
           level2->OnSubmapFinished(loc.get(), id, gnss_returned_pending, attitude));

@@ -44,12 +44,12 @@ class SubmapManager {
     /// at least 1. 0 treats every fix as independent. >= 0. On the default drive with a 60 s
     /// outage, 10 s brings the largest error in the outage from 0.81 to 0.45 m (docs/results.md).
     double gnss_correlation_s = 10.0;
-    /// With GNSS: a roll/pitch prior on each submap reference. Where the POS attitude at the
-    /// reference is given (OnSubmapFinished's `pos_attitude`), the prior is the POS's roll and
-    /// pitch with the POS's own covariance (gravity-levelled, a few hundredths of a degree): a
-    /// weaker prior let the GNSS noise rotate the submaps where the motion holds no rotation
-    /// information (standing, stop-and-go: 0.19 deg of pitch error against the POS's 0.01 on a
-    /// sweep drive, docs/sweep.md). Else level 1's roll and pitch with this sigma [rad]. 0
+    /// With GNSS: an attitude prior on each submap reference. Where the POS attitude is given
+    /// (OnSubmapFinished's `pos_attitude`), the prior is the POS's roll, pitch and yaw with the
+    /// POS's own covariance: a weaker prior let the GNSS noise rotate the submaps where the
+    /// motion holds no rotation information (standing, stop-and-go: 0.19 deg of pitch error
+    /// against the POS's 0.01 on a sweep drive; a free yaw turned standing drives by 2-13 deg,
+    /// docs/sweep.md). Else level 1's roll and pitch with this sigma [rad] and a free yaw. 0
     /// disables the prior.
     double attitude_prior_sigma_rad = 0.0175;
     int max_iterations = 100;
@@ -73,7 +73,7 @@ class SubmapManager {
   /// Level 1 finished `submap_id`: add its factors, test loops, solve when triggered; then the
   /// Localizer's submaps are moved to the new estimates.
   /// `pos_attitude` (may be absent): the POS attitude at the submap's start and its 3x3 rotation
-  /// covariance (right perturbation, body axes, rad^2) for the roll/pitch prior.
+  /// covariance (right perturbation, body axes, rad^2) for the attitude prior (yaw included).
   struct PosAttitude {
     Eigen::Matrix3d R_world_body = Eigen::Matrix3d::Identity();
     Eigen::Matrix3d cov_rotation = Eigen::Matrix3d::Identity();

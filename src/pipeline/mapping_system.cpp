@@ -374,12 +374,10 @@ struct MappingSystem::Impl {
       const SubmapRecord& rec = submaps[submaps_reported];
       const GnssPrior& gp = ins.gnss_prior();
       std::optional<SubmapManager::PosAttitude> attitude;
-      for (size_t j = 0; j < rec.scan_stamps.size() && !attitude; ++j) {
+      const bool pos_ready = external_pos || ins.initialized();
+      for (size_t j = 0; pos_ready && j < rec.scan_stamps.size() && !attitude; ++j) {
         const Timestamp t = rec.scan_stamps[j];
-        if (!external_pos &&
-            !(ins.initialized() && gp.AvailabilityAt(t) == GnssAvailability::kValid)) {
-          continue;
-        }
+        if (!external_pos && gp.AvailabilityAt(t) != GnssAvailability::kValid) continue;
         StatusOr<InsState> s = ins.StateAt(t);
         if (!s.ok()) continue;
         const Eigen::Matrix3d R_sb = rec.T_submap_scan[j].linear();

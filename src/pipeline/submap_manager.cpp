@@ -203,12 +203,12 @@ Status SubmapManager::OnSubmapFinished(Localizer* localizer, int32_t submap_id,
     cov.diagonal() << s_rp * s_rp, s_rp * s_rp, 1.0, 1e4, 1e4, 1e4;
     Eigen::Isometry3d T_prior = rec->T_world_submap;
     if (pos_attitude && pos_attitude->cov_rotation.allFinite() &&
-        pos_attitude->R_world_body.allFinite()) {
-      // The POS's attitude with its own covariance, yaw included (floored at (1e-5 rad)^2: never
+        pos_attitude->R_world_submap.allFinite()) {
+      // The POS's attitude with its own covariance, yaw included (plus (1e-5 rad)^2: never
       // exact). Its yaw matters where the positions cannot hold it: the GNSS positions of a
       // vehicle standing still hold no yaw, so a free yaw followed the GNSS noise (it turned
       // whole standing drives of the sweep by 2-13 deg while level 1 held 0.2 deg).
-      T_prior.linear() = pos_attitude->R_world_body;
+      T_prior.linear() = pos_attitude->R_world_submap;
       const Eigen::Matrix3d c =
           0.5 * (pos_attitude->cov_rotation + pos_attitude->cov_rotation.transpose());
       cov.topLeftCorner<3, 3>() = c + 1e-10 * Eigen::Matrix3d::Identity();

@@ -72,10 +72,10 @@ class SubmapManager {
                           const Eigen::Vector3d& t_body_antenna);
   /// Level 1 finished `submap_id`: add its factors, test loops, solve when triggered; then the
   /// Localizer's submaps are moved to the new estimates.
-  /// `pos_attitude` (may be absent): the POS attitude at the submap's start and its 3x3 rotation
-  /// covariance (right perturbation, body axes, rad^2) for the attitude prior (yaw included).
+  /// `pos_attitude` (may be absent): the submap frame's attitude from the POS and its 3x3 rotation
+  /// covariance (right perturbation, submap axes, rad^2) for the attitude prior (yaw included).
   struct PosAttitude {
-    Eigen::Matrix3d R_world_body = Eigen::Matrix3d::Identity();
+    Eigen::Matrix3d R_world_submap = Eigen::Matrix3d::Identity();
     Eigen::Matrix3d cov_rotation = Eigen::Matrix3d::Identity();
   };
   Status OnSubmapFinished(Localizer* localizer, int32_t submap_id, bool gnss_returned_after_outage,

@@ -59,6 +59,7 @@ Trajectory = _C.Trajectory
 Options = _C.Options
 InsOptions = _C.InsOptions
 GnssPriorOptions = _C.GnssPriorOptions
+GnssErrorModel = _C.GnssErrorModel
 LocalizerOptions = _C.LocalizerOptions
 Level2Options = _C.Level2Options
 SurfelMapOptions = _C.SurfelMapOptions
@@ -140,7 +141,7 @@ def _options_to_dict(self) -> dict:
     return out
 
 
-for _cls in (Options, InsOptions, GnssPriorOptions, LocalizerOptions, Level2Options,
+for _cls in (Options, InsOptions, GnssPriorOptions, GnssErrorModel, LocalizerOptions, Level2Options,
              SurfelMapOptions, SurfelRendererOptions, RangeProjectionOptions,
              ProjectiveIcpOptions, PointIcpOptions, SlidingWindowOptions, DeskewOptions,
              ImuPreintegrationOptions, KittiRawReaderOptions):

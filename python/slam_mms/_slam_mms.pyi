@@ -352,6 +352,29 @@ class GnssAvailability:
     @property
     def value(self) -> int: ...
 
+class GnssErrorModel:
+    """Time-correlated GNSS error of one solution type (InsFilter)."""
+    _fields: typing.ClassVar[tuple]
+    def to_dict(self) -> dict: ...
+    def __init__(self: GnssErrorModel) -> None:
+        ...
+    def __copy__(self: GnssErrorModel) -> GnssErrorModel:
+        ...
+    def copy(self: GnssErrorModel) -> GnssErrorModel:
+        """A deep copy."""
+    @property
+    def correlated_fraction(self) -> float:
+        """Share of the fix variance that is a Gauss-Markov bias, [0, 1)"""
+    @correlated_fraction.setter
+    def correlated_fraction(self, value: float) -> None: ...
+    @property
+    def correlation_time_s(self) -> float:
+        """[s]"""
+    @correlation_time_s.setter
+    def correlation_time_s(self, value: float) -> None: ...
+    def to_dict(*args, **kwargs) -> typing.Any:
+        """The fields as a dict (nested options as dicts, arrays as lists)."""
+
 class GnssFix:
     """One GNSS position fix of the antenna in WGS-84."""
     def __init__(self: GnssFix, stamp_ns: int, latitude_deg: float, longitude_deg: float, height_m: float, sigma_horizontal_m: float = 1.0, sigma_vertical_m: float = 1.5, type: GnssFixType = ..., num_satellites: int = 0) -> None:
@@ -679,6 +702,66 @@ class InsOptions:
         """[s]"""
     @history_s.setter
     def history_s(self, value: float) -> None: ...
+    @property
+    def gnss_error_rtk_fixed(self) -> GnssErrorModel:
+        """GnssErrorModel of RTK-fixed solutions (white by default)."""
+    @gnss_error_rtk_fixed.setter
+    def gnss_error_rtk_fixed(self, value: GnssErrorModel) -> None: ...
+    @property
+    def gnss_error_rtk_float(self) -> GnssErrorModel:
+        """GnssErrorModel of float ones."""
+    @gnss_error_rtk_float.setter
+    def gnss_error_rtk_float(self, value: GnssErrorModel) -> None: ...
+    @property
+    def gnss_error_code(self) -> GnssErrorModel:
+        """GnssErrorModel of single-point and differential ones."""
+    @gnss_error_code.setter
+    def gnss_error_code(self, value: GnssErrorModel) -> None: ...
+    @property
+    def zupt(self) -> bool:
+        """Zero-velocity updates while standing"""
+    @zupt.setter
+    def zupt(self, value: bool) -> None: ...
+    @property
+    def zupt_window_s(self) -> float:
+        """[s]"""
+    @zupt_window_s.setter
+    def zupt_window_s(self, value: float) -> None: ...
+    @property
+    def zupt_max_gyro_radps(self) -> float:
+        """[rad/s]"""
+    @zupt_max_gyro_radps.setter
+    def zupt_max_gyro_radps(self, value: float) -> None: ...
+    @property
+    def zupt_max_accel_mps2(self) -> float:
+        """Max gravity-compensated acceleration [m/s^2]"""
+    @zupt_max_accel_mps2.setter
+    def zupt_max_accel_mps2(self, value: float) -> None: ...
+    @property
+    def zupt_max_speed_mps(self) -> float:
+        """[m/s]"""
+    @zupt_max_speed_mps.setter
+    def zupt_max_speed_mps(self, value: float) -> None: ...
+    @property
+    def zupt_sigma_mps(self) -> float:
+        """[m/s]"""
+    @zupt_sigma_mps.setter
+    def zupt_sigma_mps(self, value: float) -> None: ...
+    @property
+    def zupt_interval_s(self) -> float:
+        """[s]"""
+    @zupt_interval_s.setter
+    def zupt_interval_s(self, value: float) -> None: ...
+    @property
+    def nhc_sigma_mps(self) -> float:
+        """Non-holonomic constraint sigma, 0: off [m/s]"""
+    @nhc_sigma_mps.setter
+    def nhc_sigma_mps(self, value: float) -> None: ...
+    @property
+    def nhc_min_speed_mps(self) -> float:
+        """[m/s]"""
+    @nhc_min_speed_mps.setter
+    def nhc_min_speed_mps(self, value: float) -> None: ...
     @property
     def gnss(self) -> GnssPriorOptions:
         """GnssPriorOptions (lever arm, floors, gates, outage timeout)."""

@@ -124,6 +124,14 @@ void RegisterOptions(py::module_& m) {
       .Validated()
       .Done();
 
+  using GEM = InsFilter::Options::GnssErrorModel;
+  OptionsClass<GEM>(m, "GnssErrorModel",
+                    "Time-correlated GNSS error of one solution type (InsFilter).")
+      .Field("correlated_fraction", &GEM::correlated_fraction,
+             "Share of the fix variance that is a Gauss-Markov bias, [0, 1)")
+      .Field("correlation_time_s", &GEM::correlation_time_s, "[s]")
+      .Done();
+
   using IO = InsFilter::Options;
   OptionsClass<IO>(m, "InsOptions", "InsFilter::Options: the POS (error-state EKF).")
       .Field("gyro_noise_density", &IO::gyro_noise_density, "[rad/s/sqrt(Hz)]")
@@ -141,6 +149,21 @@ void RegisterOptions(py::module_& m) {
       .Field("max_fix_latency_s", &IO::max_fix_latency_s, "[s]")
       .Field("max_extrapolation_s", &IO::max_extrapolation_s, "[s]")
       .Field("history_s", &IO::history_s, "[s]")
+      .Field("gnss_error_rtk_fixed", &IO::gnss_error_rtk_fixed,
+             "GnssErrorModel of RTK-fixed solutions (white by default).")
+      .Field("gnss_error_rtk_float", &IO::gnss_error_rtk_float, "GnssErrorModel of float ones.")
+      .Field("gnss_error_code", &IO::gnss_error_code,
+             "GnssErrorModel of single-point and differential ones.")
+      .Field("zupt", &IO::zupt, "Zero-velocity updates while standing")
+      .Field("zupt_window_s", &IO::zupt_window_s, "[s]")
+      .Field("zupt_max_gyro_radps", &IO::zupt_max_gyro_radps, "[rad/s]")
+      .Field("zupt_max_accel_mps2", &IO::zupt_max_accel_mps2,
+             "Max gravity-compensated acceleration [m/s^2]")
+      .Field("zupt_max_speed_mps", &IO::zupt_max_speed_mps, "[m/s]")
+      .Field("zupt_sigma_mps", &IO::zupt_sigma_mps, "[m/s]")
+      .Field("zupt_interval_s", &IO::zupt_interval_s, "[s]")
+      .Field("nhc_sigma_mps", &IO::nhc_sigma_mps, "Non-holonomic constraint sigma, 0: off [m/s]")
+      .Field("nhc_min_speed_mps", &IO::nhc_min_speed_mps, "[m/s]")
       .Field("gnss", &IO::gnss, "GnssPriorOptions (lever arm, floors, gates, outage timeout).")
       .Validated()
       .Done();

@@ -255,6 +255,7 @@ StatusOr<GnssDecisionResult> GnssPrior::Process(const GnssFix& fix,
     }
   }
   im.rejection_streak_start.reset();
+  result.innovation_weight = weight;
   if (fix.type < o.full_weight_fix_type) {
     weight *= o.downweight_variance_factor;
     if (reason.empty()) reason = std::string("fix type ") + GnssFixTypeName(fix.type);

@@ -12,7 +12,10 @@ namespace slam_mms {
 namespace {
 
 // Error-state indices.
-constexpr int kP = 0, kV = 3, kTh = 6, kBa = 9, kBg = 12;
+constexpr int kP = 0, kV = 3, kTh = 6, kBa = 9, kBg = 12, kBn = 15;
+constexpr int kN = kInsErrorDim;
+// Variance of b_gnss while the solution type's errors are white (kept positive for the smoother).
+constexpr double kWhiteBiasVariance = 1e-10;
 
 bool PositiveFinite(double x) { return std::isfinite(x) && x > 0.0; }
 
@@ -29,6 +32,7 @@ struct Nominal {
   Eigen::Vector3d v = Eigen::Vector3d::Zero();
   Eigen::Vector3d ba = Eigen::Vector3d::Zero();
   Eigen::Vector3d bg = Eigen::Vector3d::Zero();
+  Eigen::Vector3d bn = Eigen::Vector3d::Zero();  // GNSS position bias (world)
 };
 
 struct HistoryEntry {
@@ -36,10 +40,10 @@ struct HistoryEntry {
   Matrix6d cov_pose;  // rotation first, right perturbation of T_world_body
 };
 
-// 6x6 pose covariance [omega, v_body] from the 15x15 [dp_world, dv, dtheta, ...]:
+// 6x6 pose covariance [omega, v_body] from the 18x18 [dp_world, dv, dtheta, ...]:
 // T_hat Exp([w; rho]) = (R Exp(w), p + R rho) -> w = dtheta, rho = R^T dp.
-Matrix6d PoseCovariance(const Matrix15d& P, const Eigen::Matrix3d& R) {
-  Eigen::Matrix<double, 6, 15> J = Eigen::Matrix<double, 6, 15>::Zero();
+Matrix6d PoseCovariance(const InsErrorMatrix& P, const Eigen::Matrix3d& R) {
+  Eigen::Matrix<double, 6, kN> J = Eigen::Matrix<double, 6, kN>::Zero();
   J.block<3, 3>(0, kTh) = Eigen::Matrix3d::Identity();
   J.block<3, 3>(3, kP) = R.transpose();
   return J * P * J.transpose();
@@ -88,6 +92,31 @@ Status InsFilter::Options::Validate() const {
   if (!(max_extrapolation_s >= 0.0) || !std::isfinite(max_extrapolation_s))
     return FieldError("max_extrapolation_s", max_extrapolation_s, "must be >= 0");
   if (!PositiveFinite(history_s)) return FieldError("history_s", history_s, "must be > 0");
+  for (const auto& [name, m] : {std::pair<const char*, const GnssErrorModel*>{
+                                    "gnss_error_rtk_fixed", &gnss_error_rtk_fixed},
+                                {"gnss_error_rtk_float", &gnss_error_rtk_float},
+                                {"gnss_error_code", &gnss_error_code}}) {
+    if (!(m->correlated_fraction >= 0.0 && m->correlated_fraction < 1.0)) {
+      return FieldError((std::string(name) + ".correlated_fraction").c_str(),
+                        m->correlated_fraction, "must be in [0, 1)");
+    }
+    if (!PositiveFinite(m->correlation_time_s)) {
+      return FieldError((std::string(name) + ".correlation_time_s").c_str(), m->correlation_time_s,
+                        "must be > 0");
+    }
+  }
+  for (const auto& [name, v] : {std::pair<const char*, double>{"zupt_window_s", zupt_window_s},
+                                {"zupt_max_gyro_radps", zupt_max_gyro_radps},
+                                {"zupt_max_accel_mps2", zupt_max_accel_mps2},
+                                {"zupt_max_speed_mps", zupt_max_speed_mps},
+                                {"zupt_sigma_mps", zupt_sigma_mps},
+                                {"zupt_interval_s", zupt_interval_s}}) {
+    if (!PositiveFinite(v)) return FieldError(name, v, "must be > 0");
+  }
+  if (!(nhc_sigma_mps >= 0.0) || !std::isfinite(nhc_sigma_mps))
+    return FieldError("nhc_sigma_mps", nhc_sigma_mps, "must be >= 0 (0: off)");
+  if (!(nhc_min_speed_mps >= 0.0) || !std::isfinite(nhc_min_speed_mps))
+    return FieldError("nhc_min_speed_mps", nhc_min_speed_mps, "must be >= 0");
   return gnss.Validate();
 }
 
@@ -111,13 +140,48 @@ struct InsFilter::Impl {
   Eigen::Vector3d pending_bg = Eigen::Vector3d::Zero();
   std::optional<Timestamp> pending_stamp;  // when pending_q / pending_v hold (carried by the IMU)
   Nominal x;
-  Matrix15d P = Matrix15d::Zero();
+  InsErrorMatrix P = InsErrorMatrix::Zero();
   std::optional<ImuSample> last_imu;
   std::deque<HistoryEntry> history;
   // Smoother record (options.record_steps): the transition since the last recorded step.
   std::vector<InsFilterStep> steps;
-  Matrix15d F_since_step = Matrix15d::Identity();
+  InsErrorMatrix F_since_step = InsErrorMatrix::Identity();
   bool propagated_since_step = false;
+  // GNSS error model: the solution type b_gnss belongs to (-1: none yet), its stationary
+  // covariance and correlation time, the last used fix.
+  int bias_model = -1;
+  Eigen::Matrix3d bias_cov = kWhiteBiasVariance * Eigen::Matrix3d::Identity();
+  double bias_tau_s = 30.0;
+  std::optional<Timestamp> last_used_fix;
+  // Motion constraints: the stationarity detector's window, the ZARU accumulator.
+  std::deque<ImuSample> still_window;
+  std::optional<Timestamp> last_zupt, last_nhc, zaru_start;
+  Eigen::Vector3d zaru_sum = Eigen::Vector3d::Zero();
+  int zaru_n = 0;
+  int num_zupt = 0;
+
+  static int ModelIndex(GnssFixType t) {
+    return t >= GnssFixType::kRtkFixed ? 0 : t == GnssFixType::kRtkFloat ? 1 : 2;
+  }
+  const Options::GnssErrorModel& ErrorModel(int index) const {
+    return index == 0   ? options.gnss_error_rtk_fixed
+           : index == 1 ? options.gnss_error_rtk_float
+                        : options.gnss_error_code;
+  }
+
+  // Clears the GNSS-model and constraint state (a new initialisation).
+  void ResetAuxiliary() {
+    x.bn.setZero();
+    bias_model = -1;
+    bias_cov = kWhiteBiasVariance * Eigen::Matrix3d::Identity();
+    last_used_fix.reset();
+    still_window.clear();
+    last_zupt.reset();
+    last_nhc.reset();
+    zaru_start.reset();
+    zaru_sum.setZero();
+    zaru_n = 0;
+  }
 
   Eigen::Vector3d g() const {
     double gm = options.gravity_mps2;
@@ -141,6 +205,134 @@ struct InsFilter::Impl {
     P.block<3, 3>(kTh, kTh) = R.transpose() * cov_world * R;
     P.block<3, 3>(kBa, kBa).diagonal().setConstant(std::pow(options.init_sigma_accel_bias_mps2, 2));
     P.block<3, 3>(kBg, kBg).diagonal().setConstant(std::pow(options.init_sigma_gyro_bias_radps, 2));
+    P.block<3, 3>(kBn, kBn) = bias_cov;
+  }
+
+  // A new GNSS solution starts: b_gnss restarts from zero with the stationary covariance `cov`
+  // (its block of the transition is zero). Recorded as part of the propagation to this stamp.
+  // False (nothing done) when the step at this stamp already holds an update (two fixes at one
+  // stamp): the transition cannot be put before it.
+  bool ResetBias(const Eigen::Matrix3d& cov, double tau_s) {
+    if (options.record_steps && !steps.empty() && steps.back().stamp == x.stamp &&
+        steps.back().updated) {
+      return false;
+    }
+    InsErrorMatrix Fr = InsErrorMatrix::Identity();
+    Fr.block<3, 3>(kBn, kBn).setZero();
+    P = Fr * P * Fr.transpose();
+    P.block<3, 3>(kBn, kBn) = cov;
+    x.bn.setZero();
+    bias_cov = cov;
+    bias_tau_s = tau_s;
+    if (options.record_steps && !steps.empty() && steps.back().stamp == x.stamp) {
+      InsFilterStep& st = steps.back();
+      st.F = Fr * st.F;
+      st.P_prior = st.P_posterior = P;
+      st.gnss_bias_prior = st.gnss_bias_posterior = x.bn;
+    } else if (options.record_steps) {
+      F_since_step = Fr * F_since_step;
+      propagated_since_step = true;
+    }
+    return true;
+  }
+
+  // EKF update with the innovation z - h(x) = H dx + n, n ~ N(0, Rm) (Joseph form), the
+  // injection into the nominal state and the reset Jacobian of the attitude error.
+  template <int M>
+  void Update(const Eigen::Matrix<double, M, kN>& H, const Eigen::Matrix<double, M, 1>& innovation,
+              const Eigen::Matrix<double, M, M>& Rm) {
+    const Eigen::Matrix<double, M, M> S = H * P * H.transpose() + Rm;
+    const Eigen::Matrix<double, kN, M> K = S.ldlt().solve(H * P).transpose();
+    const InsErrorVector dx = K * innovation;
+    const InsErrorMatrix IKH = InsErrorMatrix::Identity() - K * H;
+    P = IKH * P * IKH.transpose() + K * Rm * K.transpose();
+    const Eigen::Matrix3d R = x.q.toRotationMatrix();
+    x.p += dx.template segment<3>(kP);
+    x.v += dx.template segment<3>(kV);
+    const Eigen::Vector3d dth = dx.template segment<3>(kTh);
+    x.q = Eigen::Quaterniond(R * so3::Exp(dth)).normalized();
+    x.ba += dx.template segment<3>(kBa);
+    x.bg += dx.template segment<3>(kBg);
+    x.bn += dx.template segment<3>(kBn);
+    InsErrorMatrix G = InsErrorMatrix::Identity();
+    G.block<3, 3>(kTh, kTh) -= 0.5 * so3::Hat(dth);
+    P = G * P * G.transpose();
+    P = 0.5 * (P + P.transpose());
+  }
+
+  // Zero-velocity update (+ gyro bias from the mean rate) while the IMU is still and the speed
+  // low; the non-holonomic constraint while moving. After the propagation to `sample`.
+  void ApplyMotionConstraints(const ImuSample& sample) {
+    const Timestamp t = sample.stamp;
+    bool still = false;
+    if (options.zupt) {
+      still_window.push_back(sample);
+      while (!still_window.empty() &&
+             t.SecondsSince(still_window.front().stamp) > options.zupt_window_s + 1e-9) {
+        still_window.pop_front();
+      }
+      const double span = t.SecondsSince(still_window.front().stamp);
+      still = still_window.size() >= 3 && span >= 0.8 * options.zupt_window_s &&
+              x.v.norm() < options.zupt_max_speed_mps;
+      const Eigen::Matrix3d R = x.q.toRotationMatrix();
+      for (size_t i = 0; still && i < still_window.size(); ++i) {
+        const ImuSample& s = still_window[i];
+        still = (s.gyro_radps - x.bg).norm() < options.zupt_max_gyro_radps &&
+                (R * (s.accel_mps2 - x.ba) + g()).norm() < options.zupt_max_accel_mps2;
+      }
+    }
+    if (!still) {
+      zaru_start.reset();
+      zaru_sum.setZero();
+      zaru_n = 0;
+    } else {
+      if (!zaru_start) zaru_start = t;
+      zaru_sum += sample.gyro_radps;
+      ++zaru_n;
+      if (!last_zupt || t.SecondsSince(*last_zupt) >= options.zupt_interval_s - 1e-9) {
+        // Rows 0-2: v = 0; rows 3-5 (with >= 2 samples): mean rate = bg.
+        const bool zaru = zaru_n >= 2;
+        Eigen::Matrix<double, 6, kN> H = Eigen::Matrix<double, 6, kN>::Zero();
+        Eigen::Matrix<double, 6, 1> z = Eigen::Matrix<double, 6, 1>::Zero();
+        Eigen::Matrix<double, 6, 6> Rm = Eigen::Matrix<double, 6, 6>::Identity();
+        H.block<3, 3>(0, kV).setIdentity();
+        z.head<3>() = -x.v;
+        Rm.topLeftCorner<3, 3>() *= options.zupt_sigma_mps * options.zupt_sigma_mps;
+        if (zaru) {
+          const double T = std::max(t.SecondsSince(*zaru_start), 1e-3);
+          H.block<3, 3>(3, kBg).setIdentity();
+          z.tail<3>() = zaru_sum / zaru_n - x.bg;
+          Rm.bottomRightCorner<3, 3>() *=
+              options.gyro_noise_density * options.gyro_noise_density / T + 1e-10;
+          Update<6>(H, z, Rm);
+        } else {
+          Update<3>(H.topRows<3>(), z.head<3>(), Rm.topLeftCorner<3, 3>());
+        }
+        ++num_zupt;
+        last_zupt = t;
+        zaru_start = t;
+        zaru_sum.setZero();
+        zaru_n = 0;
+        Record();
+      }
+      return;
+    }
+    if (options.nhc_sigma_mps > 0.0 && x.v.norm() > options.nhc_min_speed_mps &&
+        (!last_nhc || t.SecondsSince(*last_nhc) >= options.zupt_interval_s - 1e-9)) {
+      // v_body = R^T v ~ R_hat^T v_hat + R_hat^T dv + [R_hat^T v_hat]x dtheta; rows y, z.
+      const Eigen::Matrix3d Rt = x.q.toRotationMatrix().transpose();
+      const Eigen::Vector3d vb = Rt * x.v;
+      Eigen::Matrix<double, 3, kN> J = Eigen::Matrix<double, 3, kN>::Zero();
+      J.block<3, 3>(0, kV) = Rt;
+      J.block<3, 3>(0, kTh) = so3::Hat(vb);
+      const Eigen::Matrix<double, 2, kN> H = J.bottomRows<2>();
+      const Eigen::Vector2d z = -vb.tail<2>();
+      const Eigen::Matrix2d Rm =
+          options.nhc_sigma_mps * options.nhc_sigma_mps * Eigen::Matrix2d::Identity();
+      Update<2>(H, z, Rm);
+      last_nhc = t;
+      Record();
+    }
   }
 
   void Record() {
@@ -168,12 +360,14 @@ struct InsFilter::Impl {
       st.posterior = st.prior;
       st.P_prior = P;
       st.P_posterior = P;
-      st.F = steps.empty() ? Matrix15d::Identity() : F_since_step;
+      st.gnss_bias_prior = st.gnss_bias_posterior = x.bn;
+      st.F = steps.empty() ? InsErrorMatrix::Identity() : F_since_step;
       steps.push_back(st);
     } else {
       InsFilterStep& st = steps.back();
       st.posterior = ToInsState(e);
       st.P_posterior = P;
+      st.gnss_bias_posterior = x.bn;
       st.updated = true;
     }
     F_since_step.setIdentity();
@@ -191,7 +385,7 @@ struct InsFilter::Impl {
     const Eigen::Vector3d acc_world = R_mid * a + g();
     const double dt2 = dt * dt;
 
-    Matrix15d F = Matrix15d::Identity();
+    InsErrorMatrix F = InsErrorMatrix::Identity();
     const Eigen::Matrix3d a_hat = so3::Hat(a);
     F.block<3, 3>(kP, kV) = Eigen::Matrix3d::Identity() * dt;
     F.block<3, 3>(kP, kTh) = -0.5 * R_mid * a_hat * dt2;
@@ -200,7 +394,9 @@ struct InsFilter::Impl {
     F.block<3, 3>(kV, kBa) = -R_mid * dt;
     F.block<3, 3>(kTh, kTh) = dR.transpose();
     F.block<3, 3>(kTh, kBg) = -so3::RightJacobian(phi) * dt;
-    Matrix15d Q = Matrix15d::Zero();
+    const double e_bn = std::exp(-dt / bias_tau_s);
+    F.block<3, 3>(kBn, kBn) *= e_bn;
+    InsErrorMatrix Q = InsErrorMatrix::Zero();
     const double qa = std::pow(options.accel_noise_density, 2) * dt;
     const double qg = std::pow(options.gyro_noise_density, 2) * dt;
     Q.block<3, 3>(kP, kP).diagonal().setConstant(qa * dt2 / 3.0);
@@ -211,6 +407,7 @@ struct InsFilter::Impl {
     Q.block<3, 3>(kBa, kBa).diagonal().setConstant(std::pow(options.accel_bias_random_walk, 2) *
                                                    dt);
     Q.block<3, 3>(kBg, kBg).diagonal().setConstant(std::pow(options.gyro_bias_random_walk, 2) * dt);
+    Q.block<3, 3>(kBn, kBn) = (1.0 - e_bn * e_bn) * bias_cov;
     P = F * P * F.transpose() + Q;
     P = 0.5 * (P + P.transpose());
     if (options.record_steps) {
@@ -221,6 +418,7 @@ struct InsFilter::Impl {
     x.p += x.v * dt + 0.5 * acc_world * dt2;
     x.v += acc_world * dt;
     x.q = Eigen::Quaterniond(R * dR).normalized();
+    x.bn *= e_bn;
   }
 
   // Nominal-only prediction with a held sample (for extrapolated queries).
@@ -255,7 +453,9 @@ const InsFilter::Options& InsFilter::options() const { return impl_->options; }
 const GnssPrior& InsFilter::gnss_prior() const { return impl_->gnss; }
 GnssPrior& InsFilter::mutable_gnss_prior() { return impl_->gnss; }
 bool InsFilter::initialized() const { return impl_->initialized; }
-const Matrix15d& InsFilter::covariance() const { return impl_->P; }
+const InsErrorMatrix& InsFilter::covariance() const { return impl_->P; }
+Eigen::Vector3d InsFilter::gnss_bias_world() const { return impl_->x.bn; }
+int InsFilter::num_zero_velocity_updates() const { return impl_->num_zupt; }
 Eigen::Vector3d InsFilter::gravity_world() const { return impl_->g(); }
 
 Status InsFilter::Initialize(const InsState& state) {
@@ -272,6 +472,7 @@ Status InsFilter::Initialize(const InsState& state) {
   im.x.v = state.v_world_mps;
   im.x.ba = state.accel_bias_mps2;
   im.x.bg = state.gyro_bias_radps;
+  im.ResetAuxiliary();
   im.InitCovariance(im.options.init_sigma_position_m, im.options.init_sigma_position_m);
   im.initialized = true;
   im.pending_q.reset();
@@ -381,6 +582,7 @@ Status InsFilter::AddImu(const ImuSample& sample) {
   im.Propagate(a, w, dt);
   im.x.stamp = sample.stamp;
   im.Record();
+  im.ApplyMotionConstraints(sample);
   return OkStatus();
 }
 
@@ -411,8 +613,22 @@ StatusOr<GnssDecisionResult> InsFilter::AddGnss(const GnssFix& fix) {
       im.pending_stamp.reset();
       im.x.p = r.measurement.p_world_antenna - im.x.q.toRotationMatrix() * t_ba;
       const Eigen::Matrix3d& C = r.measurement.cov_world_antenna;
+      im.ResetAuxiliary();
+      // The fix's error (bias + white) is the position's: cov(dp, db) = -bias covariance.
+      const int model = Impl::ModelIndex(fix.type);
+      const Options::GnssErrorModel& em = im.ErrorModel(model);
+      if (em.correlated_fraction > 0.0) {
+        im.bias_cov = em.correlated_fraction * C / r.innovation_weight;
+      }
+      im.bias_model = model;
+      im.bias_tau_s = em.correlation_time_s;
+      im.last_used_fix = fix.stamp;
       im.InitCovariance(std::sqrt(C(0, 0)), std::sqrt(C(2, 2)));
       im.P.block<3, 3>(kP, kP) = C;
+      if (em.correlated_fraction > 0.0) {
+        im.P.block<3, 3>(kP, kBn) = -im.bias_cov;
+        im.P.block<3, 3>(kBn, kP) = -im.bias_cov;
+      }
       im.initialized = true;
       im.pending_q.reset();
       im.history.clear();
@@ -438,34 +654,44 @@ StatusOr<GnssDecisionResult> InsFilter::AddGnss(const GnssFix& fix) {
     im.Record();
   }
   const Eigen::Matrix3d R = im.x.q.toRotationMatrix();
-  Eigen::Matrix<double, 3, 15> H = Eigen::Matrix<double, 3, 15>::Zero();
+  // A new solution (another fix type, or the first fix after an outage) has its own bias.
+  const int model = Impl::ModelIndex(fix.type);
+  const bool same_stamp_updated = im.options.record_steps && !im.steps.empty() &&
+                                  im.steps.back().stamp == im.x.stamp && im.steps.back().updated;
+  const bool new_solution = !same_stamp_updated && (model != im.bias_model || !im.last_used_fix ||
+                                                    fix.stamp.SecondsSince(*im.last_used_fix) >
+                                                        im.options.gnss.outage_timeout_s);
+  Eigen::Matrix<double, 3, kN> H = Eigen::Matrix<double, 3, kN>::Zero();
   H.block<3, 3>(0, kP) = Eigen::Matrix3d::Identity();
   H.block<3, 3>(0, kV) = -lag * Eigen::Matrix3d::Identity();
   H.block<3, 3>(0, kTh) = -R * so3::Hat(t_ba);
+  // The innovation test: the measured covariance already holds the bias's share, so the
+  // prediction's covariance leaves b_gnss out (its mean is in, unless a new solution starts).
   GnssPrediction pred;
-  pred.p_world_antenna = im.x.p + R * t_ba - im.x.v * lag;
-  pred.cov_world_antenna = H * im.P * H.transpose();
+  pred.p_world_antenna = im.x.p + R * t_ba - im.x.v * lag + (new_solution ? 0.0 : 1.0) * im.x.bn;
+  pred.cov_world_antenna =
+      H.leftCols<kBn>() * im.P.topLeftCorner<kBn, kBn>() * H.leftCols<kBn>().transpose();
+  H.block<3, 3>(0, kBn) = Eigen::Matrix3d::Identity();
   SLAM_MMS_ASSIGN_OR_RETURN(GnssDecisionResult r, im.gnss.Process(fix, &pred));
   if (!r.usable()) return r;
 
-  // EKF update (Joseph form), then injection into the nominal state and the reset Jacobian.
-  const Eigen::Matrix3d& Rm = r.measurement.cov_world_antenna;
-  const Eigen::Matrix3d S = H * im.P * H.transpose() + Rm;
-  const Eigen::Matrix<double, 15, 3> K = im.P * H.transpose() * S.inverse();
-  const Eigen::Matrix<double, 15, 1> dx =
-      K * (r.measurement.p_world_antenna - pred.p_world_antenna);
-  const Matrix15d IKH = Matrix15d::Identity() - K * H;
-  im.P = IKH * im.P * IKH.transpose() + K * Rm * K.transpose();
-  im.x.p += dx.segment<3>(kP);
-  im.x.v += dx.segment<3>(kV);
-  const Eigen::Vector3d dth = dx.segment<3>(kTh);
-  im.x.q = Eigen::Quaterniond(R * so3::Exp(dth)).normalized();
-  im.x.ba += dx.segment<3>(kBa);
-  im.x.bg += dx.segment<3>(kBg);
-  Matrix15d G = Matrix15d::Identity();
-  G.block<3, 3>(kTh, kTh) -= 0.5 * so3::Hat(dth);
-  im.P = G * im.P * G.transpose();
-  im.P = 0.5 * (im.P + im.P.transpose());
+  // Split the measured covariance: the correlated share is b_gnss's stationary covariance (the
+  // fix type's weight included, the innovation test's inflation not), the rest is white.
+  const Eigen::Matrix3d& C = r.measurement.cov_world_antenna;
+  const Options::GnssErrorModel& em = im.ErrorModel(model);
+  const Eigen::Matrix3d bias_cov =
+      em.correlated_fraction > 0.0
+          ? Eigen::Matrix3d(em.correlated_fraction * C / r.innovation_weight)
+          : Eigen::Matrix3d(kWhiteBiasVariance * Eigen::Matrix3d::Identity());
+  const Eigen::Matrix3d Rm = em.correlated_fraction > 0.0 ? Eigen::Matrix3d(C - bias_cov) : C;
+  if (new_solution && im.ResetBias(bias_cov, em.correlation_time_s)) {
+    im.bias_model = model;
+  } else {
+    im.bias_cov = bias_cov;  // the stationary covariance follows the reported sigma
+  }
+  im.last_used_fix = fix.stamp;
+  const Eigen::Vector3d predicted = im.x.p + R * t_ba - im.x.v * lag + im.x.bn;
+  im.Update<3>(H, r.measurement.p_world_antenna - predicted, Rm);
   im.Record();
   return r;
 }

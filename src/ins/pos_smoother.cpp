@@ -9,21 +9,22 @@
 namespace slam_mms {
 namespace {
 
-using Vector15d = Eigen::Matrix<double, 15, 1>;
-constexpr int kP = 0, kV = 3, kTh = 6, kBa = 9, kBg = 12;
+constexpr int kP = 0, kV = 3, kTh = 6, kBa = 9, kBg = 12, kBn = 15;
 
-// a [-] b in the filter's error definition (a = b [+] d).
-Vector15d BoxMinus(const InsState& a, const InsState& b) {
-  Vector15d d;
+// a [-] b in the filter's error definition (a = b [+] d); bn_*: the GNSS bias.
+InsErrorVector BoxMinus(const InsState& a, const Eigen::Vector3d& bn_a, const InsState& b,
+                        const Eigen::Vector3d& bn_b) {
+  InsErrorVector d;
   d.segment<3>(kP) = a.T_world_body.translation() - b.T_world_body.translation();
   d.segment<3>(kV) = a.v_world_mps - b.v_world_mps;
   d.segment<3>(kTh) = so3::Log(b.T_world_body.linear().transpose() * a.T_world_body.linear());
   d.segment<3>(kBa) = a.accel_bias_mps2 - b.accel_bias_mps2;
   d.segment<3>(kBg) = a.gyro_bias_radps - b.gyro_bias_radps;
+  d.segment<3>(kBn) = bn_a - bn_b;
   return d;
 }
 
-InsState BoxPlus(const InsState& x, const Vector15d& d) {
+InsState BoxPlus(const InsState& x, const InsErrorVector& d) {
   InsState s = x;
   const Eigen::Matrix3d R = x.T_world_body.linear() * so3::Exp(d.segment<3>(kTh));
   s.T_world_body =
@@ -34,9 +35,9 @@ InsState BoxPlus(const InsState& x, const Vector15d& d) {
   return s;
 }
 
-// 6x6 pose covariance [omega, v_body] of T_world_body from the 15x15 (as InsFilter reports it).
-Matrix6d PoseCovariance(const Matrix15d& P, const Eigen::Matrix3d& R) {
-  Eigen::Matrix<double, 6, 15> J = Eigen::Matrix<double, 6, 15>::Zero();
+// 6x6 pose covariance [omega, v_body] of T_world_body from the 18x18 (as InsFilter reports it).
+Matrix6d PoseCovariance(const InsErrorMatrix& P, const Eigen::Matrix3d& R) {
+  Eigen::Matrix<double, 6, kInsErrorDim> J = Eigen::Matrix<double, 6, kInsErrorDim>::Zero();
   J.block<3, 3>(0, kTh) = Eigen::Matrix3d::Identity();
   J.block<3, 3>(3, kP) = R.transpose();
   return J * P * J.transpose();
@@ -72,7 +73,7 @@ StatusOr<std::vector<InsState>> PosSmoother::Smooth(const std::vector<InsFilterS
 }
 
 StatusOr<std::vector<InsState>> PosSmoother::Smooth(const std::vector<InsFilterStep>& steps,
-                                                    std::vector<Matrix15d>* P_smoothed) {
+                                                    std::vector<InsErrorMatrix>* P_smoothed) {
   const size_t n = steps.size();
   if (n == 0) return InvalidArgumentError("PosSmoother::Smooth: no recorded step");
   for (size_t k = 0; k < n; ++k) {
@@ -82,38 +83,43 @@ StatusOr<std::vector<InsState>> PosSmoother::Smooth(const std::vector<InsFilterS
                                   " is not after the previous one");
     }
     if (!FiniteState(s.prior) || !FiniteState(s.posterior) || !s.P_prior.allFinite() ||
-        !s.P_posterior.allFinite() || !s.F.allFinite()) {
+        !s.P_posterior.allFinite() || !s.F.allFinite() || !s.gnss_bias_prior.allFinite() ||
+        !s.gnss_bias_posterior.allFinite()) {
       return InvalidArgumentError("PosSmoother::Smooth: step " + std::to_string(k) +
                                   " holds a non-finite state, covariance or transition");
     }
   }
   std::vector<InsState> xs(n);
-  std::vector<Matrix15d> Ps(n);
+  std::vector<Eigen::Vector3d> bns(n);
+  std::vector<InsErrorMatrix> Ps(n);
   xs[n - 1] = steps[n - 1].posterior;
+  bns[n - 1] = steps[n - 1].gnss_bias_posterior;
   Ps[n - 1] = steps[n - 1].P_posterior;
   for (size_t k = n - 1; k-- > 0;) {
     const InsFilterStep& cur = steps[k];
     const InsFilterStep& next = steps[k + 1];
     // C^T = (P_{k+1}^-)^-1 F_{k+1} P_k^+, solved on the diagonally scaled covariance (its entries
     // span ~12 orders of magnitude: m^2 against (rad/s)^2).
-    const Vector15d d = next.P_prior.diagonal();
+    const InsErrorVector d = next.P_prior.diagonal();
     if (!(d.minCoeff() > 0.0)) {
       return InvalidArgumentError("PosSmoother::Smooth: step " + std::to_string(k + 1) +
                                   " has an a-priori covariance that is not positive definite");
     }
-    const Vector15d s = d.cwiseSqrt().cwiseInverse();
-    const Matrix15d P_scaled = s.asDiagonal() * next.P_prior * s.asDiagonal();
-    const Eigen::LLT<Matrix15d> llt(P_scaled);
+    const InsErrorVector s = d.cwiseSqrt().cwiseInverse();
+    const InsErrorMatrix P_scaled = s.asDiagonal() * next.P_prior * s.asDiagonal();
+    const Eigen::LLT<InsErrorMatrix> llt(P_scaled);
     if (llt.info() != Eigen::Success) {
       return InvalidArgumentError("PosSmoother::Smooth: step " + std::to_string(k + 1) +
                                   " has an a-priori covariance that is not positive definite");
     }
-    const Matrix15d Ct = s.asDiagonal() * llt.solve(s.asDiagonal() * (next.F * cur.P_posterior));
-    const Matrix15d C = Ct.transpose();
-    const Vector15d dx = C * BoxMinus(xs[k + 1], next.prior);
-    Matrix15d P = cur.P_posterior + C * (Ps[k + 1] - next.P_prior) * Ct;
+    const InsErrorMatrix Ct =
+        s.asDiagonal() * llt.solve(s.asDiagonal() * (next.F * cur.P_posterior));
+    const InsErrorMatrix C = Ct.transpose();
+    const InsErrorVector dx = C * BoxMinus(xs[k + 1], bns[k + 1], next.prior, next.gnss_bias_prior);
+    InsErrorMatrix P = cur.P_posterior + C * (Ps[k + 1] - next.P_prior) * Ct;
     Ps[k] = 0.5 * (P + P.transpose());
     xs[k] = BoxPlus(cur.posterior, dx);
+    bns[k] = cur.gnss_bias_posterior + dx.segment<3>(kBn);
   }
   for (size_t k = 0; k < n; ++k) {
     xs[k].stamp = steps[k].stamp;

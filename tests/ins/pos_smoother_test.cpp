@@ -15,17 +15,18 @@
 namespace slam_mms {
 namespace {
 
-using Vector15d = Eigen::Matrix<double, 15, 1>;
+constexpr int kN = kInsErrorDim;
+using VectorNd = InsErrorVector;
 using testing::SyntheticDrive;
 using testing::TruthState;
 
 const Timestamp kT0 = Timestamp::FromSeconds(1317000000.0);
 const GeodeticPoint kOrigin{49.011, 8.4165, 112.0};
 
-// The linear state x = [p, v, theta, ba, bg] as a nominal InsState. theta stays exactly zero in
-// the linear test (decoupled and never measured), so the filter's right-perturbation error on it
-// is linear too.
-InsState ToState(const Vector15d& x, Timestamp stamp) {
+// The linear state x = [p, v, theta, ba, bg, bn] as a nominal InsState (bn: the step's GNSS bias).
+// theta stays exactly zero in the linear test (decoupled and never measured), so the filter's
+// right-perturbation error on it is linear too.
+InsState ToState(const VectorNd& x, Timestamp stamp) {
   InsState s;
   s.stamp = stamp;
   s.T_world_body = MakeIsometry(so3::Exp(x.segment<3>(6)), x.head<3>());
@@ -35,8 +36,9 @@ InsState ToState(const Vector15d& x, Timestamp stamp) {
   return s;
 }
 
-Vector15d FromState(const InsState& s) {
-  Vector15d x;
+// The 15 nominal components (the smoother returns InsStates, without the GNSS bias).
+Eigen::Matrix<double, 15, 1> FromState(const InsState& s) {
+  Eigen::Matrix<double, 15, 1> x;
   x << s.T_world_body.translation(), s.v_world_mps, so3::Log(s.T_world_body.linear()),
       s.accel_bias_mps2, s.gyro_bias_radps;
   return x;
@@ -47,21 +49,22 @@ TEST(PosSmootherTest, RtsEqualsBatchLeastSquaresOnALinearModel) {
   // position and (every third step) velocity; some steps without a measurement.
   constexpr int kSteps = 25;
   const double dt = 0.1;
-  Matrix15d F = Matrix15d::Identity();
+  InsErrorMatrix F = InsErrorMatrix::Identity();
   F.block<3, 3>(0, 3) = dt * Eigen::Matrix3d::Identity();
   F.block<3, 3>(3, 9) = -dt * Eigen::Matrix3d::Identity();
-  F(0, 12) = 0.05;  // a gyro-bias coupling, so every block is exercised
-  Vector15d q_diag;
+  F(0, 12) = 0.05;               // a gyro-bias coupling, so every block is exercised
+  F.block<3, 3>(15, 15) *= 0.9;  // the GNSS bias: Gauss-Markov
+  VectorNd q_diag;
   q_diag << Eigen::Vector3d::Constant(1e-4), Eigen::Vector3d::Constant(4e-3),
       Eigen::Vector3d::Constant(1e-6), Eigen::Vector3d::Constant(1e-5),
-      Eigen::Vector3d::Constant(1e-8);
-  const Matrix15d Q = q_diag.asDiagonal();
-  Vector15d p0_diag;
+      Eigen::Vector3d::Constant(1e-8), Eigen::Vector3d::Constant(2e-3);
+  const InsErrorMatrix Q = q_diag.asDiagonal();
+  VectorNd p0_diag;
   p0_diag << Eigen::Vector3d::Constant(0.25), Eigen::Vector3d::Constant(0.04),
       Eigen::Vector3d::Constant(1e-4), Eigen::Vector3d::Constant(1e-3),
-      Eigen::Vector3d::Constant(1e-6);
-  const Matrix15d P0 = p0_diag.asDiagonal();
-  Vector15d m0 = Vector15d::Zero();
+      Eigen::Vector3d::Constant(1e-6), Eigen::Vector3d::Constant(0.01);
+  const InsErrorMatrix P0 = p0_diag.asDiagonal();
+  VectorNd m0 = VectorNd::Zero();
   m0.head<6>() << 1.0, -2.0, 0.5, 10.0, 0.3, -0.1;
 
   std::mt19937 rng(7);
@@ -72,11 +75,11 @@ TEST(PosSmootherTest, RtsEqualsBatchLeastSquaresOnALinearModel) {
     return v;
   };
   // Truth and measurements.
-  std::vector<Vector15d> truth(kSteps);
-  truth[0] = m0 + p0_diag.cwiseSqrt().cwiseProduct(randn(15));
+  std::vector<VectorNd> truth(kSteps);
+  truth[0] = m0 + p0_diag.cwiseSqrt().cwiseProduct(randn(kN));
   truth[0].segment<3>(6).setZero();
   for (int k = 1; k < kSteps; ++k) {
-    truth[k] = F * truth[k - 1] + q_diag.cwiseSqrt().cwiseProduct(randn(15));
+    truth[k] = F * truth[k - 1] + q_diag.cwiseSqrt().cwiseProduct(randn(kN));
     truth[k].segment<3>(6).setZero();
   }
   struct Meas {
@@ -89,8 +92,9 @@ TEST(PosSmootherTest, RtsEqualsBatchLeastSquaresOnALinearModel) {
     if (k % 5 == 2) continue;  // no fix at these steps
     const int m = (k % 3 == 0) ? 6 : 3;
     Meas z;
-    z.H = Eigen::MatrixXd::Zero(m, 15);
+    z.H = Eigen::MatrixXd::Zero(m, kN);
     z.H.leftCols(m).setIdentity();
+    z.H.block<3, 3>(0, 15).setIdentity();  // the position fix holds the GNSS bias
     z.R = Eigen::MatrixXd::Identity(m, m) * 0.01;
     z.z = z.H * truth[k] + 0.1 * randn(m);
     meas[k] = z;
@@ -98,8 +102,8 @@ TEST(PosSmootherTest, RtsEqualsBatchLeastSquaresOnALinearModel) {
 
   // Forward Kalman filter, recorded as InsFilter would.
   std::vector<InsFilterStep> steps;
-  Vector15d x = m0;
-  Matrix15d P = P0;
+  VectorNd x = m0;
+  InsErrorMatrix P = P0;
   for (int k = 0; k < kSteps; ++k) {
     InsFilterStep st;
     st.stamp = kT0.PlusSeconds(k * dt);
@@ -109,58 +113,60 @@ TEST(PosSmootherTest, RtsEqualsBatchLeastSquaresOnALinearModel) {
       st.F = F;
     }
     st.prior = ToState(x, st.stamp);
+    st.gnss_bias_prior = x.tail<3>();
     st.P_prior = P;
     if (meas[k]) {
       const Meas& z = *meas[k];
       const Eigen::MatrixXd S = z.H * P * z.H.transpose() + z.R;
       const Eigen::MatrixXd K = P * z.H.transpose() * S.inverse();
       x += K * (z.z - z.H * x);
-      P = (Matrix15d::Identity() - K * z.H) * P;
+      P = (InsErrorMatrix::Identity() - K * z.H) * P;
       P = 0.5 * (P + P.transpose()).eval();
       st.updated = true;
     }
     st.posterior = ToState(x, st.stamp);
+    st.gnss_bias_posterior = x.tail<3>();
     st.P_posterior = P;
     steps.push_back(st);
   }
-  std::vector<Matrix15d> P_smoothed;
+  std::vector<InsErrorMatrix> P_smoothed;
   auto smoothed = PosSmoother::Smooth(steps, &P_smoothed);
   ASSERT_TRUE(smoothed.ok()) << smoothed.status().ToString();
   ASSERT_EQ(smoothed->size(), static_cast<size_t>(kSteps));
 
   // Batch: minimise |x0 - m0|^2_P0 + sum |x_k - F x_{k-1}|^2_Q + sum |z_k - H x_k|^2_R (normal
-  // equations over all 15 * kSteps unknowns); its inverse information is the smoothed covariance.
-  const int n = 15 * kSteps;
+  // equations over all kN * kSteps unknowns); its inverse information is the smoothed covariance.
+  const int n = kN * kSteps;
   Eigen::MatrixXd A = Eigen::MatrixXd::Zero(n, n);
   Eigen::VectorXd b = Eigen::VectorXd::Zero(n);
-  const Matrix15d P0i = P0.inverse(), Qi = Q.inverse();
-  A.block<15, 15>(0, 0) += P0i;
-  b.segment<15>(0) += P0i * m0;
+  const InsErrorMatrix P0i = P0.inverse(), Qi = Q.inverse();
+  A.block<kN, kN>(0, 0) += P0i;
+  b.segment<kN>(0) += P0i * m0;
   for (int k = 1; k < kSteps; ++k) {
     // r = x_k - F x_{k-1}: J = [-F, I].
-    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(15, n);
-    J.block<15, 15>(0, 15 * (k - 1)) = -F;
-    J.block<15, 15>(0, 15 * k).setIdentity();
+    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(kN, n);
+    J.block<kN, kN>(0, kN * (k - 1)) = -F;
+    J.block<kN, kN>(0, kN * k).setIdentity();
     A += J.transpose() * Qi * J;
   }
   for (int k = 0; k < kSteps; ++k) {
     if (!meas[k]) continue;
     const Meas& z = *meas[k];
     const Eigen::MatrixXd Ri = z.R.inverse();
-    A.block(15 * k, 15 * k, 15, 15) += z.H.transpose() * Ri * z.H;
-    b.segment<15>(15 * k) += z.H.transpose() * Ri * z.z;
+    A.block(kN * k, kN * k, kN, kN) += z.H.transpose() * Ri * z.H;
+    b.segment<kN>(kN * k) += z.H.transpose() * Ri * z.z;
   }
   const Eigen::LDLT<Eigen::MatrixXd> ldlt(A);
   const Eigen::VectorXd x_batch = ldlt.solve(b);
   const Eigen::MatrixXd P_batch = ldlt.solve(Eigen::MatrixXd::Identity(n, n));
   double max_dx = 0.0, max_dP = 0.0;
   for (int k = 0; k < kSteps; ++k) {
-    const Vector15d xs = FromState((*smoothed)[k]);
-    max_dx = std::max(max_dx, (xs - x_batch.segment<15>(15 * k)).cwiseAbs().maxCoeff());
+    const Eigen::Matrix<double, 15, 1> xs = FromState((*smoothed)[k]);
+    max_dx = std::max(max_dx, (xs - x_batch.segment<15>(kN * k)).cwiseAbs().maxCoeff());
     max_dP = std::max(
-        max_dP, (P_smoothed[k] - P_batch.block(15 * k, 15 * k, 15, 15)).cwiseAbs().maxCoeff());
+        max_dP, (P_smoothed[k] - P_batch.block(kN * k, kN * k, kN, kN)).cwiseAbs().maxCoeff());
   }
-  std::printf("RTS vs batch least squares (%d steps, 15 states): max |dx| %.3g, max |dP| %.3g\n",
+  std::printf("RTS vs batch least squares (%d steps, 18 states): max |dx| %.3g, max |dP| %.3g\n",
               kSteps, max_dx, max_dP);
   EXPECT_LT(max_dx, 1e-9);
   EXPECT_LT(max_dP, 1e-9);
@@ -172,13 +178,13 @@ TEST(PosSmootherTest, RejectsBadSteps) {
   EXPECT_EQ(PosSmoother::Smooth({}).status().code(), StatusCode::kInvalidArgument);
   InsFilterStep a;
   a.stamp = kT0;
-  a.P_prior = a.P_posterior = Matrix15d::Identity();
+  a.P_prior = a.P_posterior = InsErrorMatrix::Identity();
   InsFilterStep b = a;
   EXPECT_EQ(PosSmoother::Smooth({a, b}).status().code(), StatusCode::kInvalidArgument);  // order
   b.stamp = kT0.PlusSeconds(0.01);
-  b.P_prior = Matrix15d::Zero();
+  b.P_prior = InsErrorMatrix::Zero();
   EXPECT_EQ(PosSmoother::Smooth({a, b}).status().code(), StatusCode::kInvalidArgument);  // P
-  b.P_prior = Matrix15d::Identity();
+  b.P_prior = InsErrorMatrix::Identity();
   b.prior.v_world_mps.x() = std::nan("");
   EXPECT_EQ(PosSmoother::Smooth({a, b}).status().code(), StatusCode::kInvalidArgument);
   PosSmoother::Options o;

@@ -295,6 +295,27 @@ const std::vector<std::pair<std::string, KeyHandler>>& Handlers() {
     SLAM_MMS_KEY_D("ins.max_fix_latency_s", o->ins.max_fix_latency_s);
     SLAM_MMS_KEY_D("ins.max_extrapolation_s", o->ins.max_extrapolation_s);
     SLAM_MMS_KEY_D("ins.history_s", o->ins.history_s);
+    SLAM_MMS_KEY_D("ins.gnss_error_rtk_fixed.correlated_fraction",
+                   o->ins.gnss_error_rtk_fixed.correlated_fraction);
+    SLAM_MMS_KEY_D("ins.gnss_error_rtk_fixed.correlation_time_s",
+                   o->ins.gnss_error_rtk_fixed.correlation_time_s);
+    SLAM_MMS_KEY_D("ins.gnss_error_rtk_float.correlated_fraction",
+                   o->ins.gnss_error_rtk_float.correlated_fraction);
+    SLAM_MMS_KEY_D("ins.gnss_error_rtk_float.correlation_time_s",
+                   o->ins.gnss_error_rtk_float.correlation_time_s);
+    SLAM_MMS_KEY_D("ins.gnss_error_code.correlated_fraction",
+                   o->ins.gnss_error_code.correlated_fraction);
+    SLAM_MMS_KEY_D("ins.gnss_error_code.correlation_time_s",
+                   o->ins.gnss_error_code.correlation_time_s);
+    SLAM_MMS_KEY_B("ins.zupt", o->ins.zupt);
+    SLAM_MMS_KEY_D("ins.zupt_window_s", o->ins.zupt_window_s);
+    SLAM_MMS_KEY_D("ins.zupt_max_gyro_radps", o->ins.zupt_max_gyro_radps);
+    SLAM_MMS_KEY_D("ins.zupt_max_accel_mps2", o->ins.zupt_max_accel_mps2);
+    SLAM_MMS_KEY_D("ins.zupt_max_speed_mps", o->ins.zupt_max_speed_mps);
+    SLAM_MMS_KEY_D("ins.zupt_sigma_mps", o->ins.zupt_sigma_mps);
+    SLAM_MMS_KEY_D("ins.zupt_interval_s", o->ins.zupt_interval_s);
+    SLAM_MMS_KEY_D("ins.nhc_sigma_mps", o->ins.nhc_sigma_mps);
+    SLAM_MMS_KEY_D("ins.nhc_min_speed_mps", o->ins.nhc_min_speed_mps);
     // GNSS (GnssPrior).
     h.emplace_back("ins.gnss.t_body_antenna",
                    Vector3([](Options* o) { return &o->ins.gnss.t_body_antenna; }));

@@ -60,6 +60,9 @@ struct GnssDecisionResult {
   GnssDecision decision = GnssDecision::kReject;
   GnssMeasurement measurement;    ///< Valid for kUse and kDownWeight (covariance inflated).
   double innovation_chi2 = -1.0;  ///< Mahalanobis^2 of the innovation; -1 if not tested.
+  /// The innovation test's variance factor in the measurement covariance (1 if not inflated);
+  /// the rest of the weight is the fix type's.
+  double innovation_weight = 1.0;
   Eigen::Vector3d innovation_m = Eigen::Vector3d::Zero();  ///< measured - predicted antenna.
   std::string reason;  ///< Why it was rejected / down-weighted ("" when used).
 

@@ -1,25 +1,39 @@
 #pragma once
 // InsFilter: the POS of a traditional mobile mapping system (paper §4, the `gnss_ins` baseline) and
-// the motion prior of the SLAM-integrated one: a 15-state error-state EKF fusing IMU samples with
+// the motion prior of the SLAM-integrated one: an 18-state error-state EKF fusing IMU samples with
 // GNSS position fixes (through GnssPrior's use / down-weight / reject decisions), or, instead, an
 // external POS solution (a commercial INS's poses) that is only stored and interpolated.
 //
 // Model (documented simplifications):
-// - Nominal state: p_world, v_world, R_world_body, accel bias ba, gyro bias bg; `world` is the
-// local
-//   ENU frame of GnssPrior. Gravity is constant in world, g = (0, 0, -gravity): Somigliana's normal
-//   gravity at the origin's latitude and height by default (or a given constant). Earth rotation
-//   (15 deg/h) and transport rate are neglected: fine for a tactical IMU over minutes, and a
-//   tactical gyro could not gyrocompass anyway (so static alignment needs a given yaw).
+// - Nominal state: p_world, v_world, R_world_body, accel bias ba, gyro bias bg, GNSS position bias
+//   b_gnss; `world` is the local ENU frame of GnssPrior. Gravity is constant in world,
+//   g = (0, 0, -gravity): Somigliana's normal gravity at the origin's latitude and height by
+//   default (or a given constant). Earth rotation (15 deg/h) and transport rate are neglected: fine
+//   for a tactical IMU over minutes, and a tactical gyro could not gyrocompass anyway (so static
+//   alignment needs a given yaw).
 // - Error state [dp (world, additive), dv (world), dtheta (right: R = R_hat Exp(dtheta)), dba,
-// dbg],
-//   biases as random walks. Propagation between consecutive samples uses the mean of the two
-//   samples (second order); a GNSS fix between samples propagates to the fix with the last sample
-//   held. A fix older than the state (latency <= max_fix_latency_s) is compared with the antenna
-//   position extrapolated back by the velocity; an older one is rejected (kReject, with the lag
-//   in the reason), not an error.
+//   dbg, db_gnss (world)], IMU biases as random walks. Propagation between consecutive samples
+//   uses the mean of the two samples (second order); a GNSS fix between samples propagates to the
+//   fix with the last sample held. A fix older than the state (latency <= max_fix_latency_s) is
+//   compared with the antenna position extrapolated back by the velocity; an older one is rejected
+//   (kReject, with the lag in the reason), not an error.
+// - GNSS errors are time-correlated (float ambiguities, single-point orbit/clock/atmosphere
+//   errors, multipath): a fix measures p + R t_body_antenna + b_gnss + white noise. The share
+//   `correlated_fraction` of the fix's variance (as GnssPrior weighs it) is a first-order
+//   Gauss-Markov bias b_gnss with the fix type's correlation time, the rest is white. A new
+//   solution (another fix type, or the first fix after an outage) starts a new bias: b_gnss is
+//   reset to zero with its stationary covariance (F = 0 on its block), so a fixed -> float step is
+//   taken up by b_gnss, not by the tilt or the accelerometer bias. Correlated fraction 0 (RTK fixed
+//   by default) is white noise (b_gnss held at zero with a negligible variance).
+// - Zero-velocity updates (ZUPT, and the gyro bias from the mean rate, ZARU) while the vehicle
+//   stands: the IMU is still over zupt_window_s (every sample's rate and gravity-compensated
+//   acceleration below thresholds)
+//   and the estimated speed is below zupt_max_speed_mps (the speed guard keeps a vehicle cruising
+//   on a smooth road, whose IMU is also still, from being stopped).
+// - Optional non-holonomic constraint (a vehicle does not slide sideways or jump): body y and z
+//   velocity zero with nhc_sigma_mps while moving; body x must be the vehicle's forward axis.
 // - During GNSS outages (no usable fix) the filter propagates the IMU alone and its covariance
-// grows.
+//   grows.
 //
 // Ownership: owns its GnssPrior and a bounded state history (history_s); move-only.
 // Thread safety: not thread-safe for mutation; const queries may run concurrently.
@@ -40,20 +54,26 @@
 namespace slam_mms {
 
 using Matrix15d = Eigen::Matrix<double, 15, 15>;
+/// Dimension of InsFilter's error state [dp, dv, dtheta, dba, dbg, db_gnss].
+constexpr int kInsErrorDim = 18;
+using InsErrorMatrix = Eigen::Matrix<double, kInsErrorDim, kInsErrorDim>;
+using InsErrorVector = Eigen::Matrix<double, kInsErrorDim, 1>;
 
 /// One step of the forward filter as a smoother needs it (InsFilter::Options::record_steps): the
-/// nominal state and the 15x15 error covariance [dp, dv, dtheta, dba, dbg] after the propagation
-/// to `stamp` (a priori) and after the measurement updates at `stamp` (a posteriori; equal to the
-/// a-priori ones where no fix was used), and the error-state transition matrix from the previous
-/// step's a-posteriori error to this step's a-priori error (identity for the first step). The
-/// nominal states' cov_T_world_body is the filter's pose covariance at that point.
+/// nominal state and the 18x18 error covariance [dp, dv, dtheta, dba, dbg, db_gnss] after the
+/// propagation to `stamp` (a priori) and after the measurement updates at `stamp` (a posteriori;
+/// equal to the a-priori ones where no fix was used), and the error-state transition matrix from
+/// the previous step's a-posteriori error to this step's a-priori error (identity for the first
+/// step). The nominal states' cov_T_world_body is the filter's pose covariance at that point.
 struct InsFilterStep {
   Timestamp stamp;
   InsState prior;
   InsState posterior;
-  Matrix15d P_prior = Matrix15d::Zero();
-  Matrix15d P_posterior = Matrix15d::Zero();
-  Matrix15d F = Matrix15d::Identity();
+  Eigen::Vector3d gnss_bias_prior = Eigen::Vector3d::Zero();  ///< b_gnss (world) [m].
+  Eigen::Vector3d gnss_bias_posterior = Eigen::Vector3d::Zero();
+  InsErrorMatrix P_prior = InsErrorMatrix::Zero();
+  InsErrorMatrix P_posterior = InsErrorMatrix::Zero();
+  InsErrorMatrix F = InsErrorMatrix::Identity();
   bool updated = false;  ///< A measurement was used at this step.
 };
 
@@ -79,9 +99,31 @@ class InsFilter {
     double max_extrapolation_s = 0.25;  ///< StateAt beyond the last state by at most this [s].
     double history_s = 600.0;           ///< States kept for StateAt [s].
     GnssPrior::Options gnss;            ///< Lever arm, floors, gates, outage timeout.
+    /// Time-correlated GNSS error of one solution type: the share of a fix's variance that is a
+    /// Gauss-Markov bias and its correlation time.
+    struct GnssErrorModel {
+      double correlated_fraction = 0.0;  ///< In [0, 1); 0: white noise.
+      double correlation_time_s = 30.0;  ///< > 0 [s].
+    };
+    GnssErrorModel gnss_error_rtk_fixed{0.0, 30.0};  ///< Fixed ambiguities: cm-level, ~white.
+    GnssErrorModel gnss_error_rtk_float{0.9, 30.0};  ///< Float ambiguities converge over ~30 s.
+    /// Single-point and differential (code) solutions: orbit, clock, atmosphere, multipath.
+    GnssErrorModel gnss_error_code{0.9, 60.0};
+    // Zero-velocity update (on by default) and its stationarity detector.
+    bool zupt = true;
+    double zupt_window_s = 0.5;         ///< IMU samples the detector looks at [s].
+    double zupt_max_gyro_radps = 0.01;  ///< Max |gyro - bg| over the window [rad/s].
+    /// Max |R_world_body (accel - ba) + g| over the window: the specific force is gravity alone.
+    double zupt_max_accel_mps2 = 0.1;
+    double zupt_max_speed_mps = 0.2;  ///< Estimated speed must be below this [m/s].
+    double zupt_sigma_mps = 0.01;     ///< Zero-velocity measurement sigma [m/s].
+    double zupt_interval_s = 0.1;     ///< At most one ZUPT (and ZARU) per interval [s].
+    /// Non-holonomic constraint sigma on the body y/z velocity [m/s]; 0 = off (default).
+    double nhc_sigma_mps = 0.0;
+    double nhc_min_speed_mps = 1.0;  ///< Applied above this estimated speed [m/s].
     /// Keep every step (InsFilterStep) since the initialisation for a forward-backward smoother
-    /// (PosSmoother). Memory: about 6.4 kB per IMU sample or fix (100 Hz IMU + 10 Hz GNSS: 42 MB
-    /// per minute, 2.5 GB per hour: smooth long drives in pieces). Not bounded by history_s.
+    /// (PosSmoother). Memory: about 8.6 kB per IMU sample or fix (100 Hz IMU + 10 Hz GNSS: 56 MB
+    /// per minute, 3.4 GB per hour: smooth long drives in pieces). Not bounded by history_s.
     bool record_steps = false;
 
     [[nodiscard]] Status Validate() const;
@@ -132,8 +174,12 @@ class InsFilter {
   /// The state at `t`, interpolated between stored states (pose by slerp, velocity and covariance
   /// linearly), or extrapolated with the last IMU sample up to max_extrapolation_s past the last.
   StatusOr<InsState> StateAt(Timestamp t) const;
-  /// 15x15 error-state covariance [dp, dv, dtheta, dba, dbg] of the latest state.
-  const Matrix15d& covariance() const;
+  /// 18x18 error-state covariance [dp, dv, dtheta, dba, dbg, db_gnss] of the latest state.
+  const InsErrorMatrix& covariance() const;
+  /// The GNSS error model's bias (antenna position error of the current solution type) [m].
+  Eigen::Vector3d gnss_bias_world() const;
+  /// Zero-velocity updates applied since the initialisation.
+  int num_zero_velocity_updates() const;
   /// Every stored state, oldest first (the GNSS/INS-only trajectory).
   std::vector<InsState> States() const;
   /// The recorded steps since the last initialisation (empty unless options.record_steps).

@@ -166,6 +166,14 @@ def _evaluate(result: DriveResult, drive: pathlib.Path, gnss_outages, num_thread
     reference_ns = run.first_scan_start_ns
     if reference_ns is None and len(reader):
         reference_ns = reader.scan_start_ns(0)
+    nees = None
+    if gt is not None and len(run.trajectory) and run.mode in (_C.MappingMode.GNSS_INS,
+                                                              _C.MappingMode.GNSS_INS_SMOOTHED):
+        # The POS's covariances are absolute (level 1's are relative to their submap).
+        try:
+            nees = _C.compute_nees(run.trajectory, gt)
+        except (ValueError, IndexError, _C.Error) as e:
+            _log.warning("NEES: %s", e)
     if gt is not None and len(run.trajectory):
         try:
             result.ate = _C.compute_ate(run.trajectory, gt)
@@ -193,7 +201,7 @@ def _evaluate(result: DriveResult, drive: pathlib.Path, gnss_outages, num_thread
         except (ValueError, _C.Error) as e:
             _log.warning("map entropy: %s", e)
     method = _C.make_method_report(result.ate, result.relative_error, result.outage_errors,
-                                   result.map_entropy)
+                                   result.map_entropy, nees)
     method.scans_per_s = run.scans_processed / run.wall_s if run.wall_s > 0 else 0.0
     method.peak_rss_mb = _C.peak_rss_mb()
     gt_map_mme = None

@@ -1403,6 +1403,11 @@ class MethodReport:
     @mme.setter
     def mme(self, value: Optional[float]) -> None: ...
     @property
+    def nees(self) -> Optional[NeesResult]:
+        ...
+    @nees.setter
+    def nees(self, value: Optional[NeesResult]) -> None: ...
+    @property
     def scans_per_s(self) -> Optional[float]:
         ...
     @scans_per_s.setter
@@ -1436,6 +1441,36 @@ class MotionFactorType:
     def name(self) -> str: ...
     @property
     def value(self) -> int: ...
+
+class NeesResult:
+    """Consistency of a trajectory's covariances (3-dof NEES of position and attitude; a consistent estimator: mean ~3, ~95 % inside)."""
+    def __init__(self: NeesResult) -> None:
+        ...
+    @property
+    def num_epochs(self) -> int:
+        ...
+    @num_epochs.setter
+    def num_epochs(self, value: int) -> None: ...
+    @property
+    def position_mean(self) -> float:
+        ...
+    @position_mean.setter
+    def position_mean(self, value: float) -> None: ...
+    @property
+    def position_fraction_inside_95(self) -> float:
+        ...
+    @position_fraction_inside_95.setter
+    def position_fraction_inside_95(self, value: float) -> None: ...
+    @property
+    def attitude_mean(self) -> float:
+        ...
+    @attitude_mean.setter
+    def attitude_mean(self, value: float) -> None: ...
+    @property
+    def attitude_fraction_inside_95(self) -> float:
+        ...
+    @attitude_fraction_inside_95.setter
+    def attitude_fraction_inside_95(self, value: float) -> None: ...
 
 class Options:
     """MappingSystem::Options with the C++ defaults. Nested: ins (InsOptions), localizer (LocalizerOptions), level2 (Level2Options)."""
@@ -2159,6 +2194,9 @@ def compute_ate(estimate: Trajectory, ground_truth: Trajectory, alignment: Align
 def compute_map_entropy(points: object, radius_m: float = 0.5, voxel_size_m: float = 0.1, min_neighbors: int = 5, num_threads: int = 2) -> MapEntropyResult:
     """Mean map entropy of points (N x 3 or N x 4); lower is sharper (GIL released)."""
 
+def compute_nees(estimate: Trajectory, ground_truth: Trajectory) -> NeesResult:
+    """NEES of the estimate's own (absolute) covariances against the ground truth."""
+
 def compute_outage_errors(ate: AteResult, windows: List[Tuple[float, float]], reference_ns: int) -> OutageErrorResult:
     """Errors of ate's poses inside [(start_s, duration_s), ...] relative to reference_ns."""
 
@@ -2180,7 +2218,7 @@ def has_simulator_ground_truth(drive_dir: os.PathLike[str]) -> bool:
 def load_ground_truth(gt_dir: os.PathLike[str], reader: DriveReader, origin: GeodeticPoint) -> dict:
     """The ground truth slam_mms_run evaluates against (eval::LoadGroundTruth: gt_dir/ground_truth/ of the simulator, else the OXTS records of a KITTI reader; FileNotFoundError otherwise) carried into the ENU frame at origin through WGS-84: {'kind', 'trajectory', 'scene_map', 'source'}."""
 
-def make_method_report(ate: AteResult = None, relative: RelativeErrorResult = None, outage: OutageErrorResult = None, entropy: MapEntropyResult = None) -> MethodReport:
+def make_method_report(ate: AteResult = None, relative: RelativeErrorResult = None, outage: OutageErrorResult = None, entropy: MapEntropyResult = None, nees: NeesResult = None) -> MethodReport:
     """The metric fields of a MethodReport (None leaves null)."""
 
 def mapping_mode_name(arg0: MappingMode) -> str:

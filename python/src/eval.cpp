@@ -252,6 +252,22 @@ void RegisterEval(py::module_& m) {
       py::arg("min_neighbors") = 5, py::arg("num_threads") = 2,
       "Mean map entropy of points (N x 3 or N x 4); lower is sharper (GIL released).");
 
+  py::class_<NeesResult>(m, "NeesResult",
+                         "Consistency of a trajectory's covariances (3-dof NEES of position and "
+                         "attitude; a consistent estimator: mean ~3, ~95 % inside).")
+      .def(py::init<>())
+      .def_readwrite("num_epochs", &NeesResult::num_epochs)
+      .def_readwrite("position_mean", &NeesResult::position_mean)
+      .def_readwrite("position_fraction_inside_95", &NeesResult::position_fraction_inside_95)
+      .def_readwrite("attitude_mean", &NeesResult::attitude_mean)
+      .def_readwrite("attitude_fraction_inside_95", &NeesResult::attitude_fraction_inside_95);
+  m.def(
+      "compute_nees",
+      [](const Trajectory& estimate, const Trajectory& ground_truth) {
+        return ValueOrThrow(ComputeNees(estimate, ground_truth));
+      },
+      py::arg("estimate"), py::arg("ground_truth"),
+      "NEES of the estimate's own (absolute) covariances against the ground truth.");
   py::class_<MethodReport>(m, "MethodReport",
                            "One method's numbers in report.json; None is written as null.")
       .def(py::init<>())
@@ -264,56 +280,59 @@ void RegisterEval(py::module_& m) {
       .def_readwrite("max_pos_err_in_outage_m", &MethodReport::max_pos_err_in_outage_m)
       .def_readwrite("max_rot_err_in_outage_deg", &MethodReport::max_rot_err_in_outage_deg)
       .def_readwrite("mme", &MethodReport::mme)
+      .def_readwrite("nees", &MethodReport::nees)
       .def_readwrite("scans_per_s", &MethodReport::scans_per_s)
       .def_readwrite("peak_rss_mb", &MethodReport::peak_rss_mb);
   m.def(
       "make_method_report",
       [](const AteResult* ate, const RelativeErrorResult* relative, const OutageErrorResult* outage,
-         const MapEntropyResult* entropy) {
-        return MakeMethodReport(ate, relative, outage, entropy);
-      },
+         const MapEntropyResult* entropy,
+         const NeesResult* nees) { return MakeMethodReport(ate, relative, outage, entropy, nees); },
       py::arg("ate") = nullptr, py::arg("relative") = nullptr, py::arg("outage") = nullptr,
-      py::arg("entropy") = nullptr, "The metric fields of a MethodReport (None leaves null).");
-  m.def(
-      "report_to_json",
-      [](const std::string& drive, int64_t scans, double duration_s,
-         const std::string& ground_truth, const std::vector<std::pair<double, double>>& outages,
-         const std::vector<std::pair<std::string, MethodReport>>& methods,
-         std::optional<double> ground_truth_map_mme, const std::string& kind, int64_t scans_total,
-         const std::vector<std::pair<std::string, std::string>>& skipped_scans,
-         const std::vector<std::string>& command_line, const std::string& options_json,
-         const std::string& georef_json, bool complete, const std::vector<std::string>& outputs) {
-        EvalReport r;
-        r.input.drive = drive;
-        r.input.kind = kind;
-        r.input.scans = scans;
-        r.input.scans_total = scans_total;
-        r.input.duration_s = duration_s;
-        r.input.ground_truth = ground_truth;
-        for (const auto& [source, reason] : skipped_scans) {
-          r.input.skipped_scans.push_back({source, reason});
-        }
-        for (const auto& [s, d] : outages) r.gnss_outages.push_back({s, d});
-        r.methods = methods;
-        r.ground_truth_map_mme = ground_truth_map_mme;
-        r.command_line = command_line;
-        r.options_json = options_json;
-        r.georef_json = georef_json;
-        r.complete = complete;
-        r.outputs = outputs;
-        return ValueOrThrow(ReportToJson(r));
-      },
-      py::arg("drive"), py::arg("scans"), py::arg("duration_s"), py::arg("ground_truth"),
-      py::arg("gnss_outages"), py::arg("methods"), py::arg("ground_truth_map_mme") = py::none(),
-      py::kw_only(), py::arg("kind") = "", py::arg("scans_total") = -1,
-      py::arg("skipped_scans") = std::vector<std::pair<std::string, std::string>>(),
-      py::arg("command_line") = std::vector<std::string>(), py::arg("options_json") = "",
-      py::arg("georef_json") = "", py::arg("complete") = true,
-      py::arg("outputs") = std::vector<std::string>(),
-      "report.json text by the C++ writer (the schema of eval/report.hpp): kind "
-      "(kitti_raw|folder|rosbag|simulated, '' = null), scans_total (< 0 = null), skipped_scans "
-      "[(source, reason)], command_line, options_json / georef_json (JSON object texts, '' = "
-      "null), complete, outputs (file names).");
+      py::arg("entropy") = nullptr, py::arg("nees") = nullptr,
+      "The metric fields of a MethodReport (None leaves null)."),
+      m.def(
+          "report_to_json",
+          [](const std::string& drive, int64_t scans, double duration_s,
+             const std::string& ground_truth, const std::vector<std::pair<double, double>>& outages,
+             const std::vector<std::pair<std::string, MethodReport>>& methods,
+             std::optional<double> ground_truth_map_mme, const std::string& kind,
+             int64_t scans_total,
+             const std::vector<std::pair<std::string, std::string>>& skipped_scans,
+             const std::vector<std::string>& command_line, const std::string& options_json,
+             const std::string& georef_json, bool complete,
+             const std::vector<std::string>& outputs) {
+            EvalReport r;
+            r.input.drive = drive;
+            r.input.kind = kind;
+            r.input.scans = scans;
+            r.input.scans_total = scans_total;
+            r.input.duration_s = duration_s;
+            r.input.ground_truth = ground_truth;
+            for (const auto& [source, reason] : skipped_scans) {
+              r.input.skipped_scans.push_back({source, reason});
+            }
+            for (const auto& [s, d] : outages) r.gnss_outages.push_back({s, d});
+            r.methods = methods;
+            r.ground_truth_map_mme = ground_truth_map_mme;
+            r.command_line = command_line;
+            r.options_json = options_json;
+            r.georef_json = georef_json;
+            r.complete = complete;
+            r.outputs = outputs;
+            return ValueOrThrow(ReportToJson(r));
+          },
+          py::arg("drive"), py::arg("scans"), py::arg("duration_s"), py::arg("ground_truth"),
+          py::arg("gnss_outages"), py::arg("methods"), py::arg("ground_truth_map_mme") = py::none(),
+          py::kw_only(), py::arg("kind") = "", py::arg("scans_total") = -1,
+          py::arg("skipped_scans") = std::vector<std::pair<std::string, std::string>>(),
+          py::arg("command_line") = std::vector<std::string>(), py::arg("options_json") = "",
+          py::arg("georef_json") = "", py::arg("complete") = true,
+          py::arg("outputs") = std::vector<std::string>(),
+          "report.json text by the C++ writer (the schema of eval/report.hpp): kind "
+          "(kitti_raw|folder|rosbag|simulated, '' = null), scans_total (< 0 = null), skipped_scans "
+          "[(source, reason)], command_line, options_json / georef_json (JSON object texts, '' = "
+          "null), complete, outputs (file names).");
   m.def("peak_rss_mb", &PeakRssMb, "Peak resident set size of this process [MB] (Linux).");
 
   // ---- map files ----

@@ -47,8 +47,10 @@ StatusOr<Json> EmbeddedObject(const std::string& text, const char* field) {
 }  // namespace
 
 MethodReport MakeMethodReport(const AteResult* ate, const RelativeErrorResult* relative,
-                              const OutageErrorResult* outage, const MapEntropyResult* entropy) {
+                              const OutageErrorResult* outage, const MapEntropyResult* entropy,
+                              const NeesResult* nees) {
   MethodReport m;
+  if (nees != nullptr && nees->num_epochs > 0) m.nees = *nees;
   if (ate != nullptr) {
     m.ate_rmse_m = ate->ate_rmse_m;
     m.ate_rmse_xyz_m = ate->ate_rmse_xyz_m;
@@ -137,6 +139,15 @@ StatusOr<std::string> ReportToJson(const EvalReport& report) {
     jm["max_pos_err_in_outage_m"] = Number(m.max_pos_err_in_outage_m);
     jm["max_rot_err_in_outage_deg"] = Number(m.max_rot_err_in_outage_deg);
     jm["mme"] = Number(m.mme);
+    if (m.nees) {
+      jm["nees"] = Json{{"epochs", m.nees->num_epochs},
+                        {"position_mean", Number(m.nees->position_mean)},
+                        {"position_inside_95", Number(m.nees->position_fraction_inside_95)},
+                        {"attitude_mean", Number(m.nees->attitude_mean)},
+                        {"attitude_inside_95", Number(m.nees->attitude_fraction_inside_95)}};
+    } else {
+      jm["nees"] = nullptr;
+    }
     jm["scans_per_s"] = Number(m.scans_per_s);
     jm["peak_rss_mb"] = Number(m.peak_rss_mb);
     methods[name] = std::move(jm);

@@ -1,5 +1,6 @@
 #include "slam_mms/eval/trajectory_error.hpp"
 
+#include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -172,6 +173,48 @@ StatusOr<AteResult> ComputeAte(const Trajectory& estimate, const Trajectory& gro
   SLAM_MMS_ASSIGN_OR_RETURN(MatchedPoses matched,
                             MatchByTimestamp(estimate, ground_truth, options.match));
   return ComputeAte(matched, options.alignment);
+}
+
+StatusOr<NeesResult> ComputeNees(const Trajectory& estimate, const Trajectory& ground_truth) {
+  SLAM_MMS_ASSIGN_OR_RETURN(MatchedPoses matched, MatchByTimestamp(estimate, ground_truth));
+  // The matched stamps are a subsequence of the estimate's: walk both in order.
+  constexpr double kLo = 0.2158, kHi = 9.348;  // chi-square, 3 dof, 2.5 % and 97.5 %
+  NeesResult r;
+  size_t in_p = 0, in_r = 0;
+  size_t k = 0;
+  const auto& poses = estimate.poses();
+  for (size_t i = 0; i < matched.size(); ++i) {
+    while (k < poses.size() && poses[k].stamp < matched.stamps[i]) ++k;
+    if (k >= poses.size() || !poses[k].cov_T_world_body) continue;
+    const Eigen::Matrix<double, 6, 6>& C = *poses[k].cov_T_world_body;
+    const Eigen::Matrix3d R = matched.T_world_est[i].linear();
+    const Eigen::Matrix3d P_pos = R * C.bottomRightCorner<3, 3>() * R.transpose();
+    const Eigen::Matrix3d P_rot = C.topLeftCorner<3, 3>();
+    const Eigen::LLT<Eigen::Matrix3d> llt_p(P_pos), llt_r(P_rot);
+    if (llt_p.info() != Eigen::Success || llt_r.info() != Eigen::Success || !C.allFinite()) {
+      continue;
+    }
+    const Eigen::Vector3d dp =
+        matched.T_world_gt[i].translation() - matched.T_world_est[i].translation();
+    const Eigen::Vector3d dr = so3::Log(R.transpose() * matched.T_world_gt[i].linear());
+    const double np = dp.dot(llt_p.solve(dp)), nr = dr.dot(llt_r.solve(dr));
+    if (!std::isfinite(np) || !std::isfinite(nr)) continue;
+    ++r.num_epochs;
+    r.position_mean += np;
+    r.attitude_mean += nr;
+    in_p += (np >= kLo && np <= kHi) ? 1 : 0;
+    in_r += (nr >= kLo && nr <= kHi) ? 1 : 0;
+  }
+  if (r.num_epochs == 0) {
+    return InvalidArgumentError(
+        "ComputeNees: no matched pose of the estimate has a usable covariance");
+  }
+  const double n = static_cast<double>(r.num_epochs);
+  r.position_mean /= n;
+  r.attitude_mean /= n;
+  r.position_fraction_inside_95 = static_cast<double>(in_p) / n;
+  r.attitude_fraction_inside_95 = static_cast<double>(in_r) / n;
+  return r;
 }
 
 }  // namespace slam_mms::eval

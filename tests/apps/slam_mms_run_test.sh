@@ -47,7 +47,7 @@ check_report() {
       fail "report.json top-level/input keys differ from the schema: $(cat "$report")"
     for m in "$@"; do
       jq -e --arg m "$m" '.methods[$m] | keys == ["ate_rmse_m","ate_rmse_xyz_m","max_pos_err_in_outage_m",
-        "max_rot_err_in_outage_deg","mme","peak_rss_mb","r_rel_deg_per_100m","rot_rmse_deg",
+        "max_rot_err_in_outage_deg","mme","nees","peak_rss_mb","r_rel_deg_per_100m","rot_rmse_deg",
         "rot_rmse_rpy_deg","scans_per_s","t_rel_pct"]' "$report" >/dev/null ||
         fail "report.json methods.$m keys differ from the schema: $(cat "$report")"
     done

@@ -109,6 +109,7 @@ TEST(ReportTest, JsonHasTheSchemaKeysAndRoundTrips) {
                                                 "max_pos_err_in_outage_m",
                                                 "max_rot_err_in_outage_deg",
                                                 "mme",
+                                                "nees",
                                                 "scans_per_s",
                                                 "peak_rss_mb"};
   const Json& methods = j["methods"];

@@ -219,6 +219,49 @@ TEST(TrajectoryErrorTest, Sim3AlignmentUndoesScaleAndTransform) {
   EXPECT_GT(ComputeAte(est, gt, o)->ate_rmse_m, 50.0);
 }
 
+// Errors drawn from each pose's covariance give a NEES near its dof (3) with ~95 % inside the
+// 95 % interval; the same errors with the covariance claimed 10x smaller (std) are flagged.
+TEST(TrajectoryErrorTest, NeesOfConsistentAndOverconfidentCovariances) {
+  std::mt19937 rng(3);
+  std::normal_distribution<double> n01(0.0, 1.0);
+  const Trajectory gt = MakeTrajectory(0.0, 200.0, 0.1, CurvePose);
+  Trajectory honest, overconfident, no_cov;
+  // Body-frame sigmas: rotation 0.2/0.3/0.5 deg, translation 0.1/0.2/0.4 m (right perturbation).
+  Eigen::Matrix<double, 6, 1> sigma;
+  sigma << 0.2 * kDeg, 0.3 * kDeg, 0.5 * kDeg, 0.1, 0.2, 0.4;
+  const Eigen::Matrix<double, 6, 6> C = sigma.cwiseProduct(sigma).asDiagonal();
+  for (int i = 0; i < 2000; ++i) {
+    const double t = 0.1 * i;
+    Eigen::Matrix<double, 6, 1> d;
+    for (int k = 0; k < 6; ++k) d(k) = sigma(k) * n01(rng);
+    const Eigen::Isometry3d T_gt = CurvePose(t);
+    // T_est = T_gt Exp(-d): the error of the estimate about the truth has the covariance C.
+    Eigen::Isometry3d T_est = Eigen::Isometry3d::Identity();
+    T_est.linear() = T_gt.linear() * so3::Exp(-d.head<3>());
+    T_est.translation() = T_gt.translation() - T_est.linear() * d.tail<3>();
+    StampedPose p;
+    p.stamp = kT0.PlusSeconds(t);
+    p.T_world_body = T_est;
+    p.cov_T_world_body = C;
+    ASSERT_TRUE(honest.Add(p).ok());
+    p.cov_T_world_body = 0.01 * C;
+    ASSERT_TRUE(overconfident.Add(p).ok());
+    ASSERT_TRUE(no_cov.Add(p.stamp, T_est).ok());
+  }
+  const StatusOr<NeesResult> h = ComputeNees(honest, gt);
+  const StatusOr<NeesResult> o = ComputeNees(overconfident, gt);
+  ASSERT_TRUE(h.ok()) << h.status().ToString();
+  ASSERT_TRUE(o.ok());
+  EXPECT_EQ(h->num_epochs, 2000u);
+  EXPECT_NEAR(h->position_mean, 3.0, 0.3);
+  EXPECT_NEAR(h->attitude_mean, 3.0, 0.3);
+  EXPECT_NEAR(h->position_fraction_inside_95, 0.95, 0.02);
+  EXPECT_NEAR(h->attitude_fraction_inside_95, 0.95, 0.02);
+  EXPECT_NEAR(o->position_mean, 300.0, 30.0);
+  EXPECT_LT(o->position_fraction_inside_95, 0.05);
+  EXPECT_EQ(ComputeNees(no_cov, gt).status().code(), StatusCode::kInvalidArgument);
+}
+
 TEST(TrajectoryErrorTest, WrapAngle) {
   EXPECT_NEAR(WrapAngle(3.0 * M_PI / 2.0), -M_PI / 2.0, 1e-12);
   EXPECT_NEAR(WrapAngle(-3.0 * M_PI / 2.0), M_PI / 2.0, 1e-12);

@@ -85,6 +85,17 @@ MethodEvaluation EvaluateMethod(const ModeRun& run, const eval::GroundTruth* gt,
   std::optional<eval::RelativeErrorResult> relative;
   std::optional<eval::OutageErrorResult> outage;
   std::optional<eval::MapEntropyResult> entropy;
+  std::optional<eval::NeesResult> nees;
+  if (gt != nullptr && !run.trajectory.empty() &&
+      (run.mode == MappingMode::kGnssIns || run.mode == MappingMode::kGnssInsSmoothed)) {
+    // The POS's covariances are absolute (level 1's are relative to their submap).
+    StatusOr<eval::NeesResult> n = eval::ComputeNees(run.trajectory, gt->T_world_body);
+    if (n.ok()) {
+      nees = *n;
+    } else {
+      SLAM_MMS_LOG(kWarning) << run.name << ": NEES: " << n.status().ToString();
+    }
+  }
   if (gt != nullptr && !run.trajectory.empty()) {
     StatusOr<eval::AteResult> ate = eval::ComputeAte(run.trajectory, gt->T_world_body);
     if (ate.ok()) {
@@ -138,7 +149,8 @@ MethodEvaluation EvaluateMethod(const ModeRun& run, const eval::GroundTruth* gt,
     }
   }
   ev.report = eval::MakeMethodReport(ev.ate ? &*ev.ate : nullptr, relative ? &*relative : nullptr,
-                                     outage ? &*outage : nullptr, entropy ? &*entropy : nullptr);
+                                     outage ? &*outage : nullptr, entropy ? &*entropy : nullptr,
+                                     nees ? &*nees : nullptr);
   ev.report.scans_per_s = run.scans_per_s;
   ev.report.peak_rss_mb = run.peak_rss_mb;
   return ev;

@@ -75,6 +75,9 @@ struct MethodReport {
   std::optional<double> max_pos_err_in_outage_m;
   std::optional<double> max_rot_err_in_outage_deg;
   std::optional<double> mme;
+  /// The covariance's consistency (ComputeNees) for the POS methods with their absolute
+  /// covariances (gnss_ins, gnss_ins_smoothed); null for the others.
+  std::optional<NeesResult> nees;
   std::optional<double> scans_per_s;
   std::optional<double> peak_rss_mb;
 };
@@ -82,7 +85,8 @@ struct MethodReport {
 /// Fills the metric fields of a MethodReport from results; a null pointer leaves its fields null.
 /// Relative errors with no segment (NaN) and outage results with no pose inside a window stay null.
 MethodReport MakeMethodReport(const AteResult* ate, const RelativeErrorResult* relative,
-                              const OutageErrorResult* outage, const MapEntropyResult* entropy);
+                              const OutageErrorResult* outage, const MapEntropyResult* entropy,
+                              const NeesResult* nees = nullptr);
 
 struct EvalReport {
   ReportInput input;

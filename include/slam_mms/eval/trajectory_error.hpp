@@ -113,6 +113,23 @@ StatusOr<AteResult> ComputeAte(const Trajectory& estimate, const Trajectory& gro
 /// The same on already matched poses.
 StatusOr<AteResult> ComputeAte(const MatchedPoses& matched, Alignment alignment);
 
+/// Consistency of a trajectory's own covariances against the ground truth: per matched pose the
+/// normalised estimation error squared of the position (3 dof; error in world, covariance's
+/// translation block taken from body to world) and of the attitude (3 dof, right perturbation),
+/// and the share inside the two-sided 95 % chi-square interval [0.216, 9.348]. A consistent
+/// estimator has a mean near 3 and about 95 % inside; a mean far above 3 is overconfident.
+struct NeesResult {
+  size_t num_epochs = 0;  ///< Matched poses with a usable (positive definite) covariance.
+  double position_mean = 0.0;
+  double position_fraction_inside_95 = 0.0;
+  double attitude_mean = 0.0;
+  double attitude_fraction_inside_95 = 0.0;
+};
+
+/// Fails where no pose of `estimate` carries a usable covariance or none can be matched. Only
+/// meaningful for absolute covariances (a POS); level 1's are relative to their submap.
+StatusOr<NeesResult> ComputeNees(const Trajectory& estimate, const Trajectory& ground_truth);
+
 /// Wraps an angle to (-pi, pi].
 double WrapAngle(double angle_rad);
 

@@ -364,9 +364,12 @@ struct MappingSystem::Impl {
     while (submaps_reported < submaps.size() && submaps[submaps_reported].finished) {
       const int32_t id = submaps[submaps_reported].id;
       // The POS attitude for level 2's attitude prior, at the submap's first scan where GNSS
-      // holds the POS at full weight (in an outage its attitude error outgrows its covariance: on
-      // the demo drive with a 30 s outage, using it there raised full's ATE from 0.30 to 0.33 m;
-      // down-weighted fixes leave tilt errors of 0.2-0.3 deg, docs/results.md). It is taken to the
+      // holds the POS, down-weighted fixes included (in an outage its attitude error outgrows its
+      // covariance: on the demo drive with a 30 s outage, using it there raised full's ATE from
+      // 0.30 to 0.33 m). Under single-point or no-fix GNSS the POS's covariance is honest since
+      // its GNSS errors are Gauss-Markov states (InsFilter); without the prior level 2's yaw was
+      // free there and followed the metre-level noise (1-6 deg on moving single-point drives of
+      // the sweep, docs/sweep.md). It is taken to the
       // submap frame through level 1's relative pose: R_world_submap = R_world_body *
       // R_submap_body^T, and a right perturbation d of the body is R_submap_body * d of the
       // submap. The first scan may precede the POS (the POS can start inside it) and its first
@@ -377,7 +380,7 @@ struct MappingSystem::Impl {
       const bool pos_ready = external_pos || ins.initialized();
       for (size_t j = 0; pos_ready && j < rec.scan_stamps.size() && !attitude; ++j) {
         const Timestamp t = rec.scan_stamps[j];
-        if (!external_pos && gp.AvailabilityAt(t) != GnssAvailability::kValid) continue;
+        if (!external_pos && gp.AvailabilityAt(t) == GnssAvailability::kOutage) continue;
         StatusOr<InsState> s = ins.StateAt(t);
         if (!s.ok()) continue;
         const Eigen::Matrix3d R_sb = rec.T_submap_scan[j].linear();

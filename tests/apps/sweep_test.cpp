@@ -64,7 +64,21 @@ TEST(SweepRulesTest, AGoodRunPassesEveryRuleThatApplies) {
   EXPECT_EQ(Verdict(r, "lidar_tracks"), "pass");
   EXPECT_EQ(Verdict(r, "full_vs_pos_rtk"), "pass");
   EXPECT_EQ(Verdict(r, "standing_still"), "n/a");
+  EXPECT_EQ(Verdict(r, "full_rot_vs_pos"), "pass");
   EXPECT_EQ(Verdict(r, "full_map_sharper"), "pass");
+}
+
+TEST(SweepRulesTest, FullMustNotRotateMoreThanThePosOnMovingRuns) {
+  RunRecord r = GoodRun();
+  r.result["methods"]["full"]["rot_rmse_deg"] = 0.16;  // gnss_ins 0.10 + 0.05
+  EXPECT_EQ(Verdict(r, "full_rot_vs_pos"), "FAIL");
+  r.result["methods"]["full"]["rot_rmse_deg"] = 0.14;
+  EXPECT_EQ(Verdict(r, "full_rot_vs_pos"), "pass");
+  r.spec["motion"]["classes"] = "standing+campus";  // standing_still's
+  EXPECT_EQ(Verdict(r, "full_rot_vs_pos"), "n/a");
+  r = GoodRun();
+  r.result["methods"].erase("gnss_ins");
+  EXPECT_EQ(Verdict(r, "full_rot_vs_pos"), "n/a");
 }
 
 TEST(SweepRulesTest, CrashHangNanAndIncompleteRunsAreNotSane) {

@@ -118,6 +118,21 @@ RuleOutcome StandingStill(const RunRecord& r) {
   return Outcome("standing_still", *fr <= *gr + 0.05, why);
 }
 
+// The same on moving runs: level 2 must not turn the map by more than the POS it starts from is
+// off (under single-point GNSS a free yaw turned moving drives by 1-6 deg).
+RuleOutcome FullRotVsPos(const RunRecord& r) {
+  const std::string classes = r.spec["motion"]["classes"].get<std::string>();
+  if (("+" + classes + "+").find("+standing+") != std::string::npos) {
+    return NotApplicable("full_rot_vs_pos", "standing (standing_still)");
+  }
+  const auto fr = Num(r.result, "full", "rot_rmse_deg");
+  const auto gr = Num(r.result, "gnss_ins", "rot_rmse_deg");
+  if (!fr || !gr) return NotApplicable("full_rot_vs_pos", "full or gnss_ins missing");
+  char why[128];
+  std::snprintf(why, sizeof(why), "full rot %.3f deg, limit gnss_ins %.3f + 0.05", *fr, *gr);
+  return Outcome("full_rot_vs_pos", *fr <= *gr + 0.05, why);
+}
+
 RuleOutcome FullMapSharper(const RunRecord& r) {
   const auto fm = Num(r.result, "full", "mme"), gm = Num(r.result, "gnss_ins", "mme");
   if (!fm || !gm) return NotApplicable("full_map_sharper", "full or gnss_ins MME missing");
@@ -135,8 +150,9 @@ std::string Join(const std::vector<std::string>& v, const std::string& sep) {
 }  // namespace
 
 const std::vector<std::string>& RuleNames() {
-  static const std::vector<std::string> names = {"sane", "lidar_tracks", "full_vs_pos_rtk",
-                                                 "standing_still", "full_map_sharper"};
+  static const std::vector<std::string> names = {
+      "sane",           "lidar_tracks",    "full_vs_pos_rtk",
+      "standing_still", "full_rot_vs_pos", "full_map_sharper"};
   return names;
 }
 
@@ -153,6 +169,7 @@ std::vector<RuleOutcome> EvaluateRules(const RunRecord& r) {
   out.push_back(LidarTracks(r));
   out.push_back(FullVsPosRtk(r));
   out.push_back(StandingStill(r));
+  out.push_back(FullRotVsPos(r));
   out.push_back(FullMapSharper(r));
   return out;
 }

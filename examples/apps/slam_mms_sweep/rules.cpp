@@ -105,32 +105,23 @@ RuleOutcome FullVsPosRtk(const RunRecord& r) {
   return Outcome("full_vs_pos_rtk", *fa <= ate_limit && *fr <= rot_limit, why);
 }
 
-RuleOutcome StandingStill(const RunRecord& r) {
+// full's rotation RMSE against the POS's: level 2 must not turn the map by more than the POS it
+// starts from is off. `standing_still` on standing windows (a free yaw followed the GNSS noise of
+// a vehicle at rest), `full_rot_vs_pos` on moving ones (under single-point GNSS a free yaw turned
+// moving drives by 1-6 deg).
+RuleOutcome FullRotationWithinThePos(const RunRecord& r, bool standing_rule) {
+  const char* rule = standing_rule ? "standing_still" : "full_rot_vs_pos";
   const std::string classes = r.spec["motion"]["classes"].get<std::string>();
-  if (("+" + classes + "+").find("+standing+") == std::string::npos) {
-    return NotApplicable("standing_still", "moving");
+  const bool standing = ("+" + classes + "+").find("+standing+") != std::string::npos;
+  if (standing != standing_rule) {
+    return NotApplicable(rule, standing ? "standing (standing_still)" : "moving");
   }
   const auto fr = Num(r.result, "full", "rot_rmse_deg");
   const auto gr = Num(r.result, "gnss_ins", "rot_rmse_deg");
-  if (!fr || !gr) return NotApplicable("standing_still", "full or gnss_ins missing");
+  if (!fr || !gr) return NotApplicable(rule, "full or gnss_ins missing");
   char why[128];
   std::snprintf(why, sizeof(why), "full rot %.3f deg, limit gnss_ins %.3f + 0.05", *fr, *gr);
-  return Outcome("standing_still", *fr <= *gr + 0.05, why);
-}
-
-// The same on moving runs: level 2 must not turn the map by more than the POS it starts from is
-// off (under single-point GNSS a free yaw turned moving drives by 1-6 deg).
-RuleOutcome FullRotVsPos(const RunRecord& r) {
-  const std::string classes = r.spec["motion"]["classes"].get<std::string>();
-  if (("+" + classes + "+").find("+standing+") != std::string::npos) {
-    return NotApplicable("full_rot_vs_pos", "standing (standing_still)");
-  }
-  const auto fr = Num(r.result, "full", "rot_rmse_deg");
-  const auto gr = Num(r.result, "gnss_ins", "rot_rmse_deg");
-  if (!fr || !gr) return NotApplicable("full_rot_vs_pos", "full or gnss_ins missing");
-  char why[128];
-  std::snprintf(why, sizeof(why), "full rot %.3f deg, limit gnss_ins %.3f + 0.05", *fr, *gr);
-  return Outcome("full_rot_vs_pos", *fr <= *gr + 0.05, why);
+  return Outcome(rule, *fr <= *gr + 0.05, why);
 }
 
 RuleOutcome FullMapSharper(const RunRecord& r) {
@@ -168,8 +159,8 @@ std::vector<RuleOutcome> EvaluateRules(const RunRecord& r) {
   }
   out.push_back(LidarTracks(r));
   out.push_back(FullVsPosRtk(r));
-  out.push_back(StandingStill(r));
-  out.push_back(FullRotVsPos(r));
+  out.push_back(FullRotationWithinThePos(r, true));
+  out.push_back(FullRotationWithinThePos(r, false));
   out.push_back(FullMapSharper(r));
   return out;
 }

@@ -297,13 +297,21 @@ struct InsFilter::Impl {
         Eigen::Matrix<double, 6, 6> Rm = Eigen::Matrix<double, 6, 6>::Identity();
         H.block<3, 3>(0, kV).setIdentity();
         z.head<3>() = -x.v;
-        Rm.topLeftCorner<3, 3>() *= options.zupt_sigma_mps * options.zupt_sigma_mps;
+        // Likewise a velocity the detector cannot see: up to zupt_max_accel_mps2 over the window.
+        const double dv_max = options.zupt_max_accel_mps2 * options.zupt_window_s;
+        Rm.topLeftCorner<3, 3>() *=
+            options.zupt_sigma_mps * options.zupt_sigma_mps + dv_max * dv_max / 3.0;
         if (zaru) {
           const double T = std::max(t.SecondsSince(*zaru_start), 1e-3);
           H.block<3, 3>(3, kBg).setIdentity();
           z.tail<3>() = zaru_sum / zaru_n - x.bg;
+          // The detector cannot tell a rate below its threshold from none: the vehicle's own
+          // residual rate (rocking, a real OXTS's standing jitter of up to 0.015 rad/s) is
+          // taken as uniform within it, not as bias (else the bias follows it and the attitude
+          // stops following the vehicle).
+          const double rate_var = options.zupt_max_gyro_radps * options.zupt_max_gyro_radps / 3.0;
           Rm.bottomRightCorner<3, 3>() *=
-              options.gyro_noise_density * options.gyro_noise_density / T + 1e-10;
+              options.gyro_noise_density * options.gyro_noise_density / T + rate_var;
           Update<6>(H, z, Rm);
         } else {
           Update<3>(H.topRows<3>(), z.head<3>(), Rm.topLeftCorner<3, 3>());

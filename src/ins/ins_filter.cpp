@@ -169,6 +169,22 @@ struct InsFilter::Impl {
                         : options.gnss_error_code;
   }
 
+  // b_gnss's stationary covariance for a fix of this model: the correlated share of its measured
+  // covariance C (the fix type's weight included, the innovation test's inflation not); a
+  // negligible one where the model's errors are white.
+  static Eigen::Matrix3d BiasCovariance(const Options::GnssErrorModel& em, const Eigen::Matrix3d& C,
+                                        double innovation_weight) {
+    if (!(em.correlated_fraction > 0.0)) return kWhiteBiasVariance * Eigen::Matrix3d::Identity();
+    return em.correlated_fraction * C / innovation_weight;
+  }
+
+  // Whether a new GNSS solution can start at the current stamp: not where the recorded step
+  // there already holds an update (its transition cannot be put before that update).
+  bool CanStartSolutionHere() const {
+    return !(options.record_steps && !steps.empty() && steps.back().stamp == x.stamp &&
+             steps.back().updated);
+  }
+
   // Clears the GNSS-model and constraint state (a new initialisation).
   void ResetAuxiliary() {
     x.bn.setZero();
@@ -209,14 +225,9 @@ struct InsFilter::Impl {
   }
 
   // A new GNSS solution starts: b_gnss restarts from zero with the stationary covariance `cov`
-  // (its block of the transition is zero). Recorded as part of the propagation to this stamp.
-  // False (nothing done) when the step at this stamp already holds an update (two fixes at one
-  // stamp): the transition cannot be put before it.
-  bool ResetBias(const Eigen::Matrix3d& cov, double tau_s) {
-    if (options.record_steps && !steps.empty() && steps.back().stamp == x.stamp &&
-        steps.back().updated) {
-      return false;
-    }
+  // (its block of the transition is zero). Recorded as part of the propagation to this stamp:
+  // AddGnss has recorded the step at x.stamp, which holds no update yet (CanStartSolutionHere).
+  void ResetBias(const Eigen::Matrix3d& cov, double tau_s) {
     InsErrorMatrix Fr = InsErrorMatrix::Identity();
     Fr.block<3, 3>(kBn, kBn).setZero();
     P = Fr * P * Fr.transpose();
@@ -224,16 +235,12 @@ struct InsFilter::Impl {
     x.bn.setZero();
     bias_cov = cov;
     bias_tau_s = tau_s;
-    if (options.record_steps && !steps.empty() && steps.back().stamp == x.stamp) {
+    if (options.record_steps) {
       InsFilterStep& st = steps.back();
       st.F = Fr * st.F;
       st.P_prior = st.P_posterior = P;
       st.gnss_bias_prior = st.gnss_bias_posterior = x.bn;
-    } else if (options.record_steps) {
-      F_since_step = Fr * F_since_step;
-      propagated_since_step = true;
     }
-    return true;
   }
 
   // EKF update with the innovation z - h(x) = H dx + n, n ~ N(0, Rm) (Joseph form), the
@@ -625,9 +632,7 @@ StatusOr<GnssDecisionResult> InsFilter::AddGnss(const GnssFix& fix) {
       // The fix's error (bias + white) is the position's: cov(dp, db) = -bias covariance.
       const int model = Impl::ModelIndex(fix.type);
       const Options::GnssErrorModel& em = im.ErrorModel(model);
-      if (em.correlated_fraction > 0.0) {
-        im.bias_cov = em.correlated_fraction * C / r.innovation_weight;
-      }
+      im.bias_cov = Impl::BiasCovariance(em, C, r.innovation_weight);
       im.bias_model = model;
       im.bias_tau_s = em.correlation_time_s;
       im.last_used_fix = fix.stamp;
@@ -664,11 +669,10 @@ StatusOr<GnssDecisionResult> InsFilter::AddGnss(const GnssFix& fix) {
   const Eigen::Matrix3d R = im.x.q.toRotationMatrix();
   // A new solution (another fix type, or the first fix after an outage) has its own bias.
   const int model = Impl::ModelIndex(fix.type);
-  const bool same_stamp_updated = im.options.record_steps && !im.steps.empty() &&
-                                  im.steps.back().stamp == im.x.stamp && im.steps.back().updated;
-  const bool new_solution = !same_stamp_updated && (model != im.bias_model || !im.last_used_fix ||
-                                                    fix.stamp.SecondsSince(*im.last_used_fix) >
-                                                        im.options.gnss.outage_timeout_s);
+  const bool new_solution =
+      im.CanStartSolutionHere() &&
+      (model != im.bias_model || !im.last_used_fix ||
+       fix.stamp.SecondsSince(*im.last_used_fix) > im.options.gnss.outage_timeout_s);
   Eigen::Matrix<double, 3, kN> H = Eigen::Matrix<double, 3, kN>::Zero();
   H.block<3, 3>(0, kP) = Eigen::Matrix3d::Identity();
   H.block<3, 3>(0, kV) = -lag * Eigen::Matrix3d::Identity();
@@ -687,12 +691,10 @@ StatusOr<GnssDecisionResult> InsFilter::AddGnss(const GnssFix& fix) {
   // fix type's weight included, the innovation test's inflation not), the rest is white.
   const Eigen::Matrix3d& C = r.measurement.cov_world_antenna;
   const Options::GnssErrorModel& em = im.ErrorModel(model);
-  const Eigen::Matrix3d bias_cov =
-      em.correlated_fraction > 0.0
-          ? Eigen::Matrix3d(em.correlated_fraction * C / r.innovation_weight)
-          : Eigen::Matrix3d(kWhiteBiasVariance * Eigen::Matrix3d::Identity());
+  const Eigen::Matrix3d bias_cov = Impl::BiasCovariance(em, C, r.innovation_weight);
   const Eigen::Matrix3d Rm = em.correlated_fraction > 0.0 ? Eigen::Matrix3d(C - bias_cov) : C;
-  if (new_solution && im.ResetBias(bias_cov, em.correlation_time_s)) {
+  if (new_solution) {
+    im.ResetBias(bias_cov, em.correlation_time_s);
     im.bias_model = model;
   } else {
     im.bias_cov = bias_cov;  // the stationary covariance follows the reported sigma

@@ -366,8 +366,9 @@ struct MappingSystem::Impl {
       // The POS attitude for level 2's attitude prior, at the submap's first scan where GNSS
       // holds the POS, down-weighted fixes included (in an outage its attitude error outgrows its
       // covariance: on the demo drive with a 30 s outage, using it there raised full's ATE from
-      // 0.30 to 0.33 m). Under single-point or no-fix GNSS the POS's covariance is honest since
-      // its GNSS errors are Gauss-Markov states (InsFilter); without the prior level 2's yaw was
+      // 0.30 to 0.33 m). Under single-point or no-fix GNSS the POS's attitude covariance is no
+      // longer overconfident, its GNSS errors being Gauss-Markov states (InsFilter; attitude NEES
+      // 2.2 on the 190 s drive, docs/results.md); without the prior level 2's yaw was
       // free there and followed the metre-level noise (1-6 deg on moving single-point drives of
       // the sweep, docs/sweep.md). It is taken to the
       // submap frame through level 1's relative pose: R_world_submap = R_world_body *

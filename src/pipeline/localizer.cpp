@@ -10,12 +10,14 @@
 #include <string>
 #include <system_error>
 
+#include "core/worker_pool.hpp"
 #include "pipeline/cloud_file.hpp"
 #include "pipeline/pose_covariance.hpp"
-#include "pipeline/voxel_accumulator.hpp"
+#include "pipeline/submap_cloud_builder.hpp"
 #include "slam_mms/core/lie.hpp"
 #include "slam_mms/core/logging.hpp"
 #include "slam_mms/ins/imu_preintegration_factor.hpp"
+#include "surfel/parallel_range_image.hpp"
 
 namespace slam_mms {
 namespace {
@@ -116,8 +118,11 @@ struct Localizer::Impl {
   ProjectiveIcp icp;
   std::unique_ptr<SlidingWindowGraph> window;
   std::vector<SubmapRecord> submaps;
-  internal::VoxelAccumulator map_acc;
-  internal::VoxelAccumulator reg_acc;
+  /// The current submap's map and registration clouds (accumulated off the critical path).
+  std::unique_ptr<internal::SubmapCloudBuilder> clouds;
+  /// Threads of the Localizer's own per-scan loops (the scan's range image).
+  std::unique_ptr<internal::WorkerPool> pool;
+  std::unique_ptr<internal::ParallelRangeImage> range_image;
   bool use_imu_states = false;
   /// Stable surfels of the submaps that left the live map, by submap id.
   std::map<int32_t, std::vector<Surfel>> archived_surfels;
@@ -209,8 +214,7 @@ struct Localizer::Impl {
     submaps.push_back(std::move(rec));
     map.SetSubmapId(submaps.back().id);
     if (opt.per_submap_surfels) RetireOldSurfels(submaps.back().id);
-    map_acc.Clear();
-    reg_acc.Clear();
+    clouds->Clear();
   }
 
   /// Takes the surfels of submaps older than current_id - 1 out of the live map (archiving the
@@ -229,12 +233,14 @@ struct Localizer::Impl {
   void CloseCurrentSubmap() {
     if (submaps.empty() || submaps.back().finished) return;
     SubmapRecord& rec = submaps.back();
-    rec.cloud = map_acc.Cloud(&rec.cloud_stamps.time_ns, &rec.cloud_stamps.scan_index);
-    rec.registration_cloud = reg_acc.Cloud();
+    internal::SubmapCloudBuilder::Clouds built = clouds->Build();
+    rec.cloud = std::move(built.map);
+    rec.cloud_stamps.time_ns = std::move(built.time_ns);
+    rec.cloud_stamps.scan_index = std::move(built.scan_index);
+    rec.registration_cloud = std::move(built.registration);
     rec.cloud_size = rec.cloud.size();
     rec.finished = true;
-    map_acc.Clear();
-    reg_acc.Clear();
+    clouds->Clear();
     // Level 2 reads only the final map cloud's file; it registers this submap with the previous
     // one next, so the registration clouds of older ones leave memory.
     Spill(rec, CloudKind::kMap);
@@ -368,10 +374,8 @@ struct Localizer::Impl {
     T_submap_prev = Eigen::Isometry3d::Identity();
     v_submap_prev = T_submap_cur.linear().transpose() * v_submap_prev;
     SLAM_MMS_RETURN_IF_ERROR(StartWindow(v_submap_prev, bias_prev));
-    const internal::ScanStamp stamp{scan.stamp_start.nanoseconds(), &scan.cloud.time_offsets_s(),
-                                    scan.index};
-    map_acc.Add(deskewed, T_body_lidar, opt.map_max_range_m, &stamp);
-    reg_acc.Add(deskewed, T_body_lidar, opt.map_max_range_m);
+    clouds->Add(deskewed, scan.cloud.time_offsets_s(), scan.stamp_start.nanoseconds(), scan.index,
+                T_body_lidar, opt.map_max_range_m);
     res->new_submap = true;
     res->submap_id = current().id;
     SLAM_MMS_LOG(kDebug) << "Localizer: submap " << current().id << " starts at scan "
@@ -452,8 +456,10 @@ StatusOr<std::unique_ptr<Localizer>> Localizer::Create(const Options& options,
   m.renderer = std::move(renderer).value();
   SLAM_MMS_RETURN_IF_ERROR(m.map.SetRenderer(m.renderer.get()));
   SLAM_MMS_ASSIGN_OR_RETURN(m.icp, ProjectiveIcp::Create(m.projection, options.icp));
-  m.map_acc = internal::VoxelAccumulator(options.map_voxel_m, /*track_first_observation=*/true);
-  m.reg_acc = internal::VoxelAccumulator(options.registration_voxel_m);
+  m.clouds = std::make_unique<internal::SubmapCloudBuilder>(
+      options.map_voxel_m, options.registration_voxel_m, /*asynchronous=*/options.num_threads > 1);
+  m.pool = std::make_unique<internal::WorkerPool>(options.num_threads);
+  m.range_image = std::make_unique<internal::ParallelRangeImage>(m.pool.get());
   if (!options.spill_dir.empty()) {
     auto spill = internal::SpillFolder::Create(options.spill_dir);
     if (!spill.ok()) return spill.status().WithContext("Localizer::Options::spill_dir");
@@ -527,7 +533,7 @@ StatusOr<LocalizationResult> Localizer::ProcessScan(const Scan& scan,
   const Eigen::Isometry3d T_bstart_bend =
       m.DeskewMotion(scan, deskew_motion, T_submap_pred, v_submap_pred, g_submap);
   SLAM_MMS_RETURN_IF_ERROR(m.deskewer.Deskew(scan, T_bstart_bend, m.T_body_lidar, &m.deskewed));
-  m.projection.ComputeVertexNormalMap(m.deskewed, &m.scan_vnm);
+  m.range_image->ComputeVertexNormalMap(m.projection, m.deskewed.View(), &m.scan_vnm);
   res.timings.deskew_ms = MsSince(t0);
 
   // ---- 3. render the current and previous submap at the prediction -----------------------------
@@ -660,10 +666,8 @@ StatusOr<LocalizationResult> Localizer::ProcessScan(const Scan& scan,
   if (!stats.ok()) return stats.status().WithContext("Localizer: surfel integration");
   res.num_surfels = stats->num_surfels;
   const Eigen::Isometry3d T_submap_lidar = T_submap_cur * m.T_body_lidar;
-  const internal::ScanStamp stamp{scan.stamp_start.nanoseconds(), &scan.cloud.time_offsets_s(),
-                                  scan.index};
-  m.map_acc.Add(m.deskewed, T_submap_lidar, m.opt.map_max_range_m, &stamp);
-  m.reg_acc.Add(m.deskewed, T_submap_lidar, m.opt.map_max_range_m);
+  m.clouds->Add(m.deskewed, scan.cloud.time_offsets_s(), scan.stamp_start.nanoseconds(), scan.index,
+                T_submap_lidar, m.opt.map_max_range_m);
   res.timings.integrate_ms = MsSince(t0);
 
   // ---- bookkeeping ------------------------------------------------------------------------------

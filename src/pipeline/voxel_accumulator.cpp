@@ -133,16 +133,18 @@ PointCloud VoxelAccumulator::Cloud(std::vector<int64_t>* first_time_ns,
   const bool stamps = track_ && first_time_ns_.size() == size_;
   if (first_time_ns != nullptr) first_time_ns->clear();
   if (first_scan != nullptr) first_scan->clear();
-  std::vector<const Entry*> sorted;
+  // (key, slot) pairs sorted by key (keys are unique): the sort compares contiguous keys instead
+  // of chasing a pointer into the table per comparison.
+  std::vector<std::pair<uint64_t, size_t>> sorted;
   sorted.reserve(size_);
-  for (const Entry& e : table_) {
-    if (e.key != kEmpty) sorted.push_back(&e);
+  for (size_t slot = 0; slot < table_.size(); ++slot) {
+    if (table_[slot].key != kEmpty) sorted.emplace_back(table_[slot].key, slot);
   }
-  std::sort(sorted.begin(), sorted.end(),
-            [](const Entry* a, const Entry* b) { return a->key < b->key; });
+  std::sort(sorted.begin(), sorted.end());
   PointCloud out;
   out.reserve(sorted.size());
-  for (const Entry* e : sorted) {
+  for (const auto& [key, slot] : sorted) {
+    const Entry* e = &table_[slot];
     const double n = e->count;
     const Eigen::Vector3d corner(static_cast<double>(Axis(e->key, 42)) * voxel_,
                                  static_cast<double>(Axis(e->key, 21)) * voxel_,

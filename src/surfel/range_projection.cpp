@@ -144,12 +144,18 @@ void RangeProjection::ComputeVertexMap(const PointCloudView& cloud, VertexNormal
 }
 
 void RangeProjection::ComputeNormals(VertexNormalMap* map) const {
+  ComputeNormals(map, 0, map->rows);
+}
+
+void RangeProjection::ComputeNormals(VertexNormalMap* map, int row_begin, int row_end) const {
   const int rows = map->rows;
   const int cols = map->cols;
   const float jump_m = static_cast<float>(options_.normal_max_range_jump_m);
   const float jump_ratio = static_cast<float>(options_.normal_max_range_jump_ratio);
   const int col_step = std::max(1, options_.normal_col_step);
-  for (int row = 0; row < rows; ++row) {
+  row_begin = std::max(row_begin, 0);
+  row_end = std::min(row_end, rows);
+  for (int row = row_begin; row < row_end; ++row) {
     for (int col = 0; col < cols; ++col) {
       const int k = row * cols + col;
       map->normal[static_cast<size_t>(k)].setZero();

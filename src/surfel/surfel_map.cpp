@@ -175,6 +175,26 @@ void SurfelMap::Clear() {
   m.frame_count = 0;
 }
 
+namespace {
+
+// Compacts ids[k0, k1) in place to the live surfels within r2 of c with confidence >
+// min_confidence; returns how many were kept.
+size_t KeepActive(const std::vector<Surfel>& surfels, const std::vector<uint8_t>& alive,
+                  const Eigen::Vector3f& c, float r2, float min_confidence, size_t k0, size_t k1,
+                  std::vector<uint32_t>* ids) {
+  size_t kept = k0;
+  for (size_t k = k0; k < k1; ++k) {
+    const uint32_t id = (*ids)[k];
+    const Surfel& s = surfels[id];
+    if (alive[id] && (s.position - c).squaredNorm() <= r2 && s.confidence > min_confidence) {
+      (*ids)[kept++] = id;
+    }
+  }
+  return kept - k0;
+}
+
+}  // namespace
+
 void SurfelMap::SelectActive(const Eigen::Vector3d& center_world, double radius_m,
                              float min_confidence, std::vector<uint32_t>* ids) const {
   const Impl& m = *impl_;
@@ -182,16 +202,46 @@ void SurfelMap::SelectActive(const Eigen::Vector3d& center_world, double radius_
   const Eigen::Vector3f c = center_world.cast<float>();
   const float r = static_cast<float>(radius_m);
   m.index.CandidatesInSphere(c, r, ids);
+  ids->resize(KeepActive(m.surfels, m.alive, c, r * r, min_confidence, 0, ids->size(), ids));
+}
+
+void SurfelMap::SelectActive(const Eigen::Vector3d& center_world, double radius_m,
+                             float min_confidence, std::vector<uint32_t>* ids) {
+  Impl& m = *impl_;
+  ids->clear();
+  const Eigen::Vector3f c = center_world.cast<float>();
+  const float r = static_cast<float>(radius_m);
+  m.index.CandidatesInSphere(c, r, ids);
   const float r2 = r * r;
-  size_t kept = 0;
-  for (size_t k = 0; k < ids->size(); ++k) {
-    const uint32_t id = (*ids)[k];
-    const Surfel& s = m.surfels[id];
-    if (m.alive[id] && (s.position - c).squaredNorm() <= r2 && s.confidence > min_confidence) {
-      (*ids)[kept++] = id;
-    }
+  const size_t n = ids->size();
+  // Reading every candidate surfel is mostly cache misses: each thread compacts its part in
+  // place, then the parts are joined in order (the ids of the serial filter, in its order).
+  constexpr size_t kMinParallel = 16384;
+  if (m.pool.num_threads() == 1 || n < kMinParallel) {
+    ids->resize(KeepActive(m.surfels, m.alive, c, r2, min_confidence, 0, n, ids));
+    return;
   }
-  ids->resize(kept);
+  std::vector<size_t>& kept = m.kept_per_thread;
+  kept.assign(static_cast<size_t>(m.pool.num_threads()), 0);
+  m.pool.Run([&](int ti) {
+    size_t k0 = 0;
+    size_t k1 = 0;
+    m.pool.Range(ti, n, &k0, &k1);
+    kept[static_cast<size_t>(ti)] =
+        KeepActive(m.surfels, m.alive, c, r2, min_confidence, k0, k1, ids);
+  });
+  size_t out = kept[0];
+  for (int ti = 1; ti < m.pool.num_threads(); ++ti) {
+    size_t k0 = 0;
+    size_t k1 = 0;
+    m.pool.Range(ti, n, &k0, &k1);
+    const auto first = ids->begin() + static_cast<std::ptrdiff_t>(k0);
+    if (out != k0)
+      std::copy(first, first + static_cast<std::ptrdiff_t>(kept[static_cast<size_t>(ti)]),
+                ids->begin() + static_cast<std::ptrdiff_t>(out));
+    out += kept[static_cast<size_t>(ti)];
+  }
+  ids->resize(out);
 }
 
 Status SurfelMap::RenderModel(const Eigen::Isometry3d& T_world_sensor, float min_confidence,

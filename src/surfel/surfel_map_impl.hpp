@@ -38,6 +38,7 @@ struct SurfelMap::Impl {
   std::vector<std::vector<uint32_t>> moved_per_thread;
   std::vector<std::vector<int>> integrated_per_thread;  // pixels confirmed by a surfel centre
   std::vector<int> confirmed_per_thread;
+  std::vector<size_t> kept_per_thread;  // SelectActive
 };
 
 }  // namespace slam_mms

@@ -9,6 +9,7 @@
 #include <limits>
 #include <random>
 #include <set>
+#include <utility>
 
 #include "slam_mms/surfel/range_projection.hpp"
 #include "surfel/synthetic_surfels.hpp"
@@ -267,6 +268,10 @@ TEST(SurfelMapTest, SelectActiveMatchesBruteForce) {
     const double radius = 2.0 + std::abs(pos(rng)) * 0.6;
     const float min_conf = q % 2 == 0 ? -std::numeric_limits<float>::infinity() : 0.5f;
     map->SelectActive(c, radius, min_conf, &ids);
+    // The non-const overload filters with the map's threads: the const one's ids, in its order.
+    std::vector<uint32_t> serial;
+    std::as_const(*map).SelectActive(c, radius, min_conf, &serial);
+    EXPECT_EQ(ids, serial) << "query " << q;
     std::set<uint32_t> got(ids.begin(), ids.end());
     EXPECT_EQ(got.size(), ids.size());
     std::set<uint32_t> want;
@@ -282,6 +287,13 @@ TEST(SurfelMapTest, SelectActiveMatchesBruteForce) {
       EXPECT_LE((map->surfels()[id].position.cast<double>() - c).norm(), radius + 1e-4);
     }
   }
+  // Every surfel a candidate (above the threshold of the threaded filter), half of them kept.
+  std::vector<uint32_t> serial;
+  map->SelectActive(Eigen::Vector3d::Zero(), 500.0, 0.0f, &ids);
+  std::as_const(*map).SelectActive(Eigen::Vector3d::Zero(), 500.0, 0.0f, &serial);
+  EXPECT_GT(ids.size(), 5000u);
+  EXPECT_LT(ids.size(), 15000u);
+  EXPECT_EQ(ids, serial);
   // After moving every surfel by +100 m in x, the old neighbourhood is empty and the new one full.
   EXPECT_EQ(map->TransformSubmap(0, Eigen::Isometry3d(Eigen::Translation3d(100, 0, 0))),
             surfels.size());

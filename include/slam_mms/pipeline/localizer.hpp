@@ -145,6 +145,8 @@ class Localizer {
     /// demand (SubmapCloud: the final map, loop closure). A failed write keeps the cloud in memory
     /// (logged); nothing is lost.
     std::filesystem::path spill_dir;
+    /// > 1: the submap clouds are accumulated on a background thread while the next scan is
+    /// processed (the same clouds, bit for bit); 1: inline.
     int num_threads = 2;
     [[nodiscard]] Status Validate() const;
   };

@@ -100,6 +100,9 @@ class RangeProjection {
   /// one, each the neighbour nearer in range that passes the discontinuity test; oriented towards
   /// the sensor. Pixels without two usable neighbours get no normal.
   void ComputeNormals(VertexNormalMap* map) const;
+  /// The same for rows [row_begin, row_end) only (other rows are read, not written), so that
+  /// callers can split the rows over threads; the result does not depend on the split.
+  void ComputeNormals(VertexNormalMap* map, int row_begin, int row_end) const;
   /// ComputeVertexMap followed by ComputeNormals.
   void ComputeVertexNormalMap(const PointCloudView& cloud, VertexNormalMap* out) const;
   void ComputeVertexNormalMap(const PointCloud& cloud, VertexNormalMap* out) const {

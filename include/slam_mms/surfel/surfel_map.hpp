@@ -134,6 +134,10 @@ class SurfelMap {
   /// same for the same map history, not sorted.
   void SelectActive(const Eigen::Vector3d& center_world, double radius_m, float min_confidence,
                     std::vector<uint32_t>* ids) const;
+  /// The same ids, the candidates filtered by the map's threads (renderer.num_threads); not to
+  /// be called concurrently with anything else on this map.
+  void SelectActive(const Eigen::Vector3d& center_world, double radius_m, float min_confidence,
+                    std::vector<uint32_t>* ids);
   /// Renders the surfels within active_radius_m of the sensor with confidence > min_confidence at
   /// T_world_sensor (the model image for projective ICP). SuMa renders l > 0 once warmed up.
   [[nodiscard]] Status RenderModel(const Eigen::Isometry3d& T_world_sensor, float min_confidence,

@@ -93,8 +93,13 @@ void CpuSurfelRenderer::Impl::Cull(const SurfelRenderInput& in, const Eigen::Mat
   const float facing = static_cast<float>(options.min_facing_cos);
   const float kInvPi = 1.0f / internal::kPiF;
 
+  // The surfels come by id, scattered over the map: fetch the one kPrefetch ahead while this one
+  // is bounded (the load of each surfel was the cull's single largest stall).
+  constexpr size_t kPrefetch = 16;
   for (size_t k = k0; k < k1; ++k) {
     const size_t id = in.ids != nullptr ? in.ids[k] : k;
+    if (in.ids != nullptr && k + kPrefetch < k1)
+      __builtin_prefetch(&in.surfels[in.ids[k + kPrefetch]]);
     const Surfel& s = in.surfels[id];
     // p = R x + t and n = R m written out (Eigen's product is not always inlined here; same
     // operation order, so the same floats).

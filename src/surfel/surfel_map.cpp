@@ -183,7 +183,9 @@ size_t KeepActive(const std::vector<Surfel>& surfels, const std::vector<uint8_t>
                   const Eigen::Vector3f& c, float r2, float min_confidence, size_t k0, size_t k1,
                   std::vector<uint32_t>* ids) {
   size_t kept = k0;
+  constexpr size_t kPrefetch = 16;  // the candidates are scattered over the slots
   for (size_t k = k0; k < k1; ++k) {
+    if (k + kPrefetch < k1) __builtin_prefetch(&surfels[(*ids)[k + kPrefetch]]);
     const uint32_t id = (*ids)[k];
     const Surfel& s = surfels[id];
     if (alive[id] && (s.position - c).squaredNorm() <= r2 && s.confidence > min_confidence) {
@@ -396,7 +398,9 @@ StatusOr<SurfelIntegrationStats> SurfelMap::Integrate(const VertexNormalMap& sca
     int confirmed = 0;
     const size_t k0 = std::min(n_active, static_cast<size_t>(ti) * chunk);
     const size_t k1 = std::min(n_active, k0 + chunk);
+    constexpr size_t kPrefetch = 16;  // the active surfels are scattered over the slots
     for (size_t k = k0; k < k1; ++k) {
+      if (k + kPrefetch < k1) __builtin_prefetch(&m.surfels[m.active[k + kPrefetch]], 1);
       const uint32_t id = m.active[k];
       Surfel& s = m.surfels[id];
       const Eigen::Vector3f p = R_sw * s.position + t_sw;

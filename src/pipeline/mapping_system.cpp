@@ -5,6 +5,7 @@
 #include <deque>
 #include <optional>
 #include <string>
+#include <thread>
 
 #include "pipeline/voxel_accumulator.hpp"
 #include "slam_mms/core/lie.hpp"
@@ -662,13 +663,23 @@ PointCloud MappingSystem::FinalMap(MapPointStamps* stamps) const {
       all_stamped = false;
     }
   }
+  // The centroids and the stamps are two independent sorts of the merged cloud: the stamps on a
+  // second thread where asked for.
+  MapPointStamps earliest;
+  std::thread stamp_thread;
+  if (all_stamped && m.opt.num_threads > 1) {
+    stamp_thread =
+        std::thread([&] { earliest = EarliestPerVoxel(merged, merged_stamps, m.opt.map_voxel_m); });
+  } else if (all_stamped) {
+    earliest = EarliestPerVoxel(merged, merged_stamps, m.opt.map_voxel_m);
+  }
   auto down = eval::VoxelDownsample(merged, m.opt.map_voxel_m);
+  if (stamp_thread.joinable()) stamp_thread.join();
   if (!down.ok()) {
     if (all_stamped) *stamps = std::move(merged_stamps);
     return merged;
   }
   if (all_stamped) {
-    MapPointStamps earliest = EarliestPerVoxel(merged, merged_stamps, m.opt.map_voxel_m);
     if (earliest.size() == down->size()) {
       *stamps = std::move(earliest);
     } else {

@@ -36,7 +36,7 @@ MapEntropyResult BruteForceEntropy(const std::vector<Eigen::Vector3f>& pts, doub
                                    int min_neighbors) {
   MapEntropyResult r;
   const float r2 = static_cast<float>(radius * radius);
-  double sum_h = 0.0, sum_pv = 0.0;
+  double sum_h = 0.0, sum_pv = 0.0, sum_nb = 0.0;
   for (const Eigen::Vector3f& q : pts) {
     std::vector<Eigen::Vector3d> nb;
     for (const Eigen::Vector3f& p : pts) {
@@ -61,10 +61,12 @@ MapEntropyResult BruteForceEntropy(const std::vector<Eigen::Vector3f>& pts, doub
     }
     sum_h += 0.5 * std::log((2.0 * M_PI * M_E * cov).determinant());
     sum_pv += Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov).eigenvalues()(0);
+    sum_nb += static_cast<double>(nb.size());
     ++r.num_valid_points;
   }
   r.mean_map_entropy = sum_h / r.num_valid_points;
   r.mean_plane_variance_m2 = sum_pv / r.num_valid_points;
+  r.mean_neighbors = sum_nb / r.num_valid_points;
   return r;
 }
 
@@ -127,6 +129,7 @@ TEST(MapEntropyTest, MatchesBruteForceOracle) {
   EXPECT_EQ(r->num_degenerate_points, 0u);
   EXPECT_NEAR(r->mean_map_entropy, bf.mean_map_entropy, 1e-9);
   EXPECT_NEAR(r->mean_plane_variance_m2, bf.mean_plane_variance_m2, 1e-12);
+  EXPECT_EQ(r->mean_neighbors, bf.mean_neighbors);  // the same neighbour sets
 
   // With the paper's 0.1 m voxel grid: downsample by brute force, then the brute-force entropy.
   o.voxel_size_m = 0.1;
@@ -155,6 +158,27 @@ TEST(MapEntropyTest, ThreadCountDoesNotChangeTheResult) {
   ASSERT_TRUE(a.ok() && b.ok());
   EXPECT_EQ(a->mean_map_entropy, b->mean_map_entropy);  // bitwise: chunk-ordered sums
   EXPECT_EQ(a->num_valid_points, b->num_valid_points);
+}
+
+// The cell grid covers at most 2^21 cells of edge r per axis; a cloud wider than that is
+// searched with the k-d tree: both give the same neighbourhoods.
+TEST(MapEntropyTest, GridAndKdTreeSearchesAgree) {
+  const PointCloud near = NoisyDisc(20000, 0.01, 5);
+  MapEntropyOptions o;
+  o.radius_m = 0.05;
+  o.voxel_size_m = 0.0;
+  PointCloud wide = near;
+  wide.Add({150000.0f, 0.0f, 0.0f});  // 150 km away: 3e6 cells of 5 cm
+  const StatusOr<MapEntropyResult> grid = ComputeMapEntropy(near, o);
+  const StatusOr<MapEntropyResult> tree = ComputeMapEntropy(wide, o);
+  ASSERT_TRUE(grid.ok() && tree.ok());
+  ASSERT_GT(grid->num_valid_points, 10000u);
+  EXPECT_EQ(tree->num_valid_points, grid->num_valid_points);
+  EXPECT_EQ(tree->num_sparse_points, grid->num_sparse_points + 1);  // the far point
+  EXPECT_EQ(tree->num_degenerate_points, grid->num_degenerate_points);
+  EXPECT_EQ(tree->mean_neighbors, grid->mean_neighbors);
+  EXPECT_NEAR(tree->mean_map_entropy, grid->mean_map_entropy, 1e-12);
+  EXPECT_NEAR(tree->mean_plane_variance_m2, grid->mean_plane_variance_m2, 1e-15);
 }
 
 TEST(MapEntropyTest, SharperMapHasLowerEntropy) {

@@ -77,6 +77,12 @@ Status WriteMethodFiles(const ModeRun& run, const std::filesystem::path& out_dir
   return first;
 }
 
+StatusOr<eval::MapEntropyResult> MapEntropyOf(const PointCloud& map, int num_threads) {
+  eval::MapEntropyOptions mo;
+  mo.num_threads = num_threads;
+  return eval::ComputeMapEntropy(map, mo);
+}
+
 MethodEvaluation EvaluateMethod(const ModeRun& run, const eval::GroundTruth* gt,
                                 const std::vector<eval::OutageWindow>& outages, Timestamp reference,
                                 int num_threads) {
@@ -138,9 +144,8 @@ MethodEvaluation EvaluateMethod(const ModeRun& run, const eval::GroundTruth* gt,
     }
   }
   if (!run.map.empty()) {
-    eval::MapEntropyOptions mo;
-    mo.num_threads = num_threads;
-    StatusOr<eval::MapEntropyResult> e = eval::ComputeMapEntropy(run.map, mo);
+    const StatusOr<eval::MapEntropyResult> e =
+        run.map_entropy ? *run.map_entropy : MapEntropyOf(run.map, num_threads);
     if (e.ok()) {
       entropy = *e;
       ev.mme_points = e->num_valid_points;

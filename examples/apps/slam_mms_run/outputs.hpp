@@ -33,9 +33,13 @@ struct MethodEvaluation {
   size_t mme_points = 0;
 };
 
+/// The map entropy EvaluateMethod reports for `map` (the paper's r, voxel and minimum).
+StatusOr<eval::MapEntropyResult> MapEntropyOf(const PointCloud& map, int num_threads);
+
 /// ATE, rotation RMSE, KITTI relative error (devkit lengths when the ground-truth path is at least
 /// 400 m, else the short 10-80 m lengths, named so), outage errors (windows relative to
-/// `reference`), map entropy; scans/s and peak RSS from the run. `gt` may be null.
+/// `reference`), map entropy (ModeRun::map_entropy where set); scans/s and peak RSS from the run.
+/// `gt` may be null.
 MethodEvaluation EvaluateMethod(const ModeRun& run, const eval::GroundTruth* gt,
                                 const std::vector<eval::OutageWindow>& outages, Timestamp reference,
                                 int num_threads);

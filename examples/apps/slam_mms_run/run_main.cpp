@@ -28,6 +28,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "slam_mms/core/logging.hpp"
@@ -478,6 +479,13 @@ int RunMain(int argc, const char* const* argv) {
       }
     };
     ModeRun run = RunMode(mode, options, reader, args.pos, tty, &g_stop, on_submap);
+    // The map entropy (CPU) beside the writing of the files (mostly one thread formatting and
+    // writing): both only read the run.
+    std::optional<StatusOr<eval::MapEntropyResult>> entropy;
+    std::thread entropy_thread;
+    if (!run.map.empty()) {
+      entropy_thread = std::thread([&] { entropy = MapEntropyOf(run.map, options.num_threads); });
+    }
     Status written = WriteMethodFiles(run, args.out_dir);
     if (run.origin && !geo.run_origin) {
       // georef.json: the world frame of the first method that has an origin.
@@ -487,6 +495,8 @@ int RunMain(int argc, const char* const* argv) {
     }
     const Status geo_written = WriteGeoOutputs(run, geo, args.out_dir, run.map_stamps);
     if (written.ok() && !geo_written.ok()) written = geo_written;
+    if (entropy_thread.joinable()) entropy_thread.join();
+    run.map_entropy = std::move(entropy);
     if (!run.status.ok()) fatal = run.status;
     if (fatal.ok() && !written.ok()) fatal = written;
     if (run.complete && written.ok()) {

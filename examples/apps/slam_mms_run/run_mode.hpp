@@ -15,6 +15,7 @@
 #include "slam_mms/core/sensor_data.hpp"
 #include "slam_mms/core/status.hpp"
 #include "slam_mms/core/trajectory.hpp"
+#include "slam_mms/eval/map_entropy.hpp"
 #include "slam_mms/io/drive_reader.hpp"
 #include "slam_mms/pipeline/drive_runner.hpp"
 #include "slam_mms/pipeline/map_point_stamps.hpp"
@@ -46,6 +47,9 @@ struct ModeRun {
   bool stopped = false;       ///< Ended early by the stop flag (a signal).
   bool smoothed_pos = false;  ///< On a forward-backward smoothed POS (gnss_ins_smoothed, full).
   Status status;              ///< The fatal error, if any.
+  /// The map's entropy when computed early (beside the writing of the files, MapEntropyOf);
+  /// unset: EvaluateMethod computes it.
+  std::optional<StatusOr<eval::MapEntropyResult>> map_entropy;
 };
 
 /// Runs `mode` with `options` (mode overridden) on `reader`; `pos`: the POS of full (--pos).

@@ -74,134 +74,212 @@ struct CpuSurfelRenderer::Impl {
   std::atomic<int> next_bin{0};
 };
 
+namespace {
+
+// Culling and bounding in blocks: the surfels of a block are gathered into arrays, bounded by one
+// branch-free loop that the compiler vectorises (every lane computes both bounds and keeps one by
+// a select), then the visible ones are clipped to bins. The arithmetic is the scalar cull's,
+// operation for operation (no reassociation, no contraction), so the bounds are the same floats.
+constexpr int kCullBlock = 64;
+
+struct CullConstants {
+  float R[9];  // row-major
+  float t[3];
+  float min_r2, max_r2, facing;
+  float fov_up, rows_f, rows_per_rad, cols_f, cols_per_rad, inv_pi;
+};
+
+struct CullBlockData {
+  // In: the surfels (map frame).
+  alignas(64) float x[kCullBlock], y[kCullBlock], z[kCullBlock];
+  alignas(64) float mx[kCullBlock], my[kCullBlock], mz[kCullBlock], radius[kCullBlock];
+  // Out: sensor-frame centre and normal, n.p, r^2, row bounds, column centre and half-width
+  // (e_yaw < 0: all columns), visibility.
+  alignas(64) float px[kCullBlock], py[kCullBlock], pz[kCullBlock];
+  alignas(64) float nx[kCullBlock], ny[kCullBlock], nz[kCullBlock];
+  alignas(64) float n_dot_p[kCullBlock], r2[kCullBlock], v_lo[kCullBlock], v_hi[kCullBlock];
+  alignas(64) float u[kCullBlock], hu[kCullBlock], e_yaw[kCullBlock];
+  alignas(64) int32_t visible[kCullBlock];
+};
+
+// The builtins (std:: overloads are calls the vectoriser does not see through); without errno
+// (this file is compiled with -fno-math-errno: a negative argument gives NaN either way).
+inline float Sqrt(float v) { return __builtin_sqrtf(v); }
+inline float Abs(float v) { return __builtin_fabsf(v); }
+
+// internal::FastAtan2 without branches (the same operations; selects instead of early returns).
+inline float FastAtan2Select(float y, float x) {
+  const float ax = Abs(x);
+  const float ay = Abs(y);
+  const float mx = ax > ay ? ax : ay;
+  const float mn = ax > ay ? ay : ax;
+  float r = internal::FastAtanUnit(mn / mx);
+  r = ay > ax ? 0.5f * internal::kPiF - r : r;
+  r = x < 0.0f ? internal::kPiF - r : r;
+  r = y < 0.0f ? -r : r;
+  return mx == 0.0f ? 0.0f : r;
+}
+
+// std::max / std::min of the scalar cull ((a < b) ? b : a and (b < a) ? b : a).
+inline float MaxOf(float a, float b) { return a < b ? b : a; }
+
+void BoundBlock(const CullConstants& c, int n, CullBlockData* b) {
+#pragma GCC ivdep
+  for (int j = 0; j < n; ++j) {
+    const float x = b->x[j], y = b->y[j], z = b->z[j];
+    const float px = (c.R[0] * x + c.R[1] * y) + c.R[2] * z + c.t[0];
+    const float py = (c.R[3] * x + c.R[4] * y) + c.R[5] * z + c.t[1];
+    const float pz = (c.R[6] * x + c.R[7] * y) + c.R[8] * z + c.t[2];
+    // Eigen's order for a 3-vector's squaredNorm() and dot() (x + (y + z)), which the scalar cull
+    // used: the same floats.
+    const float d2 = px * px + (py * py + pz * pz);
+    const float d = Sqrt(d2);
+    const float radius = b->radius[j];
+    const float mx = b->mx[j], my = b->my[j], mz = b->mz[j];
+    const float nx = (c.R[0] * mx + c.R[1] * my) + c.R[2] * mz;
+    const float ny = (c.R[3] * mx + c.R[4] * my) + c.R[5] * mz;
+    const float nz = (c.R[6] * mx + c.R[7] * my) + c.R[8] * mz;
+    const float n_dot_p = nx * px + (ny * py + nz * pz);
+    // Bitwise & of the comparisons: no branches in the loop.
+    const bool front = (d2 >= c.min_r2) & (d2 <= c.max_r2) & (radius > 0.0f) & (radius < d) &
+                       (-n_dot_p > c.facing * d);
+    const float r2 = radius * radius;
+    const float a = radius / Sqrt(d2 - r2) + kAngleMarginRad;
+    const float inv_d2 = 1.0f / d2;
+    const float rho2 = px * px + py * py;
+    const float rho = Sqrt(rho2);
+    const float pitch = FastAtan2Select(pz, rho);
+    // The linearised bound of a small disc, or the cone bound (see the scalar derivation in
+    // CpuSurfelRenderer::Impl::Cull's history: both conservative).
+    const bool linear = (a < kLinearBoundMaxAngle) & (rho > 0.5f * d);
+    const float inv_rho = 1.0f / rho;
+    const float cc = px * ny - py * nx;
+    const float q = rho2 * nz - pz * (px * nx + py * ny);
+    const float widen = radius * (1.0f + 2.0f * a);
+    const float margin = a * a + kAngleMarginRad;
+    const float e_yaw_lin = widen * inv_rho * inv_rho * Sqrt(MaxOf(0.0f, rho2 - cc * cc)) + margin;
+    const float e_pitch_lin =
+        widen * inv_rho * inv_d2 * Sqrt(MaxOf(0.0f, d2 * rho2 - q * q)) + margin;
+    const float e_pitch = linear ? e_pitch_lin : a;
+    const float v_lo = (c.fov_up - (pitch + e_pitch)) * c.rows_per_rad;
+    const float v_hi = (c.fov_up - (pitch - e_pitch)) * c.rows_per_rad;
+    const bool in_rows = !((v_hi < 0.0f) | (v_lo >= c.rows_f));
+    const float elev = MaxOf(Abs(pitch - a), Abs(pitch + a));
+    const float s2 = radius / d / CosLowerBound(elev);
+    const float e_yaw_cone = s2 / Sqrt(1.0f - s2 * s2) + kAngleMarginRad;
+    const bool cone = (elev < 0.5f * internal::kPiF - 1e-3f) & (s2 < 1.0f);
+    const float e_yaw = linear ? e_yaw_lin : (cone ? e_yaw_cone : -1.0f);
+    const float yaw = FastAtan2Select(py, px);
+    b->px[j] = px;
+    b->py[j] = py;
+    b->pz[j] = pz;
+    b->nx[j] = nx;
+    b->ny[j] = ny;
+    b->nz[j] = nz;
+    b->n_dot_p[j] = n_dot_p;
+    b->r2[j] = r2;
+    b->v_lo[j] = v_lo;
+    b->v_hi[j] = v_hi;
+    b->u[j] = 0.5f * (1.0f - yaw * c.inv_pi) * c.cols_f;
+    b->hu[j] = e_yaw * c.cols_per_rad;
+    b->e_yaw[j] = e_yaw;
+    b->visible[j] = static_cast<int32_t>(front & in_rows);
+  }
+}
+
+}  // namespace
+
 void CpuSurfelRenderer::Impl::Cull(const SurfelRenderInput& in, const Eigen::Matrix3f& R,
                                    const Eigen::Vector3f& t, size_t k0, size_t k1,
                                    std::vector<SplatRecord>* bins) const {
   const RangeProjectionOptions& po = options.projection;
   const int rows = po.rows;
   const int cols = po.cols;
-  const float rows_f = static_cast<float>(rows);
-  const float cols_f = static_cast<float>(cols);
-  const float fov_up = static_cast<float>(po.fov_up_deg * M_PI / 180.0);
+  CullConstants c;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) c.R[3 * i + j] = R(i, j);
+    c.t[i] = t[i];
+  }
+  c.rows_f = static_cast<float>(rows);
+  c.cols_f = static_cast<float>(cols);
+  c.fov_up = static_cast<float>(po.fov_up_deg * M_PI / 180.0);
   const float fov = static_cast<float>((po.fov_up_deg - po.fov_down_deg) * M_PI / 180.0);
-  const float rows_per_rad = rows_f / fov;
-  const float cols_per_rad = cols_f / (2.0f * internal::kPiF);
+  c.rows_per_rad = c.rows_f / fov;
+  c.cols_per_rad = c.cols_f / (2.0f * internal::kPiF);
   const float min_r = static_cast<float>(po.min_range_m);
   const float max_r = static_cast<float>(po.max_range_m);
-  const float min_r2 = min_r * min_r;
-  const float max_r2 = max_r * max_r;
-  const float facing = static_cast<float>(options.min_facing_cos);
-  const float kInvPi = 1.0f / internal::kPiF;
+  c.min_r2 = min_r * min_r;
+  c.max_r2 = max_r * max_r;
+  c.facing = static_cast<float>(options.min_facing_cos);
+  c.inv_pi = 1.0f / internal::kPiF;
 
+  CullBlockData b;
   // The surfels come by id, scattered over the map: fetch the one kPrefetch ahead while this one
-  // is bounded (the load of each surfel was the cull's single largest stall).
+  // is gathered (the load of each surfel was the cull's single largest stall).
   constexpr size_t kPrefetch = 16;
-  for (size_t k = k0; k < k1; ++k) {
-    const size_t id = in.ids != nullptr ? in.ids[k] : k;
-    if (in.ids != nullptr && k + kPrefetch < k1)
-      __builtin_prefetch(&in.surfels[in.ids[k + kPrefetch]]);
-    const Surfel& s = in.surfels[id];
-    // p = R x + t and n = R m written out (Eigen's product is not always inlined here; same
-    // operation order, so the same floats).
-    const Eigen::Vector3f& x = s.position;
-    const Eigen::Vector3f p((R(0, 0) * x.x() + R(0, 1) * x.y()) + R(0, 2) * x.z() + t.x(),
-                            (R(1, 0) * x.x() + R(1, 1) * x.y()) + R(1, 2) * x.z() + t.y(),
-                            (R(2, 0) * x.x() + R(2, 1) * x.y()) + R(2, 2) * x.z() + t.z());
-    const float d2 = p.squaredNorm();
-    if (!(d2 >= min_r2 && d2 <= max_r2)) continue;
-    const float d = std::sqrt(d2);
-    const float radius = s.radius;
-    if (!(radius > 0.0f) || !(radius < d)) continue;
-    const Eigen::Vector3f& m = s.normal;
-    const Eigen::Vector3f n((R(0, 0) * m.x() + R(0, 1) * m.y()) + R(0, 2) * m.z(),
-                            (R(1, 0) * m.x() + R(1, 1) * m.y()) + R(1, 2) * m.z(),
-                            (R(2, 0) * m.x() + R(2, 1) * m.y()) + R(2, 2) * m.z());
-    const float n_dot_p = n.dot(p);
-    if (!(-n_dot_p > facing * d)) continue;
-
-    // Pixel bounding box of the disc. Small discs: the linearised projection of the disc (an
-    // ellipse with half-extent r * sqrt(|g|^2 - (g.n)^2) along an angle whose gradient is g),
-    // widened by the relative second-order error 2a and a margin. Large or near-polar discs: the
-    // cone of half-angle asin(radius / d) around p. Either bound is conservative; the ray test is
-    // exact.
-    // The long-latency divisions and roots below are kept independent of each other so that they
-    // overlap: a = tan(asin(radius / d)) = radius / sqrt(d^2 - radius^2) (tan >= asin).
-    const float r2 = radius * radius;
-    const float a = radius / std::sqrt(d2 - r2) + kAngleMarginRad;
-    const float inv_d2 = 1.0f / d2;
-    const float rho2 = p.x() * p.x() + p.y() * p.y();
-    const float rho = std::sqrt(rho2);
-    const float pitch = internal::FastAtan2(p.z(), rho);
-    float e_pitch = a;
-    float e_yaw = -1.0f;  // < 0: use the cone bound
-    if (a < kLinearBoundMaxAngle && rho > 0.5f * d) {
-      // Yaw gradient g_y = (-y, x, 0) / rho^2 (|g_y|^2 = 1 / rho^2); pitch gradient
-      // g_p = (-x z, -y z, rho^2) / (d^2 rho) (|g_p|^2 = 1 / d^2). With c = rho^2 g_y . n and
-      // q = d^2 rho g_p . n: r sqrt(|g|^2 - (g.n)^2) = r sqrt(rho^2 - c^2) / rho^2 and
-      // r sqrt(d^2 rho^2 - q^2) / (d^2 rho).
-      const float inv_rho = 1.0f / rho;
-      const float c = p.x() * n.y() - p.y() * n.x();
-      const float q = rho2 * n.z() - p.z() * (p.x() * n.x() + p.y() * n.y());
-      const float widen = radius * (1.0f + 2.0f * a);
-      const float margin = a * a + kAngleMarginRad;
-      e_yaw = widen * inv_rho * inv_rho * std::sqrt(std::max(0.0f, rho2 - c * c)) + margin;
-      e_pitch = widen * inv_rho * inv_d2 * std::sqrt(std::max(0.0f, d2 * rho2 - q * q)) + margin;
-    }
-    const float v_lo = (fov_up - (pitch + e_pitch)) * rows_per_rad;
-    const float v_hi = (fov_up - (pitch - e_pitch)) * rows_per_rad;
-    if (v_hi < 0.0f || v_lo >= rows_f) continue;
-    const int row0 = std::max(0, static_cast<int>(std::floor(v_lo)));
-    const int row1 = std::min(rows - 1, static_cast<int>(std::floor(v_hi)));
-    if (e_yaw < 0.0f) {
-      const float elev = std::max(std::fabs(pitch - a), std::fabs(pitch + a));
-      if (elev < 0.5f * internal::kPiF - 1e-3f) {
-        const float s2 = radius / d / CosLowerBound(elev);
-        if (s2 < 1.0f) e_yaw = s2 / std::sqrt(1.0f - s2 * s2) + kAngleMarginRad;
+  for (size_t kb = k0; kb < k1; kb += kCullBlock) {
+    const int n = static_cast<int>(std::min<size_t>(kCullBlock, k1 - kb));
+    for (int j = 0; j < n; ++j) {
+      const size_t k = kb + static_cast<size_t>(j);
+      const size_t id = in.ids != nullptr ? in.ids[k] : k;
+      if (in.ids != nullptr && k + kPrefetch < k1) {
+        __builtin_prefetch(&in.surfels[in.ids[k + kPrefetch]]);
       }
+      const Surfel& s = in.surfels[id];
+      b.x[j] = s.position.x();
+      b.y[j] = s.position.y();
+      b.z[j] = s.position.z();
+      b.mx[j] = s.normal.x();
+      b.my[j] = s.normal.y();
+      b.mz[j] = s.normal.z();
+      b.radius[j] = s.radius;
     }
-    int col0 = 0;
-    int col1 = cols - 1;
-    if (e_yaw >= 0.0f) {
-      const float yaw = internal::FastAtan2(p.y(), p.x());
-      const float u = 0.5f * (1.0f - yaw * kInvPi) * cols_f;
-      const float hu = e_yaw * cols_per_rad;
-      const int c0 = static_cast<int>(std::floor(u - hu));
-      const int c1 = static_cast<int>(std::floor(u + hu));
-      if (c1 - c0 + 1 < cols) {
-        col0 = c0;
-        col1 = c1;
+    BoundBlock(c, n, &b);
+    for (int j = 0; j < n; ++j) {
+      if (!b.visible[j]) continue;
+      const int row0 = std::max(0, static_cast<int>(std::floor(b.v_lo[j])));
+      const int row1 = std::min(rows - 1, static_cast<int>(std::floor(b.v_hi[j])));
+      int col0 = 0;
+      int col1 = cols - 1;
+      if (b.e_yaw[j] >= 0.0f) {
+        const int c0 = static_cast<int>(std::floor(b.u[j] - b.hu[j]));
+        const int c1 = static_cast<int>(std::floor(b.u[j] + b.hu[j]));
+        if (c1 - c0 + 1 < cols) {
+          col0 = c0;
+          col1 = c1;
+        }
       }
-    }
-    // The column span [col0, col1] (may cross the rear seam) as at most two wrapped ranges, each
-    // split over the bins it touches.
-    SplatRecord rec;
-    rec.px = p.x();
-    rec.py = p.y();
-    rec.pz = p.z();
-    rec.nx = n.x();
-    rec.ny = n.y();
-    rec.nz = n.z();
-    rec.n_dot_p = n_dot_p;
-    rec.r2 = r2;
-    rec.k = static_cast<uint32_t>(k);
-    rec.row0 = row0;
-    rec.row1 = row1;
-    auto emit = [&](int c_lo, int c_hi) {
-      if (c_lo > c_hi) return;
-      for (int b = c_lo / kBinCols; b <= c_hi / kBinCols; ++b) {
-        rec.col0 = std::max(c_lo, b * kBinCols);
-        rec.col1 = std::min(c_hi, b * kBinCols + kBinCols - 1);
-        bins[b].push_back(rec);
+      // The column span [col0, col1] (may cross the rear seam) as at most two wrapped ranges,
+      // each split over the bins it touches.
+      SplatRecord rec;
+      rec.px = b.px[j];
+      rec.py = b.py[j];
+      rec.pz = b.pz[j];
+      rec.nx = b.nx[j];
+      rec.ny = b.ny[j];
+      rec.nz = b.nz[j];
+      rec.n_dot_p = b.n_dot_p[j];
+      rec.r2 = b.r2[j];
+      rec.k = static_cast<uint32_t>(kb + static_cast<size_t>(j));
+      rec.row0 = row0;
+      rec.row1 = row1;
+      auto emit = [&](int c_lo, int c_hi) {
+        if (c_lo > c_hi) return;
+        for (int bin = c_lo / kBinCols; bin <= c_hi / kBinCols; ++bin) {
+          rec.col0 = std::max(c_lo, bin * kBinCols);
+          rec.col1 = std::min(c_hi, bin * kBinCols + kBinCols - 1);
+          bins[bin].push_back(rec);
+        }
+      };
+      if (col0 < 0) {
+        emit(col0 + cols, cols - 1);
+        emit(0, std::min(col1, cols - 1));
+      } else if (col1 >= cols) {
+        emit(col0, cols - 1);
+        emit(0, col1 - cols);
+      } else {
+        emit(col0, col1);
       }
-    };
-    if (col0 < 0) {
-      emit(col0 + cols, cols - 1);
-      emit(0, std::min(col1, cols - 1));
-    } else if (col1 >= cols) {
-      emit(col0, cols - 1);
-      emit(0, col1 - cols);
-    } else {
-      emit(col0, col1);
     }
   }
 }

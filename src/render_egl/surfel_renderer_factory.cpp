@@ -1,5 +1,7 @@
 #include "slam_mms/render_egl/surfel_renderer_factory.hpp"
 
+#include <mutex>
+#include <string>
 #include <utility>
 
 #include "slam_mms/core/logging.hpp"
@@ -17,9 +19,28 @@ const char* SurfelRendererBackendName(SurfelRendererBackend backend) {
   return "unknown";
 }
 
+namespace {
+
+// kAuto's answer where EGL gave no hardware renderer: probing costs a Mesa load, a context and a
+// shader build (about 0.15 s, per MappingSystem), and the answer does not change within a
+// process, so later kAuto calls go to the CPU renderer at once (with the first probe's reason).
+std::mutex g_auto_mutex;
+bool g_auto_is_cpu = false;
+std::string g_auto_reason;
+
+}  // namespace
+
 StatusOr<std::unique_ptr<SurfelRenderer>> MakeSurfelRenderer(const SurfelRendererOptions& options,
                                                              SurfelRendererBackend backend) {
   SLAM_MMS_RETURN_IF_ERROR(options.Validate());
+  if (backend == SurfelRendererBackend::kAuto) {
+    std::lock_guard<std::mutex> lock(g_auto_mutex);
+    if (g_auto_is_cpu) {
+      SLAM_MMS_LOG(kInfo) << "surfel renderer: cpu (" << g_auto_reason << ")";
+      SLAM_MMS_ASSIGN_OR_RETURN(auto cpu, CpuSurfelRenderer::Create(options));
+      return std::unique_ptr<SurfelRenderer>(std::move(cpu));
+    }
+  }
   if (backend == SurfelRendererBackend::kEgl || backend == SurfelRendererBackend::kAuto) {
     auto egl = EglSurfelRenderer::Create(options);
     if (backend == SurfelRendererBackend::kEgl) {
@@ -31,12 +52,13 @@ StatusOr<std::unique_ptr<SurfelRenderer>> MakeSurfelRenderer(const SurfelRendere
                           << (*egl)->egl_platform();
       return std::unique_ptr<SurfelRenderer>(std::move(egl).value());
     }
-    if (egl.ok()) {
-      SLAM_MMS_LOG(kInfo) << "surfel renderer: cpu (EGL runs on the software rasteriser "
-                          << (*egl)->gl_renderer() << ", which is slower)";
-    } else {
-      SLAM_MMS_LOG(kInfo) << "surfel renderer: cpu (" << egl.status().message() << ")";
-    }
+    std::string reason = egl.ok() ? "EGL runs on the software rasteriser " + (*egl)->gl_renderer() +
+                                        ", which is slower"
+                                  : egl.status().message();
+    SLAM_MMS_LOG(kInfo) << "surfel renderer: cpu (" << reason << ")";
+    std::lock_guard<std::mutex> lock(g_auto_mutex);
+    g_auto_is_cpu = true;
+    g_auto_reason = std::move(reason);
   }
   SLAM_MMS_ASSIGN_OR_RETURN(auto cpu, CpuSurfelRenderer::Create(options));
   return std::unique_ptr<SurfelRenderer>(std::move(cpu));

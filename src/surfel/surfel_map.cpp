@@ -84,6 +84,11 @@ uint32_t SurfelMap::Impl::AddSlot(const Surfel& s) {
     conflict[id] = 0;
   } else {
     id = static_cast<uint32_t>(surfels.size());
+    if (surfels.size() == surfels.capacity()) {
+      // Grow by a quarter, not the vector's doubling: the slots are the map's largest block
+      // (64 B a surfel), and doubling left up to half of it unused.
+      surfels.reserve(surfels.size() + surfels.size() / 4 + 4096);
+    }
     surfels.push_back(s);
     alive.push_back(1);
     conflict.push_back(0);

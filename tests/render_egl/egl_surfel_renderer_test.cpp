@@ -176,6 +176,11 @@ TEST(SurfelRendererFactoryTest, ChoosesCpuOnSoftwareGlAndHonoursExplicitChoice) 
   } else {
     EXPECT_NE((*autos)->Name().find("egl"), std::string::npos);
   }
+  // A later kAuto choice is the first one's (on a machine without a GPU it skips the EGL probe),
+  // and kEgl still tries EGL.
+  auto again = MakeSurfelRenderer(options);
+  ASSERT_TRUE(again.ok());
+  EXPECT_EQ((*again)->Name(), (*autos)->Name());
   auto forced = MakeSurfelRenderer(options, SurfelRendererBackend::kEgl);
   EXPECT_EQ(forced.ok(), egl.ok());
   SurfelRendererOptions bad;

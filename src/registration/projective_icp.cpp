@@ -20,16 +20,71 @@ constexpr float kPiF = 3.14159265358979f;
 
 // atan2 with max error ~1e-5 rad (0.3% of a 2048-column pixel), ~4x faster than std::atan2.
 inline float FastAtan2(float y, float x) {
-  const float ax = std::abs(x), ay = std::abs(y);
+  const float ax = __builtin_fabsf(x), ay = __builtin_fabsf(y);
   const float mx = ax > ay ? ax : ay;
   const float mn = ax > ay ? ay : ax;
   const float a = mn / (mx + 1e-30f);
   const float s = a * a;
   float r = ((-0.0464964749f * s + 0.15931422f) * s - 0.327622764f) * s * a + a;
-  if (ay > ax) r = 0.5f * kPiF - r;
-  if (x < 0.0f) r = kPiF - r;
+  r = ay > ax ? 0.5f * kPiF - r : r;
+  r = x < 0.0f ? kPiF - r : r;
   return y < 0.0f ? -r : r;
 }
+
+// A packed scan pixel with vertex and normal (scan frame).
+struct ScanPoint {
+  Eigen::Vector3f v, n;
+};
+
+struct ProjectionConstants {
+  float rows, cols;
+  int rows_i, cols_i;
+  float fov_up, inv_fov, u_scale;
+};
+
+// The projection of a block of scan points into the model image, in one branch-free loop that
+// the compiler vectorises (this file is built with -fno-math-errno -fno-trapping-math; no value
+// changes): the same floats as the per-point code it replaced (Eigen's R x + t order,
+// (a + (b + c)) + t), and the pixel or -1 where the point falls outside the image rows.
+struct ProjectedBlock {
+  static constexpr int kSize = 64;
+  alignas(64) float x[kSize], y[kSize], z[kSize];
+  alignas(64) float qx[kSize], qy[kSize], qz[kSize];
+  alignas(64) int32_t pixel[kSize];
+
+  void Project(const Eigen::Matrix3f& R, const Eigen::Vector3f& t, const ScanPoint* points, int n,
+               const ProjectionConstants& c) {
+    for (int b = 0; b < n; ++b) {
+      x[b] = points[b].v.x();
+      y[b] = points[b].v.y();
+      z[b] = points[b].v.z();
+    }
+    const float r00 = R(0, 0), r01 = R(0, 1), r02 = R(0, 2), r10 = R(1, 0), r11 = R(1, 1),
+                r12 = R(1, 2), r20 = R(2, 0), r21 = R(2, 1), r22 = R(2, 2);
+    const float tx = t.x(), ty = t.y(), tz = t.z();
+#pragma GCC ivdep
+    for (int b = 0; b < n; ++b) {
+      const float px = (r00 * x[b] + (r01 * y[b] + r02 * z[b])) + tx;
+      const float py = (r10 * x[b] + (r11 * y[b] + r12 * z[b])) + ty;
+      const float pz = (r20 * x[b] + (r21 * y[b] + r22 * z[b])) + tz;
+      // Spherical projection (RangeProjection's mapping) of q into the model image.
+      const float xy = __builtin_sqrtf(px * px + py * py);
+      float u = 0.5f * c.cols - FastAtan2(py, px) * c.u_scale;
+      const float v = (c.fov_up - FastAtan2(pz, xy)) * c.inv_fov * c.rows;
+      const bool in_rows = (v >= 0.0f) & (v < c.rows);
+      u = u >= c.cols ? u - c.cols : u;
+      u = u < 0.0f ? u + c.cols : u;
+      int col = static_cast<int>(u);
+      col = col >= c.cols_i ? c.cols_i - 1 : col;
+      int row = static_cast<int>(v);
+      row = row >= c.rows_i ? c.rows_i - 1 : row;
+      qx[b] = px;
+      qy[b] = py;
+      qz[b] = pz;
+      pixel[b] = in_rows ? row * c.cols_i + col : -1;
+    }
+  }
+};
 
 // Upper triangle of H (21), g (6) and statistics. Per point the products are summed in float over
 // blocks of kBlock points (vectorisable), then flushed into double accumulators, so precision stays
@@ -125,15 +180,14 @@ struct ProjectiveIcp::Impl {
   Impl(const RangeProjection& p, const Options& o)
       : options(o), projection(p.options()), pool(o.num_threads) {
     per_thread.resize(static_cast<size_t>(pool.size()));
+    blocks.resize(static_cast<size_t>(pool.size()));
   }
   Options options;
   RangeProjectionOptions projection;
   WorkerPool pool;
   std::vector<Accumulator> per_thread;
-  struct ScanPoint {
-    Eigen::Vector3f v, n;  // scan vertex and normal (scan frame)
-  };
-  std::vector<ScanPoint> valid;  // packed scan pixels with vertex and normal (scratch)
+  std::vector<ScanPoint> valid;        // packed scan pixels with vertex and normal (scratch)
+  std::vector<ProjectedBlock> blocks;  // per thread
 };
 
 ProjectiveIcp::ProjectiveIcp() : impl_(std::make_unique<Impl>(RangeProjection(), Options())) {}
@@ -176,14 +230,15 @@ StatusOr<RegistrationResult> ProjectiveIcp::Align(const VertexNormalMap& scan,
     }
   }
 
-  const float rows = static_cast<float>(model.rows);
-  const float cols = static_cast<float>(model.cols);
-  const int cols_i = model.cols;
-  const int rows_i = model.rows;
-  const float fov_up = static_cast<float>(m.projection.fov_up_deg * M_PI / 180.0);
-  const float inv_fov = static_cast<float>(
+  ProjectionConstants proj;
+  proj.rows = static_cast<float>(model.rows);
+  proj.cols = static_cast<float>(model.cols);
+  proj.cols_i = model.cols;
+  proj.rows_i = model.rows;
+  proj.fov_up = static_cast<float>(m.projection.fov_up_deg * M_PI / 180.0);
+  proj.inv_fov = static_cast<float>(
       1.0 / ((m.projection.fov_up_deg - m.projection.fov_down_deg) * M_PI / 180.0));
-  const float u_scale = 0.5f * cols / kPiF;  // u = cols/2 - yaw * cols / (2 pi)
+  proj.u_scale = 0.5f * proj.cols / kPiF;  // u = cols/2 - yaw * cols / (2 pi)
   const float max_d2 = static_cast<float>(m.options.max_distance * m.options.max_distance);
   const float min_cos = static_cast<float>(std::cos(m.options.max_angle_deg * M_PI / 180.0));
   const float huber = static_cast<float>(m.options.huber_delta);
@@ -205,32 +260,29 @@ StatusOr<RegistrationResult> ProjectiveIcp::Align(const VertexNormalMap& scan,
       size_t begin, end;
       m.pool.Range(th, m.valid.size(), &begin, &end);
       acc.candidates = end - begin;
-      for (size_t k = begin; k < end; ++k) {
-        const Eigen::Vector3f& v_s = m.valid[k].v;
-        const Eigen::Vector3f q = R * v_s + t;
-        // Spherical projection (RangeProjection's mapping) of q into the model image.
-        const float xy = std::sqrt(q.x() * q.x() + q.y() * q.y());
-        float u = 0.5f * cols - FastAtan2(q.y(), q.x()) * u_scale;
-        const float v = (fov_up - FastAtan2(q.z(), xy)) * inv_fov * rows;
-        if (!(v >= 0.0f && v < rows)) continue;
-        if (u >= cols) u -= cols;
-        if (u < 0.0f) u += cols;
-        int col = static_cast<int>(u);
-        if (col >= cols_i) col = cols_i - 1;
-        int row = static_cast<int>(v);
-        if (row >= rows_i) row = rows_i - 1;
-        const size_t j = static_cast<size_t>(row * cols_i + col);
-        if (!(model.range[j] > 0.0f)) continue;
-        const Eigen::Vector3f& n_m = model.normal[j];
-        const Eigen::Vector3f& v_m = model.vertex[j];
-        const Eigen::Vector3f diff = q - v_m;
-        if (diff.squaredNorm() > max_d2) continue;
-        if (n_m.dot(R * m.valid[k].n) < min_cos) continue;
-        Eigen::Matrix<float, 6, 1> J;
-        const float r = PointToPlaneResidual<float>(R, t, v_s, v_m, n_m, &J);  // eq 15
-        const float a = std::abs(r);
-        const float w = (huber <= 0.0f || a <= huber) ? 1.0f : huber / a;
-        acc.Add(J, r, w, v_s);
+      ProjectedBlock& pb = m.blocks[static_cast<size_t>(th)];
+      for (size_t kb = begin; kb < end; kb += ProjectedBlock::kSize) {
+        const int n = static_cast<int>(std::min<size_t>(ProjectedBlock::kSize, end - kb));
+        pb.Project(R, t, &m.valid[kb], n, proj);
+        for (int b = 0; b < n; ++b) {
+          const int32_t jj = pb.pixel[b];
+          if (jj < 0) continue;
+          const size_t k = kb + static_cast<size_t>(b);
+          const Eigen::Vector3f& v_s = m.valid[k].v;
+          const Eigen::Vector3f q(pb.qx[b], pb.qy[b], pb.qz[b]);
+          const size_t j = static_cast<size_t>(jj);
+          if (!(model.range[j] > 0.0f)) continue;
+          const Eigen::Vector3f& n_m = model.normal[j];
+          const Eigen::Vector3f& v_m = model.vertex[j];
+          const Eigen::Vector3f diff = q - v_m;
+          if (diff.squaredNorm() > max_d2) continue;
+          if (n_m.dot(R * m.valid[k].n) < min_cos) continue;
+          Eigen::Matrix<float, 6, 1> J;
+          const float r = PointToPlaneResidual<float>(R, t, v_s, v_m, n_m, &J);  // eq 15
+          const float a = std::abs(r);
+          const float w = (huber <= 0.0f || a <= huber) ? 1.0f : huber / a;
+          acc.Add(J, r, w, v_s);
+        }
       }
       acc.Flush();
     };

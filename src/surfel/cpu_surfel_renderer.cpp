@@ -107,19 +107,6 @@ struct CullBlockData {
 inline float Sqrt(float v) { return __builtin_sqrtf(v); }
 inline float Abs(float v) { return __builtin_fabsf(v); }
 
-// internal::FastAtan2 without branches (the same operations; selects instead of early returns).
-inline float FastAtan2Select(float y, float x) {
-  const float ax = Abs(x);
-  const float ay = Abs(y);
-  const float mx = ax > ay ? ax : ay;
-  const float mn = ax > ay ? ay : ax;
-  float r = internal::FastAtanUnit(mn / mx);
-  r = ay > ax ? 0.5f * internal::kPiF - r : r;
-  r = x < 0.0f ? internal::kPiF - r : r;
-  r = y < 0.0f ? -r : r;
-  return mx == 0.0f ? 0.0f : r;
-}
-
 // std::max / std::min of the scalar cull ((a < b) ? b : a and (b < a) ? b : a).
 inline float MaxOf(float a, float b) { return a < b ? b : a; }
 
@@ -148,7 +135,7 @@ void BoundBlock(const CullConstants& c, int n, CullBlockData* b) {
     const float inv_d2 = 1.0f / d2;
     const float rho2 = px * px + py * py;
     const float rho = Sqrt(rho2);
-    const float pitch = FastAtan2Select(pz, rho);
+    const float pitch = internal::FastAtan2Branchless(pz, rho);
     // The linearised bound of a small disc, or the cone bound (see the scalar derivation in
     // CpuSurfelRenderer::Impl::Cull's history: both conservative).
     const bool linear = (a < kLinearBoundMaxAngle) & (rho > 0.5f * d);
@@ -169,7 +156,7 @@ void BoundBlock(const CullConstants& c, int n, CullBlockData* b) {
     const float e_yaw_cone = s2 / Sqrt(1.0f - s2 * s2) + kAngleMarginRad;
     const bool cone = (elev < 0.5f * internal::kPiF - 1e-3f) & (s2 < 1.0f);
     const float e_yaw = linear ? e_yaw_lin : (cone ? e_yaw_cone : -1.0f);
-    const float yaw = FastAtan2Select(py, px);
+    const float yaw = internal::FastAtan2Branchless(py, px);
     b->px[j] = px;
     b->py[j] = py;
     b->pz[j] = pz;

@@ -28,4 +28,18 @@ inline float FastAtan2(float y, float x) {
   return y < 0.0f ? -r : r;
 }
 
+/// FastAtan2 without branches (the same operations and result; selects instead of the early
+/// return), for loops the compiler is to vectorise.
+inline float FastAtan2Branchless(float y, float x) {
+  const float ax = __builtin_fabsf(x);
+  const float ay = __builtin_fabsf(y);
+  const float mx = ax > ay ? ax : ay;
+  const float mn = ax > ay ? ay : ax;
+  float r = FastAtanUnit(mn / mx);
+  r = ay > ax ? 0.5f * kPiF - r : r;
+  r = x < 0.0f ? kPiF - r : r;
+  r = y < 0.0f ? -r : r;
+  return mx == 0.0f ? 0.0f : r;
+}
+
 }  // namespace slam_mms::internal

@@ -7,6 +7,7 @@
 
 #include "surfel/fast_math.hpp"
 #include "surfel/surfel_map_impl.hpp"
+#include "surfel/surfel_projection_block.hpp"
 
 namespace slam_mms {
 namespace {
@@ -70,7 +71,8 @@ SurfelMap::Impl::Impl(const SurfelMapOptions& o)
       removed_per_thread(static_cast<size_t>(o.renderer.num_threads)),
       moved_per_thread(static_cast<size_t>(o.renderer.num_threads)),
       integrated_per_thread(static_cast<size_t>(o.renderer.num_threads)),
-      confirmed_per_thread(static_cast<size_t>(o.renderer.num_threads)) {
+      confirmed_per_thread(static_cast<size_t>(o.renderer.num_threads)),
+      projection_blocks(static_cast<size_t>(o.renderer.num_threads)) {
   renderer = own_renderer.get();
 }
 
@@ -403,63 +405,67 @@ StatusOr<SurfelIntegrationStats> SurfelMap::Integrate(const VertexNormalMap& sca
     int confirmed = 0;
     const size_t k0 = std::min(n_active, static_cast<size_t>(ti) * chunk);
     const size_t k1 = std::min(n_active, k0 + chunk);
-    constexpr size_t kPrefetch = 16;  // the active surfels are scattered over the slots
-    for (size_t k = k0; k < k1; ++k) {
-      if (k + kPrefetch < k1) __builtin_prefetch(&m.surfels[m.active[k + kPrefetch]], 1);
-      const uint32_t id = m.active[k];
-      Surfel& s = m.surfels[id];
-      const Eigen::Vector3f p = R_sw * s.position + t_sw;
-      const Eigen::Vector3f n = R_sw * s.normal;
-      const float d = p.norm();
-      bool is_confirmed = false;
-      if (d >= min_r && d <= max_r && n.dot(p) < 0.0f) {
-        const float yaw = internal::FastAtan2(p.y(), p.x());
-        const float pitch = internal::FastAtan2(p.z(), std::sqrt(p.x() * p.x() + p.y() * p.y()));
-        const float v = (fov_up - pitch) * rows_per_rad;
-        float u = 0.5f * (1.0f - yaw / internal::kPiF) * static_cast<float>(cols);
-        const int row = static_cast<int>(std::floor(v));
-        int col = static_cast<int>(std::floor(u));
-        if (col >= cols) col -= cols;
-        if (col < 0) col += cols;
-        if (row >= 0 && row < rows) {
-          const int i = row * cols + col;
-          if (scan.HasVertex(i) && scan.HasNormal(i)) {
-            const Eigen::Vector3f& vm = scan.vertex[i];
-            const Eigen::Vector3f& nm = scan.normal[i];
-            const float dist = std::abs(n.dot(vm - p));
-            const float a = nm.cross(n).norm();
-            if (dist < max_d && a < max_sin) {
-              is_confirmed = true;
-              float prob = p_stable * std::exp(-a * a * inv_sa2) * std::exp(-dist * dist * inv_sd2);
-              prob = std::clamp(prob, 1.0f - p_stable, 0.999f);
-              s.confidence = std::min(s.confidence + std::log(prob / (1.0f - prob)), max_conf);
-              const float range = scan.range[i];
-              s.radius = std::min(s.radius, new_radius(range, -nm.dot(vm) / range));
-              if (frame - s.created_frame < o.max_update_age_frames) {
-                const float w = static_cast<float>(std::min(s.num_updates + 1, o.max_weight));
-                const Eigen::Vector3f v_world = R_ws * vm + t_ws;
-                const Eigen::Vector3f n_world = R_ws * nm;
-                const Eigen::Vector3f old_position = s.position;
-                s.position = (w * s.position + v_world) / (w + 1.0f);
-                const Eigen::Vector3f nn = w * s.normal + n_world;
-                const float len = nn.norm();
-                if (len > 1e-6f) s.normal = nn / len;
-                if (!m.index.SameCell(old_position, s.position)) moved.push_back(id);
+    internal::SurfelProjectionBlock& pb = m.projection_blocks[static_cast<size_t>(ti)];
+    for (size_t kb = k0; kb < k1; kb += internal::SurfelProjectionBlock::kSize) {
+      const int nb =
+          static_cast<int>(std::min<size_t>(internal::SurfelProjectionBlock::kSize, k1 - kb));
+      pb.Project(m.surfels.data(), &m.active[kb], nb, k1 - kb, R_sw, t_sw, min_r, max_r, fov_up,
+                 rows_per_rad, static_cast<float>(cols));
+      for (int b = 0; b < nb; ++b) {
+        const size_t k = kb + static_cast<size_t>(b);
+        const uint32_t id = m.active[k];
+        Surfel& s = m.surfels[id];
+        const Eigen::Vector3f p(pb.px[b], pb.py[b], pb.pz[b]);
+        const Eigen::Vector3f n(pb.nx[b], pb.ny[b], pb.nz[b]);
+        bool is_confirmed = false;
+        if (pb.in_range[b]) {
+          const float v = pb.v[b];
+          float u = pb.u[b];
+          const int row = static_cast<int>(std::floor(v));
+          int col = static_cast<int>(std::floor(u));
+          if (col >= cols) col -= cols;
+          if (col < 0) col += cols;
+          if (row >= 0 && row < rows) {
+            const int i = row * cols + col;
+            if (scan.HasVertex(i) && scan.HasNormal(i)) {
+              const Eigen::Vector3f& vm = scan.vertex[i];
+              const Eigen::Vector3f& nm = scan.normal[i];
+              const float dist = std::abs(n.dot(vm - p));
+              const float a = nm.cross(n).norm();
+              if (dist < max_d && a < max_sin) {
+                is_confirmed = true;
+                float prob =
+                    p_stable * std::exp(-a * a * inv_sa2) * std::exp(-dist * dist * inv_sd2);
+                prob = std::clamp(prob, 1.0f - p_stable, 0.999f);
+                s.confidence = std::min(s.confidence + std::log(prob / (1.0f - prob)), max_conf);
+                const float range = scan.range[i];
+                s.radius = std::min(s.radius, new_radius(range, -nm.dot(vm) / range));
+                if (frame - s.created_frame < o.max_update_age_frames) {
+                  const float w = static_cast<float>(std::min(s.num_updates + 1, o.max_weight));
+                  const Eigen::Vector3f v_world = R_ws * vm + t_ws;
+                  const Eigen::Vector3f n_world = R_ws * nm;
+                  const Eigen::Vector3f old_position = s.position;
+                  s.position = (w * s.position + v_world) / (w + 1.0f);
+                  const Eigen::Vector3f nn = w * s.normal + n_world;
+                  const float len = nn.norm();
+                  if (len > 1e-6f) s.normal = nn / len;
+                  if (!m.index.SameCell(old_position, s.position)) moved.push_back(id);
+                }
+                s.updated_frame = frame;
+                s.updated_ns = stamp.nanoseconds();
+                ++s.num_updates;
+                ++confirmed;
+                integrated.push_back(i);  // SuMa: the pixel is integrated, no new surfel there
               }
-              s.updated_frame = frame;
-              s.updated_ns = stamp.nanoseconds();
-              ++s.num_updates;
-              ++confirmed;
-              integrated.push_back(i);  // SuMa: the pixel is integrated, no new surfel there
             }
           }
         }
-      }
-      if (!is_confirmed && m.conflict[id]) s.confidence += log_unstable;
-      m.conflict[id] = 0;
-      if (s.confidence < log_unstable ||
-          (s.confidence <= conf_threshold && frame - s.updated_frame >= o.unstable_age_frames)) {
-        removed.push_back(id);
+        if (!is_confirmed && m.conflict[id]) s.confidence += log_unstable;
+        m.conflict[id] = 0;
+        if (s.confidence < log_unstable ||
+            (s.confidence <= conf_threshold && frame - s.updated_frame >= o.unstable_age_frames)) {
+          removed.push_back(id);
+        }
       }
     }
     m.confirmed_per_thread[static_cast<size_t>(ti)] = confirmed;

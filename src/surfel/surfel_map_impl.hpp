@@ -6,6 +6,7 @@
 #include "core/worker_pool.hpp"
 #include "slam_mms/surfel/cpu_surfel_renderer.hpp"
 #include "slam_mms/surfel/surfel_map.hpp"
+#include "surfel/surfel_projection_block.hpp"
 #include "surfel/voxel_index.hpp"
 
 namespace slam_mms {
@@ -39,6 +40,7 @@ struct SurfelMap::Impl {
   std::vector<std::vector<int>> integrated_per_thread;  // pixels confirmed by a surfel centre
   std::vector<int> confirmed_per_thread;
   std::vector<size_t> kept_per_thread;  // SelectActive
+  std::vector<internal::SurfelProjectionBlock> projection_blocks;  // per thread, Integrate
 };
 
 }  // namespace slam_mms

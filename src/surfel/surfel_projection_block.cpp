@@ -1,0 +1,52 @@
+#include "surfel/surfel_projection_block.hpp"
+
+#include "surfel/fast_math.hpp"
+
+namespace slam_mms::internal {
+
+void SurfelProjectionBlock::Project(const Surfel* surfels, const uint32_t* ids, int n,
+                                    size_t remaining, const Eigen::Matrix3f& R,
+                                    const Eigen::Vector3f& t, float min_r, float max_r,
+                                    float fov_up, float rows_per_rad, float cols) {
+  alignas(64) float x[kSize], y[kSize], z[kSize], mx[kSize], my[kSize], mz[kSize];
+  constexpr size_t kPrefetch = 16;  // the active surfels are scattered over the slots
+  for (int b = 0; b < n; ++b) {
+    if (static_cast<size_t>(b) + kPrefetch < remaining) {
+      __builtin_prefetch(&surfels[ids[b + static_cast<int>(kPrefetch)]], 1);
+    }
+    const Surfel& s = surfels[ids[b]];
+    x[b] = s.position.x();
+    y[b] = s.position.y();
+    z[b] = s.position.z();
+    mx[b] = s.normal.x();
+    my[b] = s.normal.y();
+    mz[b] = s.normal.z();
+  }
+  const float r00 = R(0, 0), r01 = R(0, 1), r02 = R(0, 2), r10 = R(1, 0), r11 = R(1, 1),
+              r12 = R(1, 2), r20 = R(2, 0), r21 = R(2, 1), r22 = R(2, 2);
+  const float tx = t.x(), ty = t.y(), tz = t.z();
+#pragma GCC ivdep
+  for (int b = 0; b < n; ++b) {
+    const float qx = (r00 * x[b] + (r01 * y[b] + r02 * z[b])) + tx;
+    const float qy = (r10 * x[b] + (r11 * y[b] + r12 * z[b])) + ty;
+    const float qz = (r20 * x[b] + (r21 * y[b] + r22 * z[b])) + tz;
+    const float ux = r00 * mx[b] + (r01 * my[b] + r02 * mz[b]);
+    const float uy = r10 * mx[b] + (r11 * my[b] + r12 * mz[b]);
+    const float uz = r20 * mx[b] + (r21 * my[b] + r22 * mz[b]);
+    const float d = __builtin_sqrtf(qx * qx + (qy * qy + qz * qz));
+    const bool facing = ux * qx + (uy * qy + uz * qz) < 0.0f;
+    const float yaw = FastAtan2Branchless(qy, qx);
+    const float pitch = FastAtan2Branchless(qz, __builtin_sqrtf(qx * qx + qy * qy));
+    px[b] = qx;
+    py[b] = qy;
+    pz[b] = qz;
+    nx[b] = ux;
+    ny[b] = uy;
+    nz[b] = uz;
+    v[b] = (fov_up - pitch) * rows_per_rad;
+    u[b] = 0.5f * (1.0f - yaw / kPiF) * cols;
+    in_range[b] = static_cast<int32_t>((d >= min_r) & (d <= max_r) & facing);
+  }
+}
+
+}  // namespace slam_mms::internal

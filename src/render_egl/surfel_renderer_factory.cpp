@@ -1,5 +1,6 @@
 #include "slam_mms/render_egl/surfel_renderer_factory.hpp"
 
+#include <filesystem>
 #include <mutex>
 #include <string>
 #include <utility>
@@ -28,6 +29,25 @@ std::mutex g_auto_mutex;
 bool g_auto_is_cpu = false;
 std::string g_auto_reason;
 
+// Linux: no GPU device node at all (DRM render nodes, NVIDIA's, WSL's) means EGL can only run
+// on the software rasteriser, which kAuto does not use; the probe is skipped then.
+bool NoGpuDeviceNode(std::string* reason) {
+#if defined(__linux__)
+  std::error_code ec;
+  for (const char* node : {"/dev/nvidiactl", "/dev/nvidia0", "/dev/dxg"}) {
+    if (std::filesystem::exists(node, ec)) return false;
+  }
+  for (const auto& entry : std::filesystem::directory_iterator("/dev/dri", ec)) {
+    if (entry.path().filename().string().rfind("renderD", 0) == 0) return false;
+  }
+  *reason = "no GPU device node (/dev/dri/renderD*, /dev/nvidia*, /dev/dxg)";
+  return true;
+#else
+  (void)reason;
+  return false;
+#endif
+}
+
 }  // namespace
 
 StatusOr<std::unique_ptr<SurfelRenderer>> MakeSurfelRenderer(const SurfelRendererOptions& options,
@@ -35,6 +55,7 @@ StatusOr<std::unique_ptr<SurfelRenderer>> MakeSurfelRenderer(const SurfelRendere
   SLAM_MMS_RETURN_IF_ERROR(options.Validate());
   if (backend == SurfelRendererBackend::kAuto) {
     std::lock_guard<std::mutex> lock(g_auto_mutex);
+    if (!g_auto_is_cpu && NoGpuDeviceNode(&g_auto_reason)) g_auto_is_cpu = true;
     if (g_auto_is_cpu) {
       SLAM_MMS_LOG(kInfo) << "surfel renderer: cpu (" << g_auto_reason << ")";
       SLAM_MMS_ASSIGN_OR_RETURN(auto cpu, CpuSurfelRenderer::Create(options));

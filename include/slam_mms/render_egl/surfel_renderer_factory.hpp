@@ -4,7 +4,9 @@
 //          otherwise the CPU renderer, which is faster than Mesa's software rasteriser (measured
 //          in benchmarks/bm_render.cpp: BM_RenderCpu vs BM_RenderEgl). The first kAuto call that
 //          finds no hardware renderer is remembered for the process: later kAuto calls return
-//          the CPU renderer without probing EGL again (a probe costs about 0.15 s).
+//          the CPU renderer without probing EGL again (a probe costs about 0.15 s). On Linux
+//          a machine without any GPU device node (/dev/dri/renderD*, /dev/nvidia*, /dev/dxg)
+//          is not probed at all.
 //   kCpu / kEgl: that one (kEgl returns EGL's Unavailable status when it cannot start).
 //
 // Thread safety: the function is thread-safe; the renderer it returns is not (see each class).

@@ -13,7 +13,6 @@
 #include <string>
 #include <system_error>
 
-#include "core/worker_pool.hpp"
 #include "pipeline/cloud_file.hpp"
 #include "pipeline/pose_covariance.hpp"
 #include "pipeline/submap_cloud_builder.hpp"
@@ -123,8 +122,7 @@ struct Localizer::Impl {
   std::vector<SubmapRecord> submaps;
   /// The current submap's map and registration clouds (accumulated off the critical path).
   std::unique_ptr<internal::SubmapCloudBuilder> clouds;
-  /// Threads of the Localizer's own per-scan loops (the scan's range image).
-  std::unique_ptr<internal::WorkerPool> pool;
+  /// The scan's range image, on the Localizer's threads.
   std::unique_ptr<internal::ParallelRangeImage> range_image;
   bool use_imu_states = false;
   /// Stable surfels of the submaps that left the live map, by submap id.
@@ -468,8 +466,7 @@ StatusOr<std::unique_ptr<Localizer>> Localizer::Create(const Options& options,
   SLAM_MMS_ASSIGN_OR_RETURN(m.icp, ProjectiveIcp::Create(m.projection, options.icp));
   m.clouds = std::make_unique<internal::SubmapCloudBuilder>(
       options.map_voxel_m, options.registration_voxel_m, /*asynchronous=*/options.num_threads > 1);
-  m.pool = std::make_unique<internal::WorkerPool>(options.num_threads);
-  m.range_image = std::make_unique<internal::ParallelRangeImage>(m.pool.get());
+  m.range_image = std::make_unique<internal::ParallelRangeImage>(options.num_threads);
   if (!options.spill_dir.empty()) {
     auto spill = internal::SpillFolder::Create(options.spill_dir);
     if (!spill.ok()) return spill.status().WithContext("Localizer::Options::spill_dir");

@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "core/float_transform.hpp"
 #include "core/worker_pool.hpp"
 #include "registration/gauss_newton.hpp"
 #include "registration/point_to_plane.hpp"
@@ -59,14 +60,11 @@ struct ProjectedBlock {
       y[b] = points[b].v.y();
       z[b] = points[b].v.z();
     }
-    const float r00 = R(0, 0), r01 = R(0, 1), r02 = R(0, 2), r10 = R(1, 0), r11 = R(1, 1),
-                r12 = R(1, 2), r20 = R(2, 0), r21 = R(2, 1), r22 = R(2, 2);
-    const float tx = t.x(), ty = t.y(), tz = t.z();
+    const internal::FloatTransform T(R, t);
 #pragma GCC ivdep
     for (int b = 0; b < n; ++b) {
-      const float px = (r00 * x[b] + (r01 * y[b] + r02 * z[b])) + tx;
-      const float py = (r10 * x[b] + (r11 * y[b] + r12 * z[b])) + ty;
-      const float pz = (r20 * x[b] + (r21 * y[b] + r22 * z[b])) + tz;
+      float px, py, pz;
+      T.Apply(x[b], y[b], z[b], &px, &py, &pz);
       // Spherical projection (RangeProjection's mapping) of q into the model image.
       const float xy = __builtin_sqrtf(px * px + py * py);
       float u = 0.5f * c.cols - FastAtan2(py, px) * c.u_scale;

@@ -130,14 +130,22 @@ void BoundBlock(const CullConstants& c, int n, CullBlockData* b) {
     // Bitwise & of the comparisons: no branches in the loop.
     const bool front = (d2 >= c.min_r2) & (d2 <= c.max_r2) & (radius > 0.0f) & (radius < d) &
                        (-n_dot_p > c.facing * d);
+    // Pixel bounding box of the disc. Small discs: the linearised projection of the disc (an
+    // ellipse with half-extent r * sqrt(|g|^2 - (g.n)^2) along an angle whose gradient is g),
+    // widened by the relative second-order error 2a and a margin. Large or near-polar discs: the
+    // cone of half-angle asin(radius / d) around p. Either bound is conservative; the ray test is
+    // exact. a = tan(asin(radius / d)) = radius / sqrt(d^2 - radius^2) (tan >= asin).
     const float r2 = radius * radius;
     const float a = radius / Sqrt(d2 - r2) + kAngleMarginRad;
     const float inv_d2 = 1.0f / d2;
     const float rho2 = px * px + py * py;
     const float rho = Sqrt(rho2);
     const float pitch = internal::FastAtan2Branchless(pz, rho);
-    // The linearised bound of a small disc, or the cone bound (see the scalar derivation in
-    // CpuSurfelRenderer::Impl::Cull's history: both conservative).
+    // The linearised bound where the disc is small and away from the poles. Yaw gradient
+    // g_y = (-y, x, 0) / rho^2 (|g_y|^2 = 1 / rho^2); pitch gradient g_p = (-x z, -y z, rho^2) /
+    // (d^2 rho) (|g_p|^2 = 1 / d^2). With c = rho^2 g_y . n and q = d^2 rho g_p . n:
+    // r sqrt(|g|^2 - (g.n)^2) = r sqrt(rho^2 - c^2) / rho^2 and r sqrt(d^2 rho^2 - q^2) / (d^2
+    // rho).
     const bool linear = (a < kLinearBoundMaxAngle) & (rho > 0.5f * d);
     const float inv_rho = 1.0f / rho;
     const float cc = px * ny - py * nx;
@@ -151,6 +159,7 @@ void BoundBlock(const CullConstants& c, int n, CullBlockData* b) {
     const float v_lo = (c.fov_up - (pitch + e_pitch)) * c.rows_per_rad;
     const float v_hi = (c.fov_up - (pitch - e_pitch)) * c.rows_per_rad;
     const bool in_rows = !((v_hi < 0.0f) | (v_lo >= c.rows_f));
+    // The cone bound's yaw half-width where the linearised one does not apply (-1: all columns).
     const float elev = MaxOf(Abs(pitch - a), Abs(pitch + a));
     const float s2 = radius / d / CosLowerBound(elev);
     const float e_yaw_cone = s2 / Sqrt(1.0f - s2 * s2) + kAngleMarginRad;

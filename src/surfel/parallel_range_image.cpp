@@ -11,10 +11,10 @@ void ParallelRangeImage::ComputeVertexNormalMap(const RangeProjection& projectio
   const size_t n = cloud.size;
   pixel_.resize(n);
   range_.resize(n);
-  pool_->Run([&](int ti) {
+  pool_.Run([&](int ti) {
     size_t i0 = 0;
     size_t i1 = 0;
-    pool_->Range(ti, n, &i0, &i1);
+    pool_.Range(ti, n, &i0, &i1);
     ProjectedPoint px;
     for (size_t i = i0; i < i1; ++i) {
       const Eigen::Vector3f p = cloud.Point(i);
@@ -36,10 +36,10 @@ void ParallelRangeImage::ComputeVertexNormalMap(const RangeProjection& projectio
     out->vertex[static_cast<size_t>(k)] = cloud.Point(i);
     out->index[static_cast<size_t>(k)] = static_cast<int32_t>(i);
   }
-  pool_->Run([&](int ti) {
+  pool_.Run([&](int ti) {
     size_t r0 = 0;
     size_t r1 = 0;
-    pool_->Range(ti, static_cast<size_t>(o.rows), &r0, &r1);
+    pool_.Range(ti, static_cast<size_t>(o.rows), &r0, &r1);
     projection.ComputeNormals(out, static_cast<int>(r0), static_cast<int>(r1));
   });
 }

@@ -18,15 +18,14 @@ namespace slam_mms::internal {
 
 class ParallelRangeImage {
  public:
-  /// `pool` (not owned) must outlive this object; Compute must not run concurrently with other
-  /// uses of the pool.
-  explicit ParallelRangeImage(WorkerPool* pool) : pool_(pool) {}
+  /// `num_threads` >= 1 counts the calling thread (WorkerPool); not thread-safe.
+  explicit ParallelRangeImage(int num_threads) : pool_(num_threads) {}
 
   void ComputeVertexNormalMap(const RangeProjection& projection, const PointCloudView& cloud,
                               VertexNormalMap* out);
 
  private:
-  WorkerPool* pool_;
+  WorkerPool pool_;
   std::vector<int32_t> pixel_;  ///< Per point: its pixel, or -1 (not projected).
   std::vector<float> range_;    ///< Per point: its range where projected.
 };

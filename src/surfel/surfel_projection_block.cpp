@@ -1,5 +1,6 @@
 #include "surfel/surfel_projection_block.hpp"
 
+#include "core/float_transform.hpp"
 #include "surfel/fast_math.hpp"
 
 namespace slam_mms::internal {
@@ -22,17 +23,12 @@ void SurfelProjectionBlock::Project(const Surfel* surfels, const uint32_t* ids, 
     my[b] = s.normal.y();
     mz[b] = s.normal.z();
   }
-  const float r00 = R(0, 0), r01 = R(0, 1), r02 = R(0, 2), r10 = R(1, 0), r11 = R(1, 1),
-              r12 = R(1, 2), r20 = R(2, 0), r21 = R(2, 1), r22 = R(2, 2);
-  const float tx = t.x(), ty = t.y(), tz = t.z();
+  const FloatTransform T(R, t);
 #pragma GCC ivdep
   for (int b = 0; b < n; ++b) {
-    const float qx = (r00 * x[b] + (r01 * y[b] + r02 * z[b])) + tx;
-    const float qy = (r10 * x[b] + (r11 * y[b] + r12 * z[b])) + ty;
-    const float qz = (r20 * x[b] + (r21 * y[b] + r22 * z[b])) + tz;
-    const float ux = r00 * mx[b] + (r01 * my[b] + r02 * mz[b]);
-    const float uy = r10 * mx[b] + (r11 * my[b] + r12 * mz[b]);
-    const float uz = r20 * mx[b] + (r21 * my[b] + r22 * mz[b]);
+    float qx, qy, qz, ux, uy, uz;
+    T.Apply(x[b], y[b], z[b], &qx, &qy, &qz);
+    T.Rotate(mx[b], my[b], mz[b], &ux, &uy, &uz);
     const float d = __builtin_sqrtf(qx * qx + (qy * qy + qz * qz));
     const bool facing = ux * qx + (uy * qy + uz * qz) < 0.0f;
     const float yaw = FastAtan2Branchless(qy, qx);

@@ -53,8 +53,7 @@ TEST(ParallelRangeImageTest, SameBitsAsTheSerialProjectionForAnyThreadCount) {
     ASSERT_GT(pixels, 20000);
     ASSERT_GT(normals, 10000);
     for (int threads : {1, 2, 3}) {
-      WorkerPool pool(threads);
-      ParallelRangeImage image(&pool);
+      ParallelRangeImage image(threads);
       VertexNormalMap out;
       image.ComputeVertexNormalMap(proj, cloud.View(), &out);
       EXPECT_TRUE(SameBits(serial, out)) << "seed " << seed << ", " << threads << " threads";

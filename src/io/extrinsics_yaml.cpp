@@ -123,6 +123,13 @@ StatusOr<DriveExtrinsics> ParseExtrinsicsYaml(const std::string& text, const std
         std::vector<double> v;
         SLAM_MMS_RETURN_IF_ERROR(Numbers(kv.second, key, 3, file, &v));
         out.t_body_antenna_m = Eigen::Vector3d(v[0], v[1], v[2]);
+      } else if (key == "lidar_time_offset_s") {
+        const YAML::Node& v = kv.second;
+        if (!v.IsScalar() || !io_internal::ParseDouble(v.Scalar(), &out.lidar_time_offset_s)) {
+          return DataLossError(Where(file, v) + ": " + key + " '" +
+                               (v.IsScalar() ? v.Scalar() : std::string("(not a scalar)")) +
+                               "' is not a finite number [s]");
+        }
       } else {
         SLAM_MMS_LOG(kInfo) << Where(file, kv.first) << ": key '" << key << "' ignored";
       }
@@ -162,6 +169,11 @@ std::string FormatExtrinsicsYaml(const DriveExtrinsics& e) {
     const Eigen::Vector3d& a = *e.t_body_antenna_m;
     s += "t_body_antenna_m: [" + FormatDouble(a.x()) + ", " + FormatDouble(a.y()) + ", " +
          FormatDouble(a.z()) + "]\n";
+  }
+  if (e.lidar_time_offset_s != 0.0) {
+    s += "# a LiDAR stamp s is the time s + lidar_time_offset_s on the IMU/GNSS clock [s].\n"
+         "lidar_time_offset_s: " +
+         FormatDouble(e.lidar_time_offset_s) + "\n";
   }
   return s;
 }

@@ -1,8 +1,8 @@
 #pragma once
 // Private parse-from-memory entry points of the io module. The file readers (KittiRawReader,
-// ReadKittiScanFile, ReadKittiRigidCalibration, Read*Trajectory*) read a file's bytes and call
-// these, so the libFuzzer targets in fuzz/ and the tests exercise exactly the code the readers run.
-// `file` only names the source in error messages ("<file>:<line>: ...").
+// ReadKittiScanFile, ReadKittiRigidCalibration, ReadKittiImuToVelo, Read*Trajectory*) read a file's
+// bytes and call these, so the libFuzzer targets in fuzz/ and the tests exercise exactly the code
+// the readers run. `file` only names the source in error messages ("<file>:<line>: ...").
 //
 // Thread safety: pure functions; safe from any thread.
 
@@ -14,6 +14,7 @@
 #include "slam_mms/core/point_cloud.hpp"
 #include "slam_mms/core/status.hpp"
 #include "slam_mms/core/trajectory.hpp"
+#include "slam_mms/io/extrinsics_yaml.hpp"
 #include "slam_mms/io/kitti_raw_reader.hpp"
 #include "slam_mms/io/oxts_record.hpp"
 
@@ -43,6 +44,10 @@ StatusOr<OxtsRecord> ParseOxtsFileLines(const std::vector<std::string>& lines,
 /// A KITTI "R: 9 numbers / T: 3 numbers" calibration file (see ReadKittiRigidCalibration).
 StatusOr<Eigen::Isometry3d> ParseKittiRigidCalibrationLines(const std::vector<std::string>& lines,
                                                             const std::string& file);
+
+/// ReadKittiImuToVelo (kitti_calibration.hpp) on lines already in memory.
+StatusOr<DriveExtrinsics> ParseKittiImuToVeloLines(const std::vector<std::string>& lines,
+                                                   const std::string& file);
 
 /// The trajectory readers of trajectory_io.hpp on lines already in memory.
 StatusOr<Trajectory> ParseTrajectoryTumLines(const std::vector<std::string>& lines,

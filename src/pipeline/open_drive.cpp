@@ -1,8 +1,11 @@
 #include "slam_mms/pipeline/open_drive.hpp"
 
+#include <cmath>
+#include <optional>
+
 #include "slam_mms/core/logging.hpp"
-#include "slam_mms/io/extrinsics_yaml.hpp"
 #include "slam_mms/io/folder_drive_reader.hpp"
+#include "slam_mms/io/kitti_calibration.hpp"
 #include "slam_mms/io/kitti_drive_reader.hpp"
 #if defined(SLAM_MMS_HAVE_ROSBAG)
 #include "slam_mms/rosbag/rosbag_drive_reader.hpp"
@@ -11,29 +14,49 @@
 namespace slam_mms {
 namespace {
 
-// A reader whose calibration is replaced (--extrinsics over a folder's own extrinsics.yaml).
+// A reader whose calibration is replaced (--extrinsics): see OverrideExtrinsics.
 class ExtrinsicsOverride final : public DriveReader {
  public:
   ExtrinsicsOverride(std::unique_ptr<DriveReader> base, const DriveExtrinsics& extrinsics)
-      : base_(std::move(base)), streams_(base_->streams()) {
+      : base_(std::move(base)),
+        streams_(base_->streams()),
+        lidar_offset_ns_(std::llround(extrinsics.lidar_time_offset_s * 1e9)) {
     streams_.T_body_lidar = extrinsics.T_body_lidar;
-    streams_.t_body_antenna_m = extrinsics.t_body_antenna_m;
+    if (extrinsics.t_body_antenna_m) streams_.t_body_antenna_m = extrinsics.t_body_antenna_m;
   }
   std::string Describe() const override { return base_->Describe(); }
   size_t NumScans() const override { return base_->NumScans(); }
-  Timestamp ScanStart(size_t i) const override { return base_->ScanStart(i); }
-  Timestamp ScanEnd(size_t i) const override { return base_->ScanEnd(i); }
+  Timestamp ScanStart(size_t i) const override { return OnImuClock(base_->ScanStart(i)); }
+  Timestamp ScanEnd(size_t i) const override { return OnImuClock(base_->ScanEnd(i)); }
   std::string ScanSource(size_t i) const override { return base_->ScanSource(i); }
-  StatusOr<Scan> ReadScan(size_t i) const override { return base_->ReadScan(i); }
+  StatusOr<Scan> ReadScan(size_t i) const override {
+    SLAM_MMS_ASSIGN_OR_RETURN(Scan scan, base_->ReadScan(i));
+    // Per-point times are offsets from stamp_start: they move with it.
+    scan.stamp_start = OnImuClock(scan.stamp_start);
+    scan.stamp_end = OnImuClock(scan.stamp_end);
+    scan.stamp_trigger = OnImuClock(scan.stamp_trigger);
+    return scan;
+  }
   const DriveStreams& streams() const override { return streams_; }
   uint64_t TotalDroppedPoints() const override { return base_->TotalDroppedPoints(); }
 
  private:
+  // A LiDAR stamp s is s + lidar_time_offset_s on the IMU clock.
+  Timestamp OnImuClock(Timestamp lidar_stamp) const {
+    return Timestamp::FromNanoseconds(lidar_stamp.nanoseconds() + lidar_offset_ns_);
+  }
+
   std::unique_ptr<DriveReader> base_;
   DriveStreams streams_;
+  int64_t lidar_offset_ns_ = 0;
 };
 
 }  // namespace
+
+std::unique_ptr<DriveReader> OverrideExtrinsics(std::unique_ptr<DriveReader> base,
+                                                const DriveExtrinsics& extrinsics) {
+  return std::make_unique<ExtrinsicsOverride>(std::move(base), extrinsics);
+}
 
 const char* DriveSourceKindName(DriveSourceKind kind) {
   switch (kind) {
@@ -58,33 +81,32 @@ StatusOr<std::unique_ptr<DriveReader>> OpenDrive(const std::filesystem::path& pa
                                                  const DriveSourceOptions& options) {
   const DriveSourceKind kind =
       options.kind == DriveSourceKind::kAuto ? DetectDriveSourceKind(path) : options.kind;
+  std::optional<DriveExtrinsics> extrinsics;
+  if (!options.extrinsics.empty()) {
+    SLAM_MMS_ASSIGN_OR_RETURN(extrinsics, ReadExtrinsicsFile(options.extrinsics));
+  }
+  // The drive's own calibration, then --extrinsics over it.
+  auto with_extrinsics = [&](std::unique_ptr<DriveReader> reader) {
+    return extrinsics ? OverrideExtrinsics(std::move(reader), *extrinsics) : std::move(reader);
+  };
   switch (kind) {
     case DriveSourceKind::kAuto:
     case DriveSourceKind::kKittiRaw: {
-      if (!options.extrinsics.empty()) {
-        return InvalidArgumentError("--extrinsics " + options.extrinsics.string() +
-                                    ": a KITTI raw drive takes its calibration from "
-                                    "calib_imu_to_velo.txt");
-      }
       KittiRawReader::Options ro;
       ro.first_frame = options.first_frame;
       ro.last_frame = options.last_frame;
       SLAM_MMS_ASSIGN_OR_RETURN(std::unique_ptr<KittiDriveReader> reader,
                                 KittiDriveReader::Open(path, ro));
-      return std::unique_ptr<DriveReader>(std::move(reader));
+      return with_extrinsics(std::move(reader));
     }
     case DriveSourceKind::kFolder: {
       FolderDriveReader::Options fo;
       fo.first_frame = options.first_frame;
       fo.last_frame = options.last_frame;
-      fo.allow_missing_extrinsics = !options.extrinsics.empty();
+      fo.allow_missing_extrinsics = extrinsics.has_value();
       SLAM_MMS_ASSIGN_OR_RETURN(std::unique_ptr<FolderDriveReader> folder,
                                 FolderDriveReader::Open(path, fo));
-      if (options.extrinsics.empty()) return std::unique_ptr<DriveReader>(std::move(folder));
-      SLAM_MMS_ASSIGN_OR_RETURN(const DriveExtrinsics extrinsics,
-                                ReadExtrinsicsYaml(options.extrinsics));
-      return std::unique_ptr<DriveReader>(
-          std::make_unique<ExtrinsicsOverride>(std::move(folder), extrinsics));
+      return with_extrinsics(std::move(folder));
     }
     case DriveSourceKind::kRosbag: {
 #if defined(SLAM_MMS_HAVE_ROSBAG)
@@ -94,19 +116,18 @@ StatusOr<std::unique_ptr<DriveReader>> OpenDrive(const std::filesystem::path& pa
       bo.gnss_topic = options.gnss_topic;
       bo.first_scan = options.first_frame;
       bo.last_scan = options.last_frame;
-      if (!options.extrinsics.empty()) {
-        SLAM_MMS_ASSIGN_OR_RETURN(const DriveExtrinsics extrinsics,
-                                  ReadExtrinsicsYaml(options.extrinsics));
-        bo.T_body_lidar = extrinsics.T_body_lidar;
-        bo.t_body_antenna_m = extrinsics.t_body_antenna_m;
+      if (extrinsics) {
+        // Also given to the bag reader, which checks them.
+        bo.T_body_lidar = extrinsics->T_body_lidar;
+        bo.t_body_antenna_m = extrinsics->t_body_antenna_m;
       } else {
         SLAM_MMS_LOG(kWarning) << path.string()
-                               << ": no extrinsics given (--extrinsics FILE.yaml): T_body_lidar = "
+                               << ": no extrinsics given (--extrinsics FILE): T_body_lidar = "
                                   "identity";
       }
       SLAM_MMS_ASSIGN_OR_RETURN(std::unique_ptr<RosbagDriveReader> bag,
                                 RosbagDriveReader::Open(path, bo));
-      return std::unique_ptr<DriveReader>(std::move(bag));
+      return with_extrinsics(std::move(bag));
 #else
       break;
 #endif

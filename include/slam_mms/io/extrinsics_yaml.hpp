@@ -4,6 +4,7 @@
 //   # p_body = T_body_lidar * p_lidar
 //   T_body_lidar: [r00, r01, r02, tx, r10, r11, r12, ty, r20, r21, r22, tz, 0, 0, 0, 1]
 //   t_body_antenna_m: [x, y, z]      # optional: GNSS antenna lever arm in the body frame
+//   lidar_time_offset_s: t           # optional (default 0): see DriveExtrinsics
 //
 // or, for T_body_lidar, `{xyz: [x, y, z], rpy_deg: [roll, pitch, yaw]}` with
 // R = Rz(yaw) Ry(pitch) Rx(roll). The 4x4 matrix is row-major; its rotation must be orthonormal
@@ -30,6 +31,9 @@ struct DriveExtrinsics {
   Eigen::Isometry3d T_body_lidar = Eigen::Isometry3d::Identity();
   /// GNSS antenna position in the body frame [m]; empty = not given.
   std::optional<Eigen::Vector3d> t_body_antenna_m;
+  /// The LiDAR clock's offset [s]: a LiDAR stamp s is the time s + lidar_time_offset_s on the
+  /// IMU/GNSS clock.
+  double lidar_time_offset_s = 0.0;
 };
 
 /// Reads an extrinsics file (see the file comment).
@@ -39,7 +43,8 @@ struct DriveExtrinsics {
 [[nodiscard]] StatusOr<DriveExtrinsics> ParseExtrinsicsYaml(const std::string& text,
                                                             const std::string& file);
 
-/// The text WriteExtrinsicsYaml writes (T_body_lidar as 16 numbers).
+/// The text WriteExtrinsicsYaml writes (T_body_lidar as 16 numbers; lidar_time_offset_s only when
+/// nonzero).
 std::string FormatExtrinsicsYaml(const DriveExtrinsics& extrinsics);
 
 /// Writes `extrinsics` to `file` (kUnavailable when it cannot be written).

@@ -16,6 +16,7 @@
 
 #include "slam_mms/core/status.hpp"
 #include "slam_mms/io/drive_reader.hpp"
+#include "slam_mms/io/extrinsics_yaml.hpp"
 
 namespace slam_mms {
 
@@ -34,14 +35,28 @@ struct DriveSourceOptions {
   std::string lidar_topic;
   std::string imu_topic;
   std::string gnss_topic;
-  /// extrinsics.yaml (T_body_lidar, t_body_antenna_m); empty = none. Bags take it (else identity,
-  /// logged); for a folder it overrides DIR/extrinsics.yaml; KITTI raw: kInvalidArgument (its
-  /// calibration is calib_imu_to_velo.txt).
+  /// A calibration file, read by ReadExtrinsicsFile: extrinsics.yaml (.yaml/.yml: T_body_lidar,
+  /// t_body_antenna_m, lidar_time_offset_s) or a KITTI calib_imu_to_velo.txt (any other name;
+  /// kitti_calibration.hpp); empty = none. It applies to every kind through OverrideExtrinsics:
+  /// it replaces a KITTI raw drive's calib_imu_to_velo.txt, a folder's DIR/extrinsics.yaml and a
+  /// bag's identity default (logged where not given); its antenna lever arm replaces the drive's
+  /// only where it gives one, and a nonzero lidar_time_offset_s moves the scan stamps onto the
+  /// IMU clock.
   std::filesystem::path extrinsics;
 };
 
 /// The kind kAuto would pick for `path` (kKittiRaw where nothing else fits).
 DriveSourceKind DetectDriveSourceKind(const std::filesystem::path& path);
+
+/// `base` with its calibration replaced by `extrinsics`: streams().T_body_lidar is
+/// extrinsics.T_body_lidar; streams().t_body_antenna_m is extrinsics.t_body_antenna_m where given,
+/// else the base's. Where extrinsics.lidar_time_offset_s != 0 the scans are moved onto the IMU
+/// clock: ScanStart(i), ScanEnd(i) and ReadScan(i)'s stamp_start, stamp_end and stamp_trigger are
+/// the base's + lidar_time_offset_s (rounded to the nanosecond); per-point time offsets are
+/// relative to stamp_start and stay. Everything else is forwarded to `base`, which the returned
+/// reader owns. Thread safety: as `base`.
+std::unique_ptr<DriveReader> OverrideExtrinsics(std::unique_ptr<DriveReader> base,
+                                                const DriveExtrinsics& extrinsics);
 
 [[nodiscard]] StatusOr<std::unique_ptr<DriveReader>> OpenDrive(const std::filesystem::path& path,
                                                                const DriveSourceOptions& options);

@@ -13,6 +13,12 @@
 //   --elevation-bias DEG               KITTI-like 0.205 deg low points (default 0)
 //   --lead-in S                        IMU/POS records before the first scan (default 1)
 //   --oxts-start S                     with --oxts: start the lead-in S seconds into the drive
+//   --calib-error-rpy-deg R,P,Y        write calib_imu_to_velo.txt wrong on purpose: rotated by
+//                                      Rz(Y) Ry(P) Rx(R) about the body axes (each |.| <= 10 deg)
+//   --calib-error-xyz-m X,Y,Z          ... and its lever arm off by X,Y,Z [m] in the body frame
+//                                      (each |.| <= 1 m)
+//   --lidar-time-offset-s T            LiDAR clock T s behind the IMU's: the scan stamps written
+//                                      are true - T (|T| <= 0.5; the ground truth stays true)
 //   --threads N (default 2)  --no-scene-cloud  --scene-voxel M  --drive-id N  --date YYYY_MM_DD
 // --oxts also accepts a KITTI OXTS archive <drive>_sync.tar.gz (unpacked with `tar` to a temp dir).
 #include <CLI/CLI.hpp>
@@ -47,6 +53,11 @@ int Usage(const std::string& error) {
          "[--no-scene-cloud] "
          "[--scene-voxel M]\n"
          "       [--drive-id N] [--date YYYY_MM_DD]\n"
+         "       [--calib-error-rpy-deg R,P,Y] [--calib-error-xyz-m X,Y,Z] "
+         "[--lidar-time-offset-s T]\n"
+         "         (a wrong calib_imu_to_velo.txt and a LiDAR clock T s behind the IMU's, on "
+         "purpose;\n"
+         "          scenario.json keeps the truth; see docs/simulator.md)\n"
          "       slam_mms_sim --version | --help\n"
          "Values go after the flag or after '=' (--out=DIR).\n";
   return 2;
@@ -96,6 +107,7 @@ int main(int argc, char** argv) {
   std::string gnss_quality, origin;
   std::vector<std::string> outages;
   bool help = false, version = false, no_scene_cloud = false;
+  std::vector<double> calib_error_rpy_deg, calib_error_xyz_m;
   // CLI11: `--flag value` and `--flag=value`; numbers are checked by CLI11 (a bad one: exit 2).
   CLI::App app("slam_mms_sim", "slam_mms_sim");
   app.set_help_flag();
@@ -119,6 +131,9 @@ int main(int argc, char** argv) {
   app.add_option("--scene-voxel", o.scene_cloud_voxel_m);
   app.add_option("--drive-id", o.drive_id);
   app.add_option("--date", o.date);
+  app.add_option("--calib-error-rpy-deg", calib_error_rpy_deg)->delimiter(',')->expected(3);
+  app.add_option("--calib-error-xyz-m", calib_error_xyz_m)->delimiter(',')->expected(3);
+  app.add_option("--lidar-time-offset-s", o.lidar_time_offset_s);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -133,6 +148,14 @@ int main(int argc, char** argv) {
     return 0;
   }
   if (no_scene_cloud) o.write_scene_cloud = false;
+  if (!calib_error_rpy_deg.empty()) {
+    o.calib_error_rpy_deg =
+        Eigen::Vector3d(calib_error_rpy_deg[0], calib_error_rpy_deg[1], calib_error_rpy_deg[2]);
+  }
+  if (!calib_error_xyz_m.empty()) {
+    o.calib_error_xyz_m =
+        Eigen::Vector3d(calib_error_xyz_m[0], calib_error_xyz_m[1], calib_error_xyz_m[2]);
+  }
   std::vector<double> numbers;
   for (const std::string& v : outages) {
     if (!SplitNumbers(v, ':', &numbers) || numbers.size() != 2) {

@@ -103,7 +103,19 @@ Status WriteScenarioJson(const DriveSimulator::Options& o, const DriveSimulator&
   for (int r = 0; r < 4; ++r) {
     for (int c = 0; c < 4; ++c) t.push_back(T(r, c));
   }
-  j["T_lidar_body"] = std::move(t);
+  j["T_lidar_body"] = std::move(t);  // the true one, which the scans are simulated with
+  // What calib_imu_to_velo.txt holds: T_lidar_body with the calibration error on purpose.
+  const Eigen::Matrix4d T_written = WrittenTLidarBody(o).matrix();
+  Json tw = Json::array();
+  for (int r = 0; r < 4; ++r) {
+    for (int c = 0; c < 4; ++c) tw.push_back(T_written(r, c));
+  }
+  j["T_lidar_body_written"] = std::move(tw);
+  j["calib_error_rpy_deg"] = {o.calib_error_rpy_deg.x(), o.calib_error_rpy_deg.y(),
+                              o.calib_error_rpy_deg.z()};
+  j["calib_error_xyz_m"] = {o.calib_error_xyz_m.x(), o.calib_error_xyz_m.y(),
+                            o.calib_error_xyz_m.z()};
+  j["lidar_time_offset_s"] = o.lidar_time_offset_s;
   j["gravity_mps2"] = o.gravity_mps2;
   j["trajectory"] = Json{{"epoch_ns", tr.epoch().nanoseconds()},
                          {"start_s", tr.start_s()},

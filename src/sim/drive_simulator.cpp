@@ -35,6 +35,22 @@ Eigen::Isometry3d KittiTLidarBody() {
   return T;
 }
 
+Eigen::Isometry3d WrittenTLidarBody(const DriveSimulator::Options& o) {
+  if (o.calib_error_rpy_deg.isZero(0.0) && o.calib_error_xyz_m.isZero(0.0)) return o.T_lidar_body;
+  constexpr double kDegToRad = M_PI / 180.0;
+  const Eigen::Vector3d& rpy = o.calib_error_rpy_deg;
+  // The error is a rotation about the body axes (on the left) and a lever-arm error in body.
+  const Eigen::Matrix3d R_err = (Eigen::AngleAxisd(rpy.z() * kDegToRad, Eigen::Vector3d::UnitZ()) *
+                                 Eigen::AngleAxisd(rpy.y() * kDegToRad, Eigen::Vector3d::UnitY()) *
+                                 Eigen::AngleAxisd(rpy.x() * kDegToRad, Eigen::Vector3d::UnitX()))
+                                    .toRotationMatrix();
+  const Eigen::Isometry3d T_body_lidar_true = o.T_lidar_body.inverse();
+  Eigen::Isometry3d T_body_lidar_written = Eigen::Isometry3d::Identity();
+  T_body_lidar_written.linear() = R_err * T_body_lidar_true.linear();
+  T_body_lidar_written.translation() = T_body_lidar_true.translation() + o.calib_error_xyz_m;
+  return T_body_lidar_written.inverse();
+}
+
 Status DriveSimulator::Options::Validate() const {
   auto fail = [](const std::string& name, const std::string& v, const char* rule) {
     return InvalidArgumentError("DriveSimulator::Options::" + name + " = " + v + "; " + rule);
@@ -66,6 +82,19 @@ Status DriveSimulator::Options::Validate() const {
     return fail("date", "'" + date + "'", "must look like 2011_09_26");
   if (!T_lidar_body.matrix().allFinite())
     return fail("T_lidar_body", "non-finite", "must be finite");
+  auto vec = [](const Eigen::Vector3d& v) {
+    return "(" + std::to_string(v.x()) + ", " + std::to_string(v.y()) + ", " +
+           std::to_string(v.z()) + ")";
+  };
+  if (!calib_error_rpy_deg.allFinite() || !(calib_error_rpy_deg.cwiseAbs().maxCoeff() <= 10.0))
+    return fail("calib_error_rpy_deg", vec(calib_error_rpy_deg),
+                "each angle must be finite and in [-10, 10] deg");
+  if (!calib_error_xyz_m.allFinite() || !(calib_error_xyz_m.cwiseAbs().maxCoeff() <= 1.0))
+    return fail("calib_error_xyz_m", vec(calib_error_xyz_m),
+                "each component must be finite and in [-1, 1] m");
+  if (!(std::abs(lidar_time_offset_s) <= 0.5))
+    return fail("lidar_time_offset_s", std::to_string(lidar_time_offset_s),
+                "must be finite and in [-0.5, 0.5] s");
   SLAM_MMS_RETURN_IF_ERROR(fit.Validate());
   SLAM_MMS_RETURN_IF_ERROR(world.Validate());
   SLAM_MMS_RETURN_IF_ERROR(lidar.Validate());
@@ -219,7 +248,8 @@ StatusOr<DriveSimulator::Summary> DriveSimulator::Run(const std::filesystem::pat
   KittiRawWriter::Options wopt;
   wopt.overwrite = o.overwrite;
   SLAM_MMS_ASSIGN_OR_RETURN(KittiRawWriter writer, KittiRawWriter::Create(summary.drive_dir, wopt));
-  SLAM_MMS_RETURN_IF_ERROR(writer.WriteCalibration(o.T_lidar_body));
+  // The true calibration, or a wrong one on purpose (Options::calib_error_*).
+  SLAM_MMS_RETURN_IF_ERROR(writer.WriteCalibration(WrittenTLidarBody(o)));
   const std::filesystem::path gt_dir = summary.drive_dir / "ground_truth";
   std::error_code ec;
   std::filesystem::create_directories(gt_dir, ec);
@@ -290,16 +320,24 @@ StatusOr<DriveSimulator::Summary> DriveSimulator::Run(const std::filesystem::pat
     auto t_w = std::chrono::steady_clock::now();
     if (o.write_scene_cloud) scene.Add(out.p_world_exact, out.scan.cloud.intensities());
     summary.num_points += out.scan.cloud.size();
+    // The ground truth is on the true (IMU) clock; the LiDAR's stamps lag by lidar_time_offset_s.
+    const Timestamp true_start = out.scan.stamp_start;
+    const Timestamp true_trigger = out.scan.stamp_trigger;
+    const Timestamp true_end = out.scan.stamp_end;
+    if (o.lidar_time_offset_s != 0.0) {
+      out.scan.stamp_start = true_start.PlusSeconds(-o.lidar_time_offset_s);
+      out.scan.stamp_trigger = true_trigger.PlusSeconds(-o.lidar_time_offset_s);
+      out.scan.stamp_end = true_end.PlusSeconds(-o.lidar_time_offset_s);
+    }
     SLAM_MMS_RETURN_IF_ERROR(writer.AddScan(out.scan));
     // The 10 Hz sync record: the 100 Hz record nearest the trigger.
     const double tt = ts + 0.5 * period;
     const size_t j = static_cast<size_t>(std::clamp<long>(
         std::lround((tt - traj.start_s()) / imu_dt), 0L, static_cast<long>(records.size()) - 1));
     SLAM_MMS_RETURN_IF_ERROR(writer.AddOxts(traj.ToTimestamp(rec_t[j]), records[j]));
-    SLAM_MMS_RETURN_IF_ERROR(gt_start.Add(out.scan.stamp_start, traj.Pose(ts)));
-    SLAM_MMS_RETURN_IF_ERROR(gt_trigger.Add(out.scan.stamp_trigger, traj.Pose(tt)));
-    SLAM_MMS_RETURN_IF_ERROR(
-        gt_end.Add(out.scan.stamp_end, traj.Pose(ts + lidar.LastFiringOffsetSeconds())));
+    SLAM_MMS_RETURN_IF_ERROR(gt_start.Add(true_start, traj.Pose(ts)));
+    SLAM_MMS_RETURN_IF_ERROR(gt_trigger.Add(true_trigger, traj.Pose(tt)));
+    SLAM_MMS_RETURN_IF_ERROR(gt_end.Add(true_end, traj.Pose(ts + lidar.LastFiringOffsetSeconds())));
     summary.seconds_writing += Seconds(t_w);
     if (progress) progress(k + 1, n_scans);
   }

@@ -16,7 +16,9 @@
 //           scenario.json            every parameter, the seed and the WGS-84 origin of `world`
 //
 // World: local ENU (x east, y north, z up) about the WGS-84 origin in scenario.json; body = IMU
-// (x forward, y left, z up); lidar pose T_body_lidar = inverse(T_lidar_body) (calib_imu_to_velo).
+// (x forward, y left, z up); lidar pose T_body_lidar = inverse(T_lidar_body) (calib_imu_to_velo,
+// unless Options::calib_error_* make that file wrong on purpose). Options::lidar_time_offset_s
+// delays the scan stamps written; the ground truth stays on the IMU clock.
 // Trajectory times are absolute (the scenario's start time, or the real OXTS stamps).
 //
 // Ownership: move-only; owns the world. Thread safety: Run is not reentrant; const accessors may be
@@ -72,7 +74,23 @@ class DriveSimulator {
     int drive_id = -1;
     /// Scenario start time (UTC) "YYYY-MM-DD hh:mm:ss" for scripted scenarios.
     std::string start_time = "2026-01-15 10:00:00";
+    /// The true calibration the scans are simulated with (T_body_lidar = T_lidar_body.inverse()).
     Eigen::Isometry3d T_lidar_body = KittiTLidarBody();
+    /// A wrong calibration file on purpose (for self-calibration tests): calib_imu_to_velo.txt is
+    /// written with
+    ///   T_body_lidar_written = [R_err * R_body_lidar | t_body_lidar + calib_error_xyz_m],
+    /// R_err = Rz(yaw) Ry(pitch) Rx(roll) of calib_error_rpy_deg = (roll, pitch, yaw) [deg], a
+    /// rotation about the body axes (each |.| <= 10 deg), and calib_error_xyz_m a lever-arm error
+    /// in the body frame [m] (each |.| <= 1 m); the file holds T_body_lidar_written.inverse().
+    /// scenario.json keeps the true T_lidar_body and adds T_lidar_body_written. Zero: the true
+    /// calibration is written (WrittenTLidarBody).
+    Eigen::Vector3d calib_error_rpy_deg = Eigen::Vector3d::Zero();
+    Eigen::Vector3d calib_error_xyz_m = Eigen::Vector3d::Zero();
+    /// The LiDAR clock runs this much behind the IMU clock [s] (|.| <= 0.5): the scan stamps
+    /// written (velodyne_points/timestamps*.txt) are the true times - lidar_time_offset_s, so that
+    /// true = written + lidar_time_offset_s (DriveExtrinsics::lidar_time_offset_s's convention).
+    /// The ground truth (ground_truth/*.tum) and the OXTS records stay on the true (IMU) clock.
+    double lidar_time_offset_s = 0.0;
     double gravity_mps2 = 9.81;
     ReferenceTrajectory::FitOptions fit;
     CityWorld::Options world;  ///< world.seed is ignored: derived from `seed`.
@@ -139,5 +157,10 @@ class DriveSimulator {
   explicit DriveSimulator(std::unique_ptr<Impl> impl);
   std::unique_ptr<Impl> impl_;
 };
+
+/// The T_lidar_body DriveSimulator writes to calib_imu_to_velo.txt for options `o`: the true
+/// o.T_lidar_body with o.calib_error_rpy_deg / o.calib_error_xyz_m applied (see Options); exactly
+/// o.T_lidar_body where both are zero.
+Eigen::Isometry3d WrittenTLidarBody(const DriveSimulator::Options& o);
 
 }  // namespace slam_mms::sim

@@ -140,7 +140,7 @@ StatusOr<GroundTruth> LoadOxts(const KittiRawReader& reader, const GeodeticPoint
 StatusOr<GroundTruth> LoadGroundTruth(const std::filesystem::path& gt_dir,
                                       const DriveReader& reader, const GeodeticPoint& run_origin) {
   if (HasSimulatorGroundTruth(gt_dir)) return LoadSimulator(gt_dir, run_origin);
-  if (const auto* kitti = dynamic_cast<const KittiDriveReader*>(&reader)) {
+  if (const auto* kitti = dynamic_cast<const KittiDriveReader*>(&reader.Underlying())) {
     return LoadOxts(kitti->kitti(), run_origin);
   }
   return NotFoundError(reader.Describe() + ": no ground truth (no " +

@@ -100,6 +100,8 @@ StatusOr<std::string> ReportToJson(const EvalReport& report) {
   }
   SLAM_MMS_ASSIGN_OR_RETURN(Json options, EmbeddedObject(report.options_json, "options_json"));
   SLAM_MMS_ASSIGN_OR_RETURN(Json georef, EmbeddedObject(report.georef_json, "georef_json"));
+  SLAM_MMS_ASSIGN_OR_RETURN(Json extrinsics,
+                            EmbeddedObject(report.extrinsics_json, "extrinsics_json"));
 
   Json j = Json::object();
   j["version"] = SLAM_MMS_VERSION_STRING;
@@ -156,6 +158,7 @@ StatusOr<std::string> ReportToJson(const EvalReport& report) {
   j["ground_truth_map"] = Json{{"mme", Number(report.ground_truth_map_mme)}};
   j["options"] = std::move(options);
   j["georef"] = std::move(georef);
+  j["extrinsics"] = std::move(extrinsics);
   j["warnings"] = report.warnings;
   if (!report.outputs.empty()) j["outputs"] = Json{{"files", report.outputs}};
   // Invalid UTF-8 in a path or message is replaced rather than failing the whole report.

@@ -70,6 +70,34 @@ bool ParsePosWorkflow(const std::string& name, PosWorkflow* pos) {
   return false;
 }
 
+StatusOr<OfflinePos> ComputeOfflinePos(const DriveReader& reader,
+                                       const MappingSystem::Options& options) {
+  const DriveStreams& in = reader.streams();
+  OfflinePos out;
+  if (in.pos.empty()) {
+    PosSmoother::Options so;
+    so.ins = options.ins;
+    so.origin = options.origin;
+    so.gnss_outages = options.gnss_outages;
+    if (reader.NumScans() > 0) so.outage_reference = reader.ScanStart(0);
+    StatusOr<PosSmoother::Result> smoothed =
+        PosSmoother::Run(so, in.imu, in.gnss, in.initial_state);
+    if (!smoothed.ok()) return smoothed.status().WithContext(reader.Describe());
+    out.origin = smoothed->origin;
+    out.states = std::move(smoothed->smoothed);
+    out.smoothed = true;
+    return out;
+  }
+  out.origin = options.origin
+                   ? *options.origin
+                   : GeodeticPoint{in.pos.front().latitude_deg, in.pos.front().longitude_deg,
+                                   in.pos.front().height_m};
+  StatusOr<std::vector<InsState>> converted = PosRecordsInWorld(in.pos, out.origin);
+  if (!converted.ok()) return converted.status().WithContext(reader.Describe());
+  out.states = std::move(converted).value();
+  return out;
+}
+
 DriveRun RunDrive(const DriveReader& reader, const MappingSystem::Options& base_options,
                   const DriveRunCallbacks& callbacks, const DriveRunOptions& run_options) {
   const DriveStreams& in = reader.streams();
@@ -85,39 +113,23 @@ DriveRun RunDrive(const DriveReader& reader, const MappingSystem::Options& base_
   // The offline method places scans through the external-POS path of a gnss_ins system.
   if (options.mode == MappingMode::kGnssInsSmoothed) options.mode = MappingMode::kGnssIns;
   std::vector<InsState> pos;
-  if (smooth && in.pos.empty()) {
-    // The offline workflow: the forward-backward smoothed POS over the whole drive first.
-    PosSmoother::Options so;
-    so.ins = options.ins;
-    so.origin = options.origin;
-    so.gnss_outages = options.gnss_outages;
-    if (run.scans_total > 0) so.outage_reference = reader.ScanStart(0);
-    StatusOr<PosSmoother::Result> smoothed =
-        PosSmoother::Run(so, in.imu, in.gnss, in.initial_state);
-    if (!smoothed.ok()) {
-      run.status = smoothed.status().WithContext(reader.Describe());
-      return run;
-    }
-    options.origin = smoothed->origin;
-    pos = std::move(smoothed->smoothed);
-    run.smoothed_pos = true;
-    run.smoothing_wall_s =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  } else if (!in.pos.empty()) {
-    if (smooth) {
+  if (smooth || !in.pos.empty()) {
+    if (smooth && !in.pos.empty()) {
       SLAM_MMS_LOG(kInfo) << reader.Describe()
                           << ": the input's own external POS is used as the smoothed POS";
     }
-    if (!options.origin) {
-      options.origin = GeodeticPoint{in.pos.front().latitude_deg, in.pos.front().longitude_deg,
-                                     in.pos.front().height_m};
-    }
-    StatusOr<std::vector<InsState>> converted = PosRecordsInWorld(in.pos, *options.origin);
-    if (!converted.ok()) {
-      run.status = converted.status().WithContext(reader.Describe());
+    StatusOr<OfflinePos> offline = ComputeOfflinePos(reader, options);
+    if (!offline.ok()) {
+      run.status = offline.status();
       return run;
     }
-    pos = std::move(converted).value();
+    options.origin = offline->origin;
+    pos = std::move(offline->states);
+    if (offline->smoothed) {
+      run.smoothed_pos = true;
+      run.smoothing_wall_s =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    }
   }
   StatusOr<std::unique_ptr<MappingSystem>> created = MappingSystem::Create(options);
   if (!created.ok()) {

@@ -39,6 +39,7 @@ class ExtrinsicsOverride final : public DriveReader {
   }
   const DriveStreams& streams() const override { return streams_; }
   uint64_t TotalDroppedPoints() const override { return base_->TotalDroppedPoints(); }
+  const DriveReader& Underlying() const override { return base_->Underlying(); }
 
  private:
   // A LiDAR stamp s is s + lidar_time_offset_s on the IMU clock.

@@ -93,8 +93,14 @@ Options:
                           Ground truth: ground_truth/ beside the bag if present.
   --lidar-topic, --imu-topic, --gnss-topic T
                           bag topics (default: the one topic of each message type in the bag).
-  --extrinsics FILE.yaml  T_body_lidar and t_body_antenna_m (the folder's extrinsics.yaml format);
-                          for bags, and to override a folder's own.
+  --extrinsics FILE       T_body_lidar, t_body_antenna_m and lidar_time_offset_s: a YAML file
+                          (.yaml/.yml, the folder's extrinsics.yaml format) or KITTI's
+                          calib_imu_to_velo.txt format (what --calibrate-extrinsics writes); for
+                          bags, and to override a folder's or a KITTI drive's own.
+  --calibrate-extrinsics  estimate the LiDAR boresight, lever arm and clock offset from the drive
+                          against the offline POS first, write DIR/calib_imu_to_velo_estimated.txt
+                          and report.json "extrinsics", and run with the estimate (config key
+                          level2.estimate_extrinsics; docs/calibration.md).
   --out DIR               output folder (created).
   --mode M                full | gnss_ins | gnss_ins_smoothed | lidar_only | all (default all =
                           the four in turn). gnss_ins: scans on the forward GNSS/INS filter (the
@@ -180,6 +186,7 @@ StatusOr<RunArgs> ParseRunArgs(int argc, const char* const* argv) {
   app.add_option("--sim-duration", sim_duration);
   app.add_option("--sim-seed", sim_seed);
   app.add_flag("--keep-sim", args.keep_sim);
+  app.add_flag("--calibrate-extrinsics", args.calibrate_extrinsics);
   app.add_option("--log-level", log_level);
   app.add_option("--crs", args.crs);
   app.add_option("--las-tile-size", las_tile_size);

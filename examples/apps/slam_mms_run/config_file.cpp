@@ -392,6 +392,7 @@ const std::vector<std::pair<std::string, KeyHandler>>& Handlers() {
     SLAM_MMS_KEY_D("level2.attitude_prior_sigma_rad", o->level2.attitude_prior_sigma_rad);
     SLAM_MMS_KEY_I("level2.max_iterations", o->level2.max_iterations);
     SLAM_MMS_KEY_I("level2.num_threads", o->level2.num_threads);
+    SLAM_MMS_KEY_B("level2.estimate_extrinsics", o->level2.estimate_extrinsics);
 #undef SLAM_MMS_KEY_D
 #undef SLAM_MMS_KEY_F
 #undef SLAM_MMS_KEY_I

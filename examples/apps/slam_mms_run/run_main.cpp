@@ -39,8 +39,10 @@
 #include "slam_mms/io/map_io.hpp"
 #include "slam_mms/io/trajectory_io.hpp"
 #include "slam_mms/pipeline/mapping_system.hpp"
+#include "slam_mms/pipeline/open_drive.hpp"
 #include "slam_mms/sim/drive_simulator.hpp"
 #include "slam_mms/version.hpp"
+#include "slam_mms_run/calibration.hpp"
 #include "slam_mms_run/checkpoint.hpp"
 #include "slam_mms_run/cli.hpp"
 #include "slam_mms_run/config_file.hpp"
@@ -393,10 +395,28 @@ int RunMain(int argc, const char* const* argv) {
   }
   StatusOr<std::unique_ptr<DriveReader>> opened = OpenRunInput(args, drive_dir);
   if (!opened.ok()) return Fail(opened.status(), kExitError);
-  const DriveReader& reader = **opened;
-  if (reader.NumScans() == 0) {
-    return Fail(OutOfRangeError(reader.Describe() + ": no scan in the frame range"), kExitError);
+  std::unique_ptr<DriveReader> input = std::move(opened).value();
+  if (input->NumScans() == 0) {
+    return Fail(OutOfRangeError(input->Describe() + ": no scan in the frame range"), kExitError);
   }
+  // Boresight self-calibration first: every method then runs with the estimate.
+  std::string extrinsics_json;
+  if (args.calibrate_extrinsics || options.level2.estimate_extrinsics) {
+    MappingSystem::Options cal_options = options;
+    cal_options.gnss_outages = args.gnss_outages;
+    if (input->streams().t_body_antenna_m) {
+      cal_options.ins.gnss.t_body_antenna = *input->streams().t_body_antenna_m;
+    }
+    StatusOr<RunCalibration> calibration =
+        CalibrateRunExtrinsics(*input, cal_options, args.out_dir, &g_stop);
+    if (!calibration.ok()) {
+      return Fail(calibration.status().WithContext("--calibrate-extrinsics"),
+                  g_stop.load() ? StopExitCode() : kExitError);
+    }
+    input = OverrideExtrinsics(std::move(input), calibration->extrinsics);
+    extrinsics_json = std::move(calibration->json);
+  }
+  const DriveReader& reader = *input;
   options.T_body_lidar = reader.streams().T_body_lidar;
   if (reader.streams().t_body_antenna_m) {
     options.ins.gnss.t_body_antenna = *reader.streams().t_body_antenna_m;
@@ -418,7 +438,7 @@ int RunMain(int argc, const char* const* argv) {
   // else the OXTS poses of a KITTI raw drive.
   const fs::path gt_dir = GroundTruthDir(args, drive_dir);
   const bool sim_gt = eval::HasSimulatorGroundTruth(gt_dir);
-  const bool kitti_input = dynamic_cast<const KittiDriveReader*>(&reader) != nullptr;
+  const bool kitti_input = dynamic_cast<const KittiDriveReader*>(&reader.Underlying()) != nullptr;
   const std::string gt_kind = sim_gt ? "simulator" : kitti_input ? "oxts" : "none";
   const Timestamp first_scan = reader.ScanStart(0);
   const double duration_s = reader.ScanEnd(reader.NumScans() - 1).SecondsSince(first_scan);
@@ -609,6 +629,7 @@ int RunMain(int argc, const char* const* argv) {
     }
   }
   report.command_line = args.command_line;
+  report.extrinsics_json = extrinsics_json;
   report.options_json = options_json;
   if (geo.run_origin) {
     StatusOr<std::string> georef = RunGeorefJson(*geo.run_origin, geo);

@@ -101,6 +101,9 @@ struct EvalReport {
   std::string options_json;
   /// The geo-reference as a JSON object text (georef.json's); empty = null.
   std::string georef_json;
+  /// The boresight self-calibration (slam_mms_run --calibrate-extrinsics) as a JSON object text
+  /// (docs/calibration.md); empty = null.
+  std::string extrinsics_json;
   /// False where the run stopped before the end of the drive (error, interrupt).
   bool complete = true;
   /// The run's warnings, in order ("warnings": always written, [] when none).

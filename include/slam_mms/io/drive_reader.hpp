@@ -85,6 +85,9 @@ class DriveReader {
   virtual const DriveStreams& streams() const = 0;
   /// Points dropped for non-finite values over all ReadScan calls so far.
   virtual uint64_t TotalDroppedPoints() const = 0;
+  /// The reader this one adapts (OverrideExtrinsics' wrapper: the reader it wraps, recursively),
+  /// else itself: what hosts inspect for the input's kind (the OXTS ground truth of KITTI raw).
+  virtual const DriveReader& Underlying() const { return *this; }
 };
 
 }  // namespace slam_mms

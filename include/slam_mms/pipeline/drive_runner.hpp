@@ -97,6 +97,20 @@ struct DriveRunCallbacks {
 DriveRun RunDrive(const DriveReader& reader, const MappingSystem::Options& options,
                   const DriveRunCallbacks& callbacks = {}, const DriveRunOptions& run_options = {});
 
+/// The offline POS of a drive, as RunDrive's offline workflow places the scans on it.
+struct OfflinePos {
+  std::vector<InsState> states;  ///< T_world_body (with covariances), strictly increasing stamps.
+  GeodeticPoint origin;          ///< The world origin used.
+  bool smoothed = false;         ///< PosSmoother ran (false: the input's own external POS).
+};
+
+/// The input's own external POS in world (local ENU about options.origin, else its first record)
+/// where it has one, else PosSmoother over its IMU + GNSS with options.ins, options.origin and the
+/// outage windows (relative to scan 0's start). Errors name the reader (FailedPrecondition where
+/// there is no initial attitude or no usable fix).
+[[nodiscard]] StatusOr<OfflinePos> ComputeOfflinePos(const DriveReader& reader,
+                                                     const MappingSystem::Options& options);
+
 /// The external POS records in world (local ENU about `origin`): positions through WGS-84, the
 /// attitudes rotated from each record's local ENU into world, covariances from the sigmas (else
 /// 1 cm / 0.01 deg). Fails on a record outside the WGS-84 range.

@@ -54,6 +54,12 @@ class SubmapManager {
     double attitude_prior_sigma_rad = 0.0175;
     int max_iterations = 100;
     int num_threads = 2;
+    /// Boresight self-calibration before the run (slam_mms_run --calibrate-extrinsics): the
+    /// LiDAR's extrinsic and clock offset estimated against the offline POS (CalibrateExtrinsics,
+    /// docs/calibration.md) and the run made with the estimate. Read by the hosts that own a
+    /// whole drive (slam_mms_run); a streaming MappingSystem cannot make the second pass and
+    /// ignores it. Off until measured to help (docs/calibration.md).
+    bool estimate_extrinsics = false;
     PointIcp::Options icp;
     [[nodiscard]] Status Validate() const;
   };

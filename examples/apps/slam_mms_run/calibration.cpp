@@ -1,0 +1,110 @@
+#include "slam_mms_run/calibration.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+
+#include "slam_mms/io/kitti_calibration.hpp"
+#include "slam_mms/pipeline/drive_runner.hpp"
+
+namespace slam_mms::app {
+namespace {
+
+using Json = nlohmann::ordered_json;
+constexpr double kDeg = 180.0 / M_PI;
+
+Json Matrix4(const Eigen::Isometry3d& T) {
+  Json rows = Json::array();
+  for (int r = 0; r < 4; ++r) {
+    Json row = Json::array();
+    for (int c = 0; c < 4; ++c) row.push_back(T.matrix()(r, c));
+    rows.push_back(std::move(row));
+  }
+  return rows;
+}
+
+Json Vec(const Eigen::Vector3d& v, double scale = 1.0) {
+  return Json::array({v(0) * scale, v(1) * scale, v(2) * scale});
+}
+
+}  // namespace
+
+std::string CalibrationJson(const ExtrinsicCalibration& c, const std::string& file_name) {
+  Json j = Json::object();
+  j["T_body_lidar_initial"] = Matrix4(c.T_body_lidar_initial);
+  j["T_body_lidar_estimated"] = Matrix4(c.T_body_lidar_estimated);
+  j["correction_rpy_deg"] = Vec(c.correction_rpy_rad, kDeg);
+  j["correction_xyz_m"] = Vec(c.correction_xyz_m);
+  j["time_offset_s"] = c.time_offset_s;
+  j["time_offset_initial_s"] = c.time_offset_initial_s;
+  j["sigma_rpy_deg"] = Vec(c.sigma_rpy_rad, kDeg);
+  j["sigma_xyz_m"] = Vec(c.sigma_xyz_m);
+  j["sigma_time_offset_s"] = c.sigma_time_s;
+  Json obs = Json::object();
+  for (int i = 0; i < 7; ++i) obs[ExtrinsicParameterName(i)] = c.observable[i];
+  j["observable"] = std::move(obs);
+  j["pos_attitude_sigma_deg"] = Vec(c.pos_attitude_sigma_rad, kDeg);
+  Json formal = Json::array(), jack = Json::array();
+  for (int i = 0; i < 7; ++i) {
+    const double s = i < 3 ? kDeg : 1.0;  // deg, m, s
+    formal.push_back(c.formal_sigma(i) * s);
+    jack.push_back(c.jackknife_sigma(i) * s);
+  }
+  j["data_sigma"] = Json{{"order", "roll_deg pitch_deg yaw_deg x_m y_m z_m time_offset_s"},
+                         {"formal", std::move(formal)},
+                         {"jackknife", std::move(jack)}};
+  j["scans_used"] = c.scans_used;
+  j["scans_skipped_pos"] = c.scans_skipped_pos;
+  j["scans_skipped_unreadable"] = c.scans_skipped_unreadable;
+  j["residuals"] = c.residuals;
+  j["rounds"] = c.rounds;
+  j["converged"] = c.converged;
+  j["rms_initial_m"] = c.rms_initial_m;
+  j["rms_final_m"] = c.rms_final_m;
+  j["total_heading_change_deg"] = c.total_heading_change_rad * kDeg;
+  j["wall_s"] = c.wall_s;
+  j["calibration_file"] = file_name;
+  return j.dump();
+}
+
+StatusOr<RunCalibration> CalibrateRunExtrinsics(const DriveReader& reader,
+                                                const MappingSystem::Options& options,
+                                                const std::filesystem::path& out_dir,
+                                                const std::atomic<bool>* stop) {
+  std::printf("[calibration] offline POS of the drive, then the LiDAR extrinsic against it\n");
+  std::fflush(stdout);
+  SLAM_MMS_ASSIGN_OR_RETURN(const OfflinePos pos, ComputeOfflinePos(reader, options));
+  ExtrinsicCalibrationOptions co;
+  co.num_threads = options.num_threads;
+  RunCalibration out;
+  SLAM_MMS_ASSIGN_OR_RETURN(
+      out.result,
+      CalibrateExtrinsics(reader, pos.states, reader.streams().T_body_lidar, 0.0, co, stop));
+  const ExtrinsicCalibration& c = out.result;
+  out.extrinsics.T_body_lidar = c.T_body_lidar_estimated;
+  out.extrinsics.lidar_time_offset_s = c.time_offset_s;
+  const std::string name = "calib_imu_to_velo_estimated.txt";
+  out.file = out_dir / name;
+  SLAM_MMS_RETURN_IF_ERROR(
+      WriteKittiImuToVelo(out.extrinsics, out.file, "slam_mms_run --calibrate-extrinsics"));
+  out.json = CalibrationJson(c, name);
+  std::string unobservable;
+  for (int i = 0; i < 7; ++i) {
+    if (!c.observable[i]) unobservable += std::string(" ") + ExtrinsicParameterName(i);
+  }
+  std::printf(
+      "[calibration] %d scans, %zu residuals, rms %.4f -> %.4f m, %.1f s\n"
+      "[calibration] correction rpy [%.4f %.4f %.4f] deg (sigma [%.4f %.4f %.4f]), xyz "
+      "[%.4f %.4f %.4f] m (sigma [%.4f %.4f %.4f]), time offset %.4f s (sigma %.4f)\n"
+      "[calibration] held at the file's values (not observable in this drive):%s\n",
+      c.scans_used, c.residuals, c.rms_initial_m, c.rms_final_m, c.wall_s,
+      c.correction_rpy_rad(0) * kDeg, c.correction_rpy_rad(1) * kDeg,
+      c.correction_rpy_rad(2) * kDeg, c.sigma_rpy_rad(0) * kDeg, c.sigma_rpy_rad(1) * kDeg,
+      c.sigma_rpy_rad(2) * kDeg, c.correction_xyz_m(0), c.correction_xyz_m(1),
+      c.correction_xyz_m(2), c.sigma_xyz_m(0), c.sigma_xyz_m(1), c.sigma_xyz_m(2), c.time_offset_s,
+      c.sigma_time_s, unobservable.empty() ? " none" : unobservable.c_str());
+  std::fflush(stdout);
+  return out;
+}
+
+}  // namespace slam_mms::app

@@ -291,6 +291,11 @@ def _run_reader(reader, drive: pathlib.Path, mode, options: "_C.Options", outage
     """One method over an opened reader with `options` (copied; mode set here)."""
     opts = options.copy()
     opts.mode = _mode_of(mode)
+    if opts.level2.estimate_extrinsics:
+        raise NotImplementedError(
+            "level2.estimate_extrinsics: the boresight self-calibration runs in slam_mms_run "
+            "(--calibrate-extrinsics); the Python package does not run it yet: run slam_mms_run, "
+            "then open the drive with extrinsics=<DIR>/calib_imu_to_velo_estimated.txt")
     # gnss_ins_smoothed is RunDrive's (offline): MappingSystem itself runs it as gnss_ins.
     check_opts = opts.copy()
     if check_opts.mode == _C.MappingMode.GNSS_INS_SMOOTHED:

@@ -993,6 +993,11 @@ class Level2Options:
     @num_threads.setter
     def num_threads(self, value: int) -> None: ...
     @property
+    def estimate_extrinsics(self) -> bool:
+        """boresight self-calibration before the run (slam_mms_run --calibrate-extrinsics)"""
+    @estimate_extrinsics.setter
+    def estimate_extrinsics(self, value: bool) -> None: ...
+    @property
     def icp(self) -> PointIcpOptions:
         """PointIcpOptions"""
     @icp.setter

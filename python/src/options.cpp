@@ -328,6 +328,8 @@ void RegisterOptions(py::module_& m) {
       .Field("attitude_prior_sigma_rad", &SO::attitude_prior_sigma_rad, "[rad]")
       .Field("max_iterations", &SO::max_iterations, "")
       .Field("num_threads", &SO::num_threads, "")
+      .Field("estimate_extrinsics", &SO::estimate_extrinsics,
+             "boresight self-calibration before the run (slam_mms_run --calibrate-extrinsics)")
       .Field("icp", &SO::icp, "PointIcpOptions")
       .Validated()
       .Done();

@@ -79,5 +79,6 @@ def test_report_embeds_options_and_issue22_fields():
     assert r["options"]["level2"]["use_loops"] is False
     assert r["options"] == json.loads(slam_mms.options_to_json(o))
     assert r["georef"] is None and r["outputs"] == {"files": ["full.tum"]}
+    assert r["extrinsics"] is None
     with pytest.raises(ValueError, match="options_json"):
         slam_mms.report_to_json("d", 1, 1.0, "none", [], [], options_json="{bad")

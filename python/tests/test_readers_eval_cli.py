@@ -47,6 +47,22 @@ def test_reader_frame_range_and_errors(sim_drive, tmp_path):
         slam_mms.KittiRawReader(tmp_path / "no_such_drive")
 
 
+def test_kitti_calibration_file_overrides_and_calibration_key_is_refused(sim_drive, tmp_path):
+    # A calib_imu_to_velo.txt with a LiDAR clock offset (what slam_mms_run
+    # --calibrate-extrinsics writes) taken by open_drive over a KITTI drive's own calibration.
+    calib = tmp_path / "calib.txt"
+    calib.write_text("calib_time: test\nR: 1 0 0 0 1 0 0 0 1\nT: -0.8 0.3 -0.9\n"
+                     "lidar_time_offset_s: 0.02\n")
+    base = slam_mms.open_drive(sim_drive)
+    shifted = slam_mms.open_drive(sim_drive, extrinsics=calib)
+    np.testing.assert_allclose(shifted.streams.T_body_lidar[:3, 3], [0.8, -0.3, 0.9])
+    assert shifted[0].stamp_start_ns - base[0].stamp_start_ns == 20_000_000
+    opts = slam_mms.Options()
+    opts.level2.estimate_extrinsics = True
+    with pytest.raises(NotImplementedError, match="calibrate-extrinsics"):
+        slam_mms.run_drive(sim_drive, mode="gnss_ins", options=opts, evaluate=False)
+
+
 def test_eval_metrics_on_known_errors():
     n = 50
     t = 1_000_000_000 + np.arange(n, dtype=np.int64) * 100_000_000

@@ -9,350 +9,320 @@
 #include <string>
 #include <unordered_set>
 
-#include "core/worker_pool.hpp"
+#include "pipeline/extrinsic_calibration_problem.hpp"
 #include "slam_mms/core/lie.hpp"
 #include "slam_mms/core/logging.hpp"
 
 namespace slam_mms {
 namespace {
 
-using Vector7d = Eigen::Matrix<double, 7, 1>;
-using Matrix7d = Eigen::Matrix<double, 7, 7>;
+using namespace calib_internal;
 
 Status FieldError(const std::string& field, double value, const std::string& rule) {
   return InvalidArgumentError("ExtrinsicCalibrationOptions::" + field + " = " +
                               std::to_string(value) + "; " + rule);
 }
 
-// ---- The POS as a continuous trajectory ---------------------------------------------------------
-
-// T_world_body(t), its linear and angular velocity in world, and its position sigma, from the
-// POS states (linear interpolation of position and velocity, geodesic of attitude).
-class PosTrack {
- public:
-  PosTrack(const std::vector<InsState>& states, Timestamp t0) : states_(states) {
-    t_.reserve(states.size());
-    for (const InsState& s : states) t_.push_back(s.stamp.SecondsSince(t0));
+// The scans used (see the header): evenly spaced, inside the POS span, where the POS is as good
+// as usual; each subsampled, its time block set. Fills the scan counts and the POS attitude sigma.
+StatusOr<std::vector<CalScan>> SelectScans(const DriveReader& reader, const PosTrack& track,
+                                           Timestamp t0, double time_offset_initial_s,
+                                           const ExtrinsicCalibrationOptions& o,
+                                           ExtrinsicCalibration* out) {
+  ExtrinsicCalibration& result = *out;
+  const size_t n = reader.NumScans();
+  // Scans (shifted by the initial offset) inside the POS span by a small margin; a later offset
+  // estimate beyond it holds the end pose (PosTrack::At clamps).
+  const double margin = 0.05;
+  std::vector<size_t> candidates;
+  std::vector<double> pos_sigmas;
+  for (size_t i = 0; i < n; ++i) {
+    const double ts = reader.ScanStart(i).SecondsSince(t0) + time_offset_initial_s;
+    const double te = reader.ScanEnd(i).SecondsSince(t0) + time_offset_initial_s;
+    if (ts - margin < track.begin() || te + margin > track.end()) continue;
+    pos_sigmas.push_back(track.At(ts).pos_sigma_m);
+    candidates.push_back(i);
   }
-  double begin() const { return t_.front(); }
-  double end() const { return t_.back(); }
-
-  struct Sample {
-    Eigen::Isometry3d T_world_body = Eigen::Isometry3d::Identity();
-    Eigen::Vector3d omega_world = Eigen::Vector3d::Zero();  // [rad/s]
-    Eigen::Vector3d v_world = Eigen::Vector3d::Zero();      // [m/s]
-    double pos_sigma_m = 0.0;
-    Eigen::Vector3d att_sigma_rad = Eigen::Vector3d::Zero();  // about the body axes
+  const auto median = [](std::vector<double> v) {
+    if (v.empty()) return 0.0;
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
   };
-  Sample At(double t) const {
-    const size_t n = t_.size();
-    size_t k = static_cast<size_t>(std::upper_bound(t_.begin(), t_.end(), t) - t_.begin());
-    k = std::clamp<size_t>(k, 1, n - 1) - 1;  // interval [k, k+1]
-    const double dt = t_[k + 1] - t_[k];
-    const double a = std::clamp((t - t_[k]) / dt, 0.0, 1.0);
-    const InsState& s0 = states_[k];
-    const InsState& s1 = states_[k + 1];
-    const Eigen::Matrix3d R0 = s0.T_world_body.linear();
-    const Eigen::Vector3d w = so3::Log(Eigen::Matrix3d(s1.T_world_body.linear() * R0.transpose()));
-    Sample out;
-    out.T_world_body.linear() = so3::Exp(Eigen::Vector3d(a * w)) * R0;
-    out.T_world_body.translation() =
-        (1.0 - a) * s0.T_world_body.translation() + a * s1.T_world_body.translation();
-    out.omega_world = w / dt;
-    out.v_world = (s1.T_world_body.translation() - s0.T_world_body.translation()) / dt;
-    const InsState& near = a < 0.5 ? s0 : s1;
-    out.pos_sigma_m = std::sqrt(near.cov_T_world_body.block<3, 3>(3, 3).diagonal().maxCoeff());
-    out.att_sigma_rad = near.cov_T_world_body.diagonal().head<3>().cwiseMax(0.0).cwiseSqrt();
-    return out;
+  {
+    // The POS where it is as good as usual on this drive: not in outages, where it drifts.
+    const double gate = std::min(o.max_pos_sigma_m, o.max_pos_sigma_ratio * median(pos_sigmas));
+    std::vector<size_t> kept;
+    for (size_t k = 0; k < candidates.size(); ++k) {
+      if (pos_sigmas[k] <= gate) {
+        kept.push_back(candidates[k]);
+      } else {
+        ++result.scans_skipped_pos;
+      }
+    }
+    candidates = std::move(kept);
+  }
+  const size_t want = std::min(candidates.size(), static_cast<size_t>(o.max_scans));
+  std::vector<CalScan> scans;
+  std::vector<Eigen::Vector3d> att_sigmas;
+  for (size_t k = 0; k < want; ++k) {
+    const size_t i = candidates[k * candidates.size() / want];
+    StatusOr<Scan> scan = reader.ReadScan(i);
+    if (!scan.ok()) {
+      SLAM_MMS_LOG(kWarning) << "CalibrateExtrinsics: " << scan.status().ToString()
+                             << " (scan skipped)";
+      ++result.scans_skipped_unreadable;
+      continue;
+    }
+    CalScan s;
+    s.t_start = scan->stamp_start.SecondsSince(t0);
+    att_sigmas.push_back(track.At(s.t_start + time_offset_initial_s).att_sigma_rad);
+    s.duration = scan->DurationSeconds();
+    Subsample(*scan, o, &s);
+    if (s.raw.size() < 50) continue;
+    scans.push_back(std::move(s));
+  }
+  if (scans.size() < 10) {
+    return FailedPreconditionError(
+        "CalibrateExtrinsics: " + std::to_string(scans.size()) +
+        " usable scans (need 10; scans outside the POS span or with a POS sigma above " +
+        std::to_string(o.max_pos_sigma_m) + " m or " + std::to_string(o.max_pos_sigma_ratio) +
+        " x its median are not used: " + std::to_string(result.scans_skipped_pos) +
+        " so; median POS sigma " + std::to_string(median(pos_sigmas)) + " m)");
+  }
+  for (int axis = 0; axis < 3; ++axis) {
+    std::vector<double> v;
+    for (const Eigen::Vector3d& a : att_sigmas) v.push_back(a(axis));
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    result.pos_attitude_sigma_rad(axis) = v[v.size() / 2];
+  }
+  const double span = scans.back().t_start - scans.front().t_start;
+  for (CalScan& s : scans) {
+    s.block = std::min(o.jackknife_blocks - 1,
+                       static_cast<int>((s.t_start - scans.front().t_start) / std::max(span, 1e-9) *
+                                        o.jackknife_blocks));
   }
 
- private:
-  const std::vector<InsState>& states_;
-  std::vector<double> t_;
-};
+  return scans;
+}
 
-// ---- Scans -------------------------------------------------------------------------------------
-
-struct CloudAdaptor {
-  const std::vector<Eigen::Vector3f>* pts = nullptr;
-  size_t kdtree_get_point_count() const { return pts->size(); }
-  float kdtree_get_pt(size_t i, size_t d) const { return (*pts)[i][static_cast<int>(d)]; }
-  template <class BBox>
-  bool kdtree_get_bbox(BBox& /*bb*/) const {
-    return false;
+// Partners of every scan (from the POS at the initial time offset) and the drive's heading change.
+void AssignPartners(const PosTrack& track, double time_offset_initial_s,
+                    const ExtrinsicCalibrationOptions& o, std::vector<CalScan>* scans_io,
+                    ExtrinsicCalibration* out) {
+  std::vector<CalScan>& scans = *scans_io;
+  ExtrinsicCalibration& result = *out;
+  std::vector<Eigen::Vector3d> where(scans.size());
+  std::vector<double> when(scans.size());
+  double heading = 0.0, last_yaw = 0.0;
+  for (size_t i = 0; i < scans.size(); ++i) {
+    const PosTrack::Sample s = track.At(scans[i].t_start + time_offset_initial_s);
+    where[i] = s.T_world_body.translation();
+    when[i] = scans[i].t_start;
+    const Eigen::Matrix3d R = s.T_world_body.linear();
+    const double yaw = std::atan2(R(1, 0), R(0, 0));
+    if (i > 0) heading += std::abs(std::remainder(yaw - last_yaw, 2.0 * M_PI));
+    last_yaw = yaw;
   }
-};
-using KdTree = nanoflann::KDTreeSingleIndexAdaptor<
-    nanoflann::L2_Simple_Adaptor<float, CloudAdaptor, float, uint32_t>, CloudAdaptor, 3, uint32_t>;
-
-struct CalScan {
-  double t_start = 0.0;  // LiDAR stamp of the first firing, seconds from t0 (LiDAR clock)
-  double duration = 0.0;
-  std::vector<Eigen::Vector3f> raw;  // lidar frame, not de-skewed
-  std::vector<float> tau;            // per point, from t_start
-  std::vector<Eigen::Vector3f> q;    // de-skewed into the lidar frame at t_start
-  CloudAdaptor adaptor;
-  std::unique_ptr<KdTree> tree;
-  std::vector<int> partners;
-  PosTrack::Sample pose;  // body at t_start + dt
-  int block = 0;          // jackknife block
-};
-
-// One point of scan a against the plane (c, n) of partner scan b, both in their lidar frames.
-struct Association {
-  int a = 0, b = 0;
-  Eigen::Vector3d q, c, n;
-};
-
-// Per-scan voxel subsample in the lidar frame (first point of each voxel in scan order).
-void Subsample(const Scan& scan, const ExtrinsicCalibrationOptions& o, CalScan* out) {
-  std::unordered_set<uint64_t> seen;
-  const auto& pts = scan.cloud.points();
-  const auto& tau = scan.cloud.time_offsets_s();
-  const bool have_tau = tau.size() == pts.size();
-  const double inv = 1.0 / o.voxel_m;
-  std::vector<size_t> keep;
-  for (size_t i = 0; i < pts.size(); ++i) {
-    const Eigen::Vector3f& p = pts[i];
-    const double r = p.norm();
-    if (!(r >= o.min_range_m && r <= o.max_range_m)) continue;
-    const auto key = [&](int d) {
-      return static_cast<uint64_t>(static_cast<int64_t>(std::floor(p[d] * inv)) + (1 << 20)) &
-             0x1FFFFF;
+  result.total_heading_change_rad = heading;
+  for (size_t a = 0; a < scans.size(); ++a) {
+    std::vector<int> p;
+    const auto add = [&](size_t b) {
+      if (b == a || (where[b] - where[a]).norm() > o.max_partner_distance_m) return;
+      if (std::find(p.begin(), p.end(), static_cast<int>(b)) == p.end())
+        p.push_back(static_cast<int>(b));
     };
-    const uint64_t k = key(0) | (key(1) << 21) | (key(2) << 42);
-    if (seen.insert(k).second) keep.push_back(i);
-  }
-  const size_t m = static_cast<size_t>(o.max_points_per_scan);
-  const double step = keep.size() > m ? static_cast<double>(keep.size()) / m : 1.0;
-  for (double f = 0.0; f < keep.size() && out->raw.size() < m; f += step) {
-    const size_t i = keep[static_cast<size_t>(f)];
-    out->raw.push_back(pts[i]);
-    out->tau.push_back(have_tau ? tau[i] : 0.0f);
+    for (double sep : o.partner_separations_s) {
+      for (double sign : {-1.0, 1.0}) {
+        const double target = when[a] + sign * sep;
+        const size_t b =
+            static_cast<size_t>(std::lower_bound(when.begin(), when.end(), target) - when.begin());
+        size_t best = b < scans.size() ? b : scans.size() - 1;
+        if (b > 0 && (b == scans.size() || target - when[b - 1] < when[b] - target)) best = b - 1;
+        if (std::abs(when[best] - target) < 0.5 * sep) add(best);
+      }
+    }
+    std::vector<std::pair<double, size_t>> revisits;
+    for (size_t b = 0; b < scans.size(); ++b) {
+      if (std::abs(when[b] - when[a]) < o.revisit_min_separation_s) continue;
+      const double d = (where[b] - where[a]).norm();
+      if (d <= o.revisit_max_distance_m) revisits.emplace_back(d, b);
+    }
+    std::sort(revisits.begin(), revisits.end());
+    for (int r = 0; r < std::min<int>(o.max_revisit_partners, revisits.size()); ++r)
+      add(revisits[r].second);
+    scans[a].partners = std::move(p);
   }
 }
 
-// The 7-vector of a correction: [phi (left rotation about body axes), dt_xyz, dtime].
-struct Params {
-  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();  // R_body_lidar
-  Eigen::Vector3d t = Eigen::Vector3d::Zero();      // t_body_lidar
-  double time = 0.0;                                // lidar_time_offset_s
-  Eigen::Isometry3d X() const {
-    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-    T.linear() = R;
-    T.translation() = t;
-    return T;
-  }
-};
-
-Vector7d Difference(const Params& p, const Params& p0) {
-  Vector7d d;
-  d.head<3>() = so3::Log(Eigen::Matrix3d(p.R * p0.R.transpose()));
-  d.segment<3>(3) = p.t - p0.t;
-  d(6) = p.time - p0.time;
-  return d;
-}
-
-void Apply(const Vector7d& d, Params* p) {
-  p->R = so3::Exp(Eigen::Vector3d(d.head<3>())) * p->R;
-  Eigen::JacobiSVD<Eigen::Matrix3d> svd(p->R, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  p->R = svd.matrixU() * svd.matrixV().transpose();
-  p->t += d.segment<3>(3);
-  p->time += d(6);
-}
-
-class Calibrator {
+// The Gauss-Newton rounds and the sigmas about the prior `initial`.
+class Solver {
  public:
-  Calibrator(std::vector<CalScan> scans, const PosTrack& pos, const ExtrinsicCalibrationOptions& o)
-      : scans_(std::move(scans)), pos_(pos), o_(o), pool_(std::max(1, o.num_threads)) {}
-
-  std::vector<CalScan>& scans() { return scans_; }
-
-  // Poses at scan starts for the time offset of `p`.
-  void UpdatePoses(const Params& p) {
-    for (CalScan& s : scans_) s.pose = pos_.At(s.t_start + p.time);
+  Solver(CalibrationProblem* cal, const Params& initial, const ExtrinsicCalibrationOptions& o,
+         const std::atomic<bool>* stop)
+      : cal_(*cal), initial_(initial), o_(o), stop_(stop) {
+    prior_info_ << o.prior_sigma_rpy_rad.cwiseInverse().cwiseAbs2(),
+        o.prior_sigma_xyz_m.cwiseInverse().cwiseAbs2(),
+        1.0 / (o.prior_sigma_time_s * o.prior_sigma_time_s);
   }
 
-  // De-skews every scan with the POS into its lidar frame at t_start and rebuilds its tree.
-  void Deskew(const Params& p) {
-    const Eigen::Isometry3d X = p.X();
-    const Eigen::Isometry3d Xinv = X.inverse();
-    ParallelFor(scans_.size(), [&](size_t i) {
-      CalScan& s = scans_[i];
-      constexpr int kKnots = 20;
-      Eigen::Isometry3d A[kKnots + 1];
-      const Eigen::Isometry3d P0inv = pos_.At(s.t_start + p.time).T_world_body.inverse();
-      const double d = std::max(s.duration, 1e-6);
-      for (int k = 0; k <= kKnots; ++k) {
-        A[k] = Xinv * P0inv * pos_.At(s.t_start + p.time + d * k / kKnots).T_world_body * X;
+  // Rounds of re-de-skew, re-association and Gauss-Newton steps from *p over the free set `fr`;
+  // `last` gets the associations of the last round.
+  Status Solve(Params* p, const std::array<bool, 7>& fr, int rounds, std::vector<Association>* last,
+               ExtrinsicCalibration* result) {
+    const auto& o = o_;
+    auto& cal = cal_;
+    const auto& initial = initial_;
+    const auto& prior_info = prior_info_;
+    const auto* stop = stop_;
+    for (int round = 0; round < rounds; ++round) {
+      if (stop != nullptr && stop->load()) {
+        return FailedPreconditionError("CalibrateExtrinsics: stopped");
       }
-      s.q.resize(s.raw.size());
-      for (size_t j = 0; j < s.raw.size(); ++j) {
-        const double u = std::clamp(static_cast<double>(s.tau[j]) / d, 0.0, 1.0) * kKnots;
-        const int k = std::min(static_cast<int>(u), kKnots - 1);
-        const double a = u - k;
-        const Eigen::Matrix3d R = (1.0 - a) * A[k].linear() + a * A[k + 1].linear();
-        const Eigen::Vector3d t = (1.0 - a) * A[k].translation() + a * A[k + 1].translation();
-        s.q[j] = (R * s.raw[j].cast<double>() + t).cast<float>();
+      const double f = rounds > 1 ? std::min(1.0, round / 4.0) : 1.0;
+      const double gate = o.initial_gate_m * std::pow(o.final_gate_m / o.initial_gate_m, f);
+      cal.UpdatePoses(*p);
+      cal.Deskew(*p);
+      *last = cal.Associate(*p, gate);
+      if (last->size() < 100) {
+        return FailedPreconditionError("CalibrateExtrinsics: " + std::to_string(last->size()) +
+                                       " point-to-plane associations (need 100): the scans do not "
+                                       "overlap or the initial extrinsic is far off");
       }
-      s.adaptor.pts = &s.q;
-      s.tree =
-          std::make_unique<KdTree>(3, s.adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(10));
-      s.tree->buildIndex();
-    });
-  }
-
-  // Point-to-plane associations at `p` with residual gate `gate`.
-  std::vector<Association> Associate(const Params& p, double gate) const {
-    const Eigen::Isometry3d X = p.X();
-    std::vector<std::vector<Association>> per_scan(scans_.size());
-    const int k = o_.num_neighbours;
-    const float max_d2 =
-        static_cast<float>(o_.max_neighbour_distance_m * o_.max_neighbour_distance_m);
-    ParallelFor(scans_.size(), [&](size_t ia) {
-      const CalScan& a = scans_[ia];
-      if (a.partners.empty()) return;
-      const Eigen::Isometry3d Wa = a.pose.T_world_body * X;
-      std::vector<uint32_t> idx(k);
-      std::vector<float> d2(k);
-      int round = 0;
-      for (size_t j = 0; j < a.q.size(); j += static_cast<size_t>(o_.query_stride)) {
-        for (int m = 0; m < o_.partners_per_point; ++m) {
-          const int ib = a.partners[(round++) % a.partners.size()];
-          const CalScan& b = scans_[ib];
-          const Eigen::Isometry3d Mba = (b.pose.T_world_body * X).inverse() * Wa;
-          const Eigen::Vector3d qb = Mba * a.q[j].cast<double>();
-          const Eigen::Vector3f qf = qb.cast<float>();
-          if (b.tree->knnSearch(qf.data(), k, idx.data(), d2.data()) != static_cast<size_t>(k))
-            continue;
-          if (d2[k - 1] > max_d2) continue;
-          Eigen::Vector3d c = Eigen::Vector3d::Zero();
-          for (int i = 0; i < k; ++i) c += b.q[idx[i]].cast<double>();
-          c /= k;
-          Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
-          for (int i = 0; i < k; ++i) {
-            const Eigen::Vector3d e = b.q[idx[i]].cast<double>() - c;
-            C += e * e.transpose();
-          }
-          C /= k;
-          Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(C);
-          const Eigen::Vector3d ev = es.eigenvalues();
-          if (ev(0) > o_.max_plane_thickness_m * o_.max_plane_thickness_m) continue;
-          if (ev(1) < 4.0 * ev(0) || ev(1) < 1e-4) continue;
-          const Eigen::Vector3d n = es.eigenvectors().col(0);
-          if (std::abs(n.dot(qb - c)) > gate) continue;
-          per_scan[ia].push_back({static_cast<int>(ia), ib, a.q[j].cast<double>(), c, n});
-        }
+      double step_norm = 0.0;
+      for (int it = 0; it < o.gauss_newton_steps_per_round; ++it) {
+        cal.UpdatePoses(*p);
+        const std::vector<CalibrationProblem::Normal> nb = cal.Accumulate(*last, *p, 1);
+        // Data weighted by the residual variance, so that the prior has its stated weight.
+        const double s2 = std::max(nb[0].wrr / std::max(1.0, nb[0].n - 7.0), 1e-6);
+        const Vector7d d =
+            SolveStep(nb[0].H / s2, nb[0].g / s2, Difference(*p, initial), prior_info, fr);
+        Apply(d, p);
+        step_norm = std::max(
+            {d.head<3>().norm() / 1e-5, d.segment<3>(3).norm() / 1e-4, std::abs(d(6)) / 1e-5});
       }
-    });
-    std::vector<Association> all;
-    for (auto& v : per_scan) all.insert(all.end(), v.begin(), v.end());
-    return all;
-  }
-
-  // Residual and its Jacobian over [phi, dt_xyz, dtime] (see the header comment).
-  double Residual(const Association& s, const Params& p, Vector7d* J) const {
-    const CalScan& a = scans_[s.a];
-    const CalScan& b = scans_[s.b];
-    const Eigen::Matrix3d& Ra = a.pose.T_world_body.linear();
-    const Eigen::Matrix3d& Rb = b.pose.T_world_body.linear();
-    const Eigen::Vector3d Rq = p.R * s.q, Rc = p.R * s.c, Rn = p.R * s.n;
-    const Eigen::Vector3d wa = Ra * (Rq + p.t) + a.pose.T_world_body.translation();
-    const Eigen::Vector3d wb = Rb * (Rc + p.t) + b.pose.T_world_body.translation();
-    const Eigen::Vector3d nw = Rb * Rn;
-    const Eigen::Vector3d d = wa - wb;
-    if (J != nullptr) {
-      const Eigen::Vector3d na = Ra.transpose() * nw, nb = Rb.transpose() * nw;
-      J->head<3>() = Rq.cross(na) - Rc.cross(nb) + Rn.cross(Rb.transpose() * d);
-      J->segment<3>(3) = na - nb;
-      const Eigen::Vector3d wa_dot =
-          a.pose.omega_world.cross(wa - a.pose.T_world_body.translation()) + a.pose.v_world;
-      const Eigen::Vector3d wb_dot =
-          b.pose.omega_world.cross(wb - b.pose.T_world_body.translation()) + b.pose.v_world;
-      (*J)(6) = nw.dot(wa_dot - wb_dot) + b.pose.omega_world.cross(nw).dot(d);
+      result->rounds = round + 1;
+      result->converged = f >= 1.0 && step_norm < 1.0;
+      if (result->converged) break;
     }
-    return nw.dot(d);
+    cal.UpdatePoses(*p);
+    return OkStatus();
   }
 
-  struct Normal {
-    Matrix7d H = Matrix7d::Zero();
-    Vector7d g = Vector7d::Zero();
-    double wrr = 0.0, w = 0.0;
-    size_t n = 0;
-  };
-  // Huber-weighted normal equations, per jackknife block.
-  std::vector<Normal> Accumulate(const std::vector<Association>& as, const Params& p,
-                                 int blocks) const {
-    const int nt = pool_.num_threads();
-    std::vector<std::vector<Normal>> part(nt, std::vector<Normal>(blocks));
-    pool_.Run([&](int t) {
-      size_t begin, end;
-      pool_.Range(t, as.size(), &begin, &end);
-      Vector7d J;
-      for (size_t i = begin; i < end; ++i) {
-        const double r = Residual(as[i], p, &J);
-        const double ar = std::abs(r);
-        const double w = ar <= o_.huber_m ? 1.0 : o_.huber_m / ar;
-        Normal& nrm = part[t][blocks == 1 ? 0 : scans_[as[i].a].block];
-        nrm.H.selfadjointView<Eigen::Lower>().rankUpdate(J, w);
-        nrm.g += w * r * J;
-        nrm.wrr += w * r * r;
-        nrm.w += w;
-        ++nrm.n;
-      }
-    });
-    std::vector<Normal> out(blocks);
-    for (int t = 0; t < nt; ++t) {
-      for (int b = 0; b < blocks; ++b) {
-        out[b].H += part[t][b].H;
-        out[b].g += part[t][b].g;
-        out[b].wrr += part[t][b].wrr;
-        out[b].w += part[t][b].w;
-        out[b].n += part[t][b].n;
-      }
+  // Formal and jackknife (over time blocks) sigmas from the normal equations at `at`.
+  void Sigmas(const Params& at, const std::array<bool, 7>& fr, const std::vector<Association>& last,
+              Vector7d* formal, Vector7d* jack) const {
+    const auto& o = o_;
+    const auto& cal = cal_;
+    const auto& initial = initial_;
+    const auto& prior_info = prior_info_;
+    const std::vector<CalibrationProblem::Normal> blocks =
+        cal.Accumulate(last, at, o.jackknife_blocks);
+    CalibrationProblem::Normal all;
+    for (const auto& b : blocks) {
+      all.H += b.H;
+      all.g += b.g;
+      all.wrr += b.wrr;
+      all.w += b.w;
+      all.n += b.n;
     }
-    for (Normal& nrm : out) nrm.H = nrm.H.selfadjointView<Eigen::Lower>();
-    return out;
-  }
-
-  double Rms(const std::vector<Association>& as, const Params& p) const {
-    double s = 0.0;
-    for (const Association& a : as) s += std::pow(Residual(a, p, nullptr), 2);
-    return as.empty() ? 0.0 : std::sqrt(s / as.size());
+    const double dof = std::max<double>(1.0, static_cast<double>(all.n) - 7.0);
+    const double s2 = all.wrr / dof;
+    const Vector7d off = Difference(at, initial);
+    Matrix7d A = all.H / s2;
+    for (int i = 0; i < 7; ++i) A(i, i) += prior_info(i);
+    for (int i = 0; i < 7; ++i) {
+      if (fr[i]) continue;
+      A.row(i).setZero();
+      A.col(i).setZero();
+      A(i, i) = 1.0;
+    }
+    const Matrix7d cov = A.inverse();
+    for (int i = 0; i < 7; ++i) (*formal)(i) = fr[i] ? std::sqrt(std::max(0.0, cov(i, i))) : 0.0;
+    std::vector<Vector7d> loo;
+    for (const auto& b : blocks) {
+      if (b.n == 0) continue;
+      loo.push_back(SolveStep((all.H - b.H) / s2, (all.g - b.g) / s2, off, prior_info, fr));
+    }
+    jack->setZero();
+    if (loo.size() >= 2) {
+      Vector7d mean = Vector7d::Zero();
+      for (const auto& d : loo) mean += d;
+      mean /= loo.size();
+      for (const auto& d : loo) jack->array() += (d - mean).array().square();
+      const double k = static_cast<double>(loo.size());
+      *jack = (*jack * (k - 1.0) / k).cwiseSqrt();
+    }
   }
 
  private:
-  template <typename Fn>
-  void ParallelFor(size_t n, Fn&& fn) const {
-    std::atomic<size_t> next{0};
-    pool_.Run([&](int) {
-      for (size_t i = next++; i < n; i = next++) fn(i);
-    });
-  }
-
-  std::vector<CalScan> scans_;
-  const PosTrack& pos_;
+  CalibrationProblem& cal_;
+  const Params initial_;
   const ExtrinsicCalibrationOptions& o_;
-  mutable internal::WorkerPool pool_;
+  const std::atomic<bool>* stop_;
+  Vector7d prior_info_;
 };
 
-// Solves (H + prior) d = -(g + prior gradient) over the free parameters.
-Vector7d SolveStep(const Matrix7d& H, const Vector7d& g, const Vector7d& offset_from_prior,
-                   const Vector7d& prior_info, const std::array<bool, 7>& free) {
-  Matrix7d A = H;
-  Vector7d b = -g;
-  for (int i = 0; i < 7; ++i) {
-    A(i, i) += prior_info(i);
-    b(i) -= prior_info(i) * offset_from_prior(i);
+// kTravelDirection: the POS's mean heading error from its own velocity (see the header), applied
+// to the observable yaw (and the observable lever arm components it turns).
+void ApplyTravelReference(const CalibrationProblem& cal, const PosTrack& track,
+                          const ExtrinsicCalibrationOptions& o,
+                          const std::array<bool, 7>& observable, Params* p_io,
+                          ExtrinsicCalibration* out) {
+  Params& p = *p_io;
+  ExtrinsicCalibration& result = *out;
+  // The POS's mean attitude error about the body y and z axes from its own velocity in its body
+  // frame (v_body = v (1, -eps_z, eps_y) for an error R_est = R_true Exp(eps)), per time block;
+  // the map placed the scans with R_est, so the extrinsic in the true body frame is Exp(eps) X.
+  std::vector<Eigen::Vector2d> block_sum(o.jackknife_blocks, Eigen::Vector2d::Zero());
+  std::vector<int> block_n(o.jackknife_blocks, 0);
+  for (const CalScan& sc : cal.scans()) {
+    const PosTrack::Sample smp = track.At(sc.t_start + p.time);
+    const double speed = smp.v_world.norm();
+    if (speed < o.travel_min_speed_mps ||
+        std::abs(smp.omega_world.z()) > o.travel_max_yaw_rate_radps) {
+      continue;
+    }
+    const Eigen::Vector3d vb = smp.T_world_body.linear().transpose() * smp.v_world;
+    block_sum[sc.block] += Eigen::Vector2d(std::atan2(vb.z(), vb.x()), -std::atan2(vb.y(), vb.x()));
+    ++block_n[sc.block];
   }
-  for (int i = 0; i < 7; ++i) {
-    if (free[i]) continue;
-    A.row(i).setZero();
-    A.col(i).setZero();
-    A(i, i) = 1.0;
-    b(i) = 0.0;
+  std::vector<Eigen::Vector2d> means;
+  Eigen::Vector2d total = Eigen::Vector2d::Zero();
+  int n_total = 0;
+  for (int b = 0; b < o.jackknife_blocks; ++b) {
+    if (block_n[b] == 0) continue;
+    means.push_back(block_sum[b] / block_n[b]);
+    total += block_sum[b];
+    n_total += block_n[b];
   }
-  return A.ldlt().solve(b);
+  result.travel_samples = n_total;
+  if (means.size() >= 2) {
+    const Eigen::Vector2d eps = total / n_total;
+    Eigen::Vector2d var = Eigen::Vector2d::Zero();
+    for (const Eigen::Vector2d& m : means) var += (m - eps).cwiseAbs2();
+    const Eigen::Vector2d sem =
+        (var / static_cast<double>(means.size() * (means.size() - 1))).cwiseSqrt();
+    // Heading only: the vertical velocity of a GNSS/INS is too noisy for pitch (0.03-0.27 deg
+    // off on the simulated drives), while its roll and pitch, levelled by gravity, are good.
+    result.travel_correction_rad = Eigen::Vector3d(0.0, 0.0, eps(1));
+    result.attitude_reference = "travel_direction";
+    result.pos_attitude_sigma_rad(2) = std::hypot(sem(1), o.travel_sigma_rad);
+    Eigen::Vector3d e = result.travel_correction_rad;
+    if (!observable[2]) e(2) = 0.0;
+    const Eigen::Matrix3d Re = so3::Exp(e);
+    p.R = Re * p.R;
+    if (observable[3] || observable[4] || observable[5]) {
+      const Eigen::Vector3d t_rot = Re * p.t;
+      for (int i = 0; i < 3; ++i) {
+        if (observable[3 + i]) p.t(i) = t_rot(i);
+      }
+    }
+  } else {
+    SLAM_MMS_LOG(kWarning) << "CalibrateExtrinsics: too few straight stretches above "
+                           << o.travel_min_speed_mps
+                           << " m/s for the travel-direction attitude reference; the POS "
+                              "attitude is the reference";
+  }
 }
 
 }  // namespace
@@ -400,6 +370,14 @@ Status ExtrinsicCalibrationOptions::Validate() const {
     return FieldError("gauss_newton_steps_per_round", gauss_newton_steps_per_round, "must be >= 1");
   if (!(max_pos_sigma_m > 0.0))
     return FieldError("max_pos_sigma_m", max_pos_sigma_m, "must be > 0");
+  if (!(travel_min_speed_mps > 0.0))
+    return FieldError("travel_min_speed_mps", travel_min_speed_mps, "must be > 0");
+  if (!(travel_max_yaw_rate_radps > 0.0))
+    return FieldError("travel_max_yaw_rate_radps", travel_max_yaw_rate_radps, "must be > 0");
+  if (!(travel_sigma_rad >= 0.0))
+    return FieldError("travel_sigma_rad", travel_sigma_rad, "must be >= 0");
+  if (!(max_pos_sigma_ratio >= 1.0))
+    return FieldError("max_pos_sigma_ratio", max_pos_sigma_ratio, "must be >= 1");
   if (!(prior_sigma_rpy_rad.minCoeff() > 0.0 && prior_sigma_xyz_m.minCoeff() > 0.0 &&
         prior_sigma_time_s > 0.0) ||
       !prior_sigma_rpy_rad.allFinite() || !prior_sigma_xyz_m.allFinite())
@@ -438,156 +416,21 @@ StatusOr<ExtrinsicCalibration> CalibrateExtrinsics(const DriveReader& reader,
   result.T_body_lidar_initial = T_body_lidar_initial;
   result.time_offset_initial_s = time_offset_initial_s;
 
-  // ---- Scans: evenly spaced, inside the POS span with margin, POS good there.
-  const size_t n = reader.NumScans();
-  const double margin = 3.0 * o.prior_sigma_time_s + 0.2;
-  std::vector<size_t> candidates;
-  for (size_t i = 0; i < n; ++i) {
-    const double ts = reader.ScanStart(i).SecondsSince(t0) + time_offset_initial_s;
-    const double te = reader.ScanEnd(i).SecondsSince(t0) + time_offset_initial_s;
-    if (ts - margin < track.begin() || te + margin > track.end()) continue;
-    if (track.At(ts).pos_sigma_m > o.max_pos_sigma_m) {
-      ++result.scans_skipped_pos;
-      continue;
-    }
-    candidates.push_back(i);
-  }
-  const size_t want = std::min(candidates.size(), static_cast<size_t>(o.max_scans));
-  std::vector<CalScan> scans;
-  std::vector<Eigen::Vector3d> att_sigmas;
-  for (size_t k = 0; k < want; ++k) {
-    const size_t i = candidates[k * candidates.size() / want];
-    StatusOr<Scan> scan = reader.ReadScan(i);
-    if (!scan.ok()) {
-      SLAM_MMS_LOG(kWarning) << "CalibrateExtrinsics: " << scan.status().ToString()
-                             << " (scan skipped)";
-      ++result.scans_skipped_unreadable;
-      continue;
-    }
-    CalScan s;
-    s.t_start = scan->stamp_start.SecondsSince(t0);
-    att_sigmas.push_back(track.At(s.t_start + time_offset_initial_s).att_sigma_rad);
-    s.duration = scan->DurationSeconds();
-    Subsample(*scan, o, &s);
-    if (s.raw.size() < 50) continue;
-    scans.push_back(std::move(s));
-  }
-  if (scans.size() < 10) {
-    return FailedPreconditionError(
-        "CalibrateExtrinsics: " + std::to_string(scans.size()) +
-        " usable scans (need 10; scans outside the POS span or with POS sigma above " +
-        std::to_string(o.max_pos_sigma_m) +
-        " m are not used: " + std::to_string(result.scans_skipped_pos) + " so)");
-  }
-  for (int axis = 0; axis < 3; ++axis) {
-    std::vector<double> v;
-    for (const Eigen::Vector3d& a : att_sigmas) v.push_back(a(axis));
-    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-    result.pos_attitude_sigma_rad(axis) = v[v.size() / 2];
-  }
-  const double span = scans.back().t_start - scans.front().t_start;
-  for (CalScan& s : scans) {
-    s.block = std::min(o.jackknife_blocks - 1,
-                       static_cast<int>((s.t_start - scans.front().t_start) / std::max(span, 1e-9) *
-                                        o.jackknife_blocks));
-  }
+  SLAM_MMS_ASSIGN_OR_RETURN(std::vector<CalScan> scans,
+                            SelectScans(reader, track, t0, time_offset_initial_s, o, &result));
+  AssignPartners(track, time_offset_initial_s, o, &scans, &result);
 
-  // ---- Partners (from the POS at the initial time offset).
-  {
-    std::vector<Eigen::Vector3d> where(scans.size());
-    std::vector<double> when(scans.size());
-    double heading = 0.0, last_yaw = 0.0;
-    for (size_t i = 0; i < scans.size(); ++i) {
-      const PosTrack::Sample s = track.At(scans[i].t_start + time_offset_initial_s);
-      where[i] = s.T_world_body.translation();
-      when[i] = scans[i].t_start;
-      const Eigen::Matrix3d R = s.T_world_body.linear();
-      const double yaw = std::atan2(R(1, 0), R(0, 0));
-      if (i > 0) heading += std::abs(std::remainder(yaw - last_yaw, 2.0 * M_PI));
-      last_yaw = yaw;
-    }
-    result.total_heading_change_rad = heading;
-    for (size_t a = 0; a < scans.size(); ++a) {
-      std::vector<int> p;
-      const auto add = [&](size_t b) {
-        if (b == a || (where[b] - where[a]).norm() > o.max_partner_distance_m) return;
-        if (std::find(p.begin(), p.end(), static_cast<int>(b)) == p.end())
-          p.push_back(static_cast<int>(b));
-      };
-      for (double sep : o.partner_separations_s) {
-        for (double sign : {-1.0, 1.0}) {
-          const double target = when[a] + sign * sep;
-          const size_t b = static_cast<size_t>(std::lower_bound(when.begin(), when.end(), target) -
-                                               when.begin());
-          size_t best = b < scans.size() ? b : scans.size() - 1;
-          if (b > 0 && (b == scans.size() || target - when[b - 1] < when[b] - target)) best = b - 1;
-          if (std::abs(when[best] - target) < 0.5 * sep) add(best);
-        }
-      }
-      std::vector<std::pair<double, size_t>> revisits;
-      for (size_t b = 0; b < scans.size(); ++b) {
-        if (std::abs(when[b] - when[a]) < o.revisit_min_separation_s) continue;
-        const double d = (where[b] - where[a]).norm();
-        if (d <= o.revisit_max_distance_m) revisits.emplace_back(d, b);
-      }
-      std::sort(revisits.begin(), revisits.end());
-      for (int r = 0; r < std::min<int>(o.max_revisit_partners, revisits.size()); ++r)
-        add(revisits[r].second);
-      scans[a].partners = std::move(p);
-    }
-  }
-
-  Calibrator cal(std::move(scans), track, o);
+  CalibrationProblem cal(std::move(scans), track, o);
   result.scans_used = static_cast<int>(cal.scans().size());
   Params initial;
   initial.R = R0;
   initial.t = T_body_lidar_initial.translation();
   initial.time = time_offset_initial_s;
-  Vector7d prior_info;
-  prior_info << o.prior_sigma_rpy_rad.cwiseInverse().cwiseAbs2(),
-      o.prior_sigma_xyz_m.cwiseInverse().cwiseAbs2(),
-      1.0 / (o.prior_sigma_time_s * o.prior_sigma_time_s);
   std::array<bool, 7> free{};
   for (int i = 0; i < 3; ++i) free[i] = o.estimate_rotation;
   for (int i = 3; i < 6; ++i) free[i] = o.estimate_translation;
   free[6] = o.estimate_time_offset;
-
-  // One solve from `start` with the free set; returns the associations of its last round.
-  const auto solve = [&](Params* p, const std::array<bool, 7>& fr, int rounds,
-                         std::vector<Association>* last) -> Status {
-    for (int round = 0; round < rounds; ++round) {
-      if (stop != nullptr && stop->load()) {
-        return FailedPreconditionError("CalibrateExtrinsics: stopped");
-      }
-      const double f = rounds > 1 ? std::min(1.0, round / 4.0) : 1.0;
-      const double gate = o.initial_gate_m * std::pow(o.final_gate_m / o.initial_gate_m, f);
-      cal.UpdatePoses(*p);
-      cal.Deskew(*p);
-      *last = cal.Associate(*p, gate);
-      if (last->size() < 100) {
-        return FailedPreconditionError("CalibrateExtrinsics: " + std::to_string(last->size()) +
-                                       " point-to-plane associations (need 100): the scans do not "
-                                       "overlap or the initial extrinsic is far off");
-      }
-      double step_norm = 0.0;
-      for (int it = 0; it < o.gauss_newton_steps_per_round; ++it) {
-        cal.UpdatePoses(*p);
-        const std::vector<Calibrator::Normal> nb = cal.Accumulate(*last, *p, 1);
-        // Data weighted by the residual variance, so that the prior has its stated weight.
-        const double s2 = std::max(nb[0].wrr / std::max(1.0, nb[0].n - 7.0), 1e-6);
-        const Vector7d d =
-            SolveStep(nb[0].H / s2, nb[0].g / s2, Difference(*p, initial), prior_info, fr);
-        Apply(d, p);
-        step_norm = std::max(
-            {d.head<3>().norm() / 1e-5, d.segment<3>(3).norm() / 1e-4, std::abs(d(6)) / 1e-5});
-      }
-      result.rounds = round + 1;
-      result.converged = f >= 1.0 && step_norm < 1.0;
-      if (result.converged) break;
-    }
-    cal.UpdatePoses(*p);
-    return OkStatus();
-  };
+  Solver solver(&cal, initial, o, stop);
 
   // RMS at the initial value (final gate).
   cal.UpdatePoses(initial);
@@ -596,50 +439,10 @@ StatusOr<ExtrinsicCalibration> CalibrateExtrinsics(const DriveReader& reader,
 
   Params p = initial;
   std::vector<Association> last;
-  SLAM_MMS_RETURN_IF_ERROR(solve(&p, free, o.max_rounds, &last));
+  SLAM_MMS_RETURN_IF_ERROR(solver.Solve(&p, free, o.max_rounds, &last, &result));
 
-  // Sigmas: formal and jackknife over time blocks, from the normal equations at the solution.
-  const auto sigmas = [&](const Params& at, const std::array<bool, 7>& fr, Vector7d* formal,
-                          Vector7d* jack) {
-    const std::vector<Calibrator::Normal> blocks = cal.Accumulate(last, at, o.jackknife_blocks);
-    Calibrator::Normal all;
-    for (const auto& b : blocks) {
-      all.H += b.H;
-      all.g += b.g;
-      all.wrr += b.wrr;
-      all.w += b.w;
-      all.n += b.n;
-    }
-    const double dof = std::max<double>(1.0, static_cast<double>(all.n) - 7.0);
-    const double s2 = all.wrr / dof;
-    const Vector7d off = Difference(at, initial);
-    Matrix7d A = all.H / s2;
-    for (int i = 0; i < 7; ++i) A(i, i) += prior_info(i);
-    for (int i = 0; i < 7; ++i) {
-      if (fr[i]) continue;
-      A.row(i).setZero();
-      A.col(i).setZero();
-      A(i, i) = 1.0;
-    }
-    const Matrix7d cov = A.inverse();
-    for (int i = 0; i < 7; ++i) (*formal)(i) = fr[i] ? std::sqrt(std::max(0.0, cov(i, i))) : 0.0;
-    std::vector<Vector7d> loo;
-    for (const auto& b : blocks) {
-      if (b.n == 0) continue;
-      loo.push_back(SolveStep((all.H - b.H) / s2, (all.g - b.g) / s2, off, prior_info, fr));
-    }
-    jack->setZero();
-    if (loo.size() >= 2) {
-      Vector7d mean = Vector7d::Zero();
-      for (const auto& d : loo) mean += d;
-      mean /= loo.size();
-      for (const auto& d : loo) jack->array() += (d - mean).array().square();
-      const double k = static_cast<double>(loo.size());
-      *jack = (*jack * (k - 1.0) / k).cwiseSqrt();
-    }
-  };
   Vector7d formal, jack;
-  sigmas(p, free, &formal, &jack);
+  solver.Sigmas(p, free, last, &formal, &jack);
   result.formal_sigma = formal;
   result.jackknife_sigma = jack;
   Vector7d prior_sigma;
@@ -667,15 +470,20 @@ StatusOr<ExtrinsicCalibration> CalibrateExtrinsics(const DriveReader& reader,
     q.R = so3::Exp(keep_rot) * initial.R;
     if (fr[6]) q.time = p.time;
     if (std::any_of(fr.begin(), fr.end(), [](bool b) { return b; })) {
-      SLAM_MMS_RETURN_IF_ERROR(solve(&q, fr, std::max(3, o.max_rounds / 2), &last));
+      SLAM_MMS_RETURN_IF_ERROR(solver.Solve(&q, fr, std::max(3, o.max_rounds / 2), &last, &result));
     }
     p = q;
     Vector7d f2, j2;
-    sigmas(p, fr, &f2, &j2);
+    solver.Sigmas(p, fr, last, &f2, &j2);
     formal = f2;
     jack = j2;
   }
   result.observable = observable;
+  cal.Deskew(p);
+  result.rms_final_m = cal.Rms(cal.Associate(p, o.final_gate_m), p);
+  if (o.attitude_reference == ExtrinsicCalibrationOptions::AttitudeReference::kTravelDirection) {
+    ApplyTravelReference(cal, track, o, observable, &p, &result);
+  }
   {
     // Held rotation axes exactly at the initial value in the reported (roll, pitch, yaw) terms
     // (the steps kept them at zero to first order only).
@@ -702,8 +510,6 @@ StatusOr<ExtrinsicCalibration> CalibrateExtrinsics(const DriveReader& reader,
   }
   result.sigma_time_s = observable[6] ? std::max(formal(6), jack(6)) : 0.0;
   result.residuals = last.size();
-  cal.Deskew(p);
-  result.rms_final_m = cal.Rms(cal.Associate(p, o.final_gate_m), p);
   result.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_wall).count();
   return result;
 }

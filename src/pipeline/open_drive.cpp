@@ -128,6 +128,11 @@ StatusOr<std::unique_ptr<DriveReader>> OpenDrive(const std::filesystem::path& pa
       }
       SLAM_MMS_ASSIGN_OR_RETURN(std::unique_ptr<RosbagDriveReader> bag,
                                 RosbagDriveReader::Open(path, bo));
+      // The bag reader took T_body_lidar and the antenna: only a clock offset needs the wrapper
+      // (hosts see the RosbagDriveReader itself otherwise).
+      if (extrinsics && extrinsics->lidar_time_offset_s == 0.0) {
+        return std::unique_ptr<DriveReader>(std::move(bag));
+      }
       return with_extrinsics(std::move(bag));
 #else
       break;

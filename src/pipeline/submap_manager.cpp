@@ -64,6 +64,7 @@ Status SubmapManager::Options::Validate() const {
   }
   if (max_iterations < 1) return bad("max_iterations", max_iterations, "must be >= 1");
   if (num_threads < 1) return bad("num_threads", num_threads, "must be >= 1");
+  SLAM_MMS_RETURN_IF_ERROR(extrinsic_calibration.Validate());
   return icp.Validate();
 }
 

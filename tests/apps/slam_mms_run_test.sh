@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # End-to-end tests of examples/apps/slam_mms_run (registered in tests/CMakeLists.txt).
 #   slam_mms_run_test.sh CASE SLAM_MMS_RUN_BINARY SOURCE_DIR
-# Cases: kitti_frames, truncated_bin, bad_oxts, bad_config, bad_cli, sim_all, folder_input,
+# Cases: kitti_frames, truncated_bin, bad_oxts, bad_config, bad_cli, sim_all, calibrate_extrinsics, folder_input,
 # rosbag_input (these two convert the real frames with slam_mms_convert, next to the app, and also
 # run slam_mms_bench_e2e on them where it is built), sigint, sigterm (a signal mid-run: partial
 # outputs, no spill folder, exit 130/143), resume (a SIGKILLed run continued), unwritable_out,
@@ -35,7 +35,7 @@ check_report() {
   local report=$1; shift
   [[ -s $report ]] || fail "no $report"
   if command -v jq >/dev/null; then
-    jq -e '((keys - ["outputs"]) == ["command_line","complete","georef","gnss_outages",
+    jq -e '((keys - ["outputs"]) == ["command_line","complete","extrinsics","georef","gnss_outages",
              "ground_truth_map","input","methods","options","version","warnings"]) and
            (.input | keys == ["drive","duration_s","ground_truth","kind","scans","scans_processed",
              "scans_total","skipped_scans"]) and
@@ -57,7 +57,7 @@ check_report() {
              '"t_rel_pct"' '"r_rel_deg_per_100m"' '"max_pos_err_in_outage_m"' \
              '"max_rot_err_in_outage_deg"' '"mme"' '"scans_per_s"' '"peak_rss_mb"' \
              '"ground_truth_map"' '"version"' '"complete"' '"command_line"' '"options"' \
-             '"georef"' '"kind"' '"scans_total"' '"scans_processed"' '"skipped_scans"' '"warnings"'; do
+             '"georef"' '"extrinsics"' '"kind"' '"scans_total"' '"scans_processed"' '"skipped_scans"' '"warnings"'; do
       grep -q "$k" "$report" || fail "report.json lacks $k"
     done
     for m in "$@"; do grep -q "\"$m\"" "$report" || fail "report.json lacks method $m"; done
@@ -408,6 +408,35 @@ PY
       jq -e '(.trajectories.k.ate_rmse_m - .trajectories.t.ate_rmse_m | fabs) < 1e-6' \
         "$tmp/eval.json" >/dev/null || fail "full.kitti and full.tum evaluate differently: $(cat "$tmp/eval.json")"
     fi
+    ;;
+  calibrate_extrinsics)
+    # Boresight self-calibration on the simulated drive, its file taken back by a second run.
+    run "$tmp/log" --out "$tmp/out" --mode gnss_ins --sim-duration 6 --keep-sim \
+      --calibrate-extrinsics || fail "exit status $? with --calibrate-extrinsics: $(tail -30 "$tmp/log")"
+    grep -q "^\[calibration\] correction rpy" "$tmp/log" || fail "no calibration summary: $(cat "$tmp/log")"
+    check_report "$tmp/out/report.json" gnss_ins
+    check_files "$tmp/out" calib_imu_to_velo_estimated.txt
+    grep -q "^R: " "$tmp/out/calib_imu_to_velo_estimated.txt" &&
+      grep -q "^T: " "$tmp/out/calib_imu_to_velo_estimated.txt" || fail "calibration file not in KITTI format"
+    if command -v jq >/dev/null; then
+      jq -e '.extrinsics | (.observable | keys == ["pitch","roll","time_offset","x","y","yaw","z"]) and
+             (.T_body_lidar_estimated | length == 4) and (.correction_rpy_deg | length == 3) and
+             (.sigma_xyz_m | length == 3) and ((.time_offset_s | type) == "number") and
+             .calibration_file == "calib_imu_to_velo_estimated.txt" and .scans_used >= 10' \
+        "$tmp/out/report.json" >/dev/null || fail "report.json extrinsics: $(jq .extrinsics "$tmp/out/report.json")"
+    fi
+    sim_drive=$(find "$tmp/out/sim" -type d -name '*_sync' | head -1)
+    [[ -d $sim_drive ]] || fail "--keep-sim left no drive"
+    run "$tmp/log2" --kitti-raw "$sim_drive" --extrinsics "$tmp/out/calib_imu_to_velo_estimated.txt" \
+      --mode gnss_ins --out "$tmp/out2" || fail "the estimated calibration file was not taken: $(tail -20 "$tmp/log2")"
+    if command -v jq >/dev/null; then
+      [[ $(jq -r '.extrinsics' "$tmp/out2/report.json") == null ]] || fail "extrinsics not null without the flag"
+      [[ $(jq -r '.input.ground_truth' "$tmp/out2/report.json") == simulator ]] || fail "ground truth lost"
+    fi
+    printf 'calib_time: x\nR: 1 0 0 0 1 0 0 0 1\nT: 0 0\n' >"$tmp/bad_calib.txt"
+    run "$tmp/log3" --kitti-raw "$sim_drive" --extrinsics "$tmp/bad_calib.txt" --mode gnss_ins \
+      --out "$tmp/out3" && fail "a malformed calibration file was accepted"
+    grep -q "bad_calib.txt:3" "$tmp/log3" || fail "the error does not name file:line: $(cat "$tmp/log3")"
     ;;
   dump_config)
     # --dump-config writes the effective options (defaults + --config) as YAML that --config reads

@@ -73,7 +73,8 @@ TEST(ReportTest, JsonHasTheSchemaKeysAndRoundTrips) {
   ASSERT_TRUE(j.is_object());
   EXPECT_EQ(Keys(j), (std::vector<std::string>{"version", "complete", "command_line", "input",
                                                "gnss_outages", "methods", "ground_truth_map",
-                                               "options", "georef", "warnings", "outputs"}));
+                                               "options", "georef", "extrinsics", "warnings",
+                                               "outputs"}));
   EXPECT_EQ(j["version"], SLAM_MMS_VERSION_STRING);
   EXPECT_EQ(j["warnings"].get<std::vector<std::string>>(), r.warnings);
   EXPECT_EQ(j["complete"], false);
@@ -160,6 +161,7 @@ TEST(ReportTest, DoublesReadBackExactlyAndDefaultsAreNull) {
   EXPECT_TRUE(j["input"]["skipped_scans"]["scans"].empty());
   EXPECT_TRUE(j["options"].is_null());
   EXPECT_TRUE(j["georef"].is_null());
+  EXPECT_TRUE(j["extrinsics"].is_null());
   EXPECT_EQ(j["complete"], true);
   EXPECT_TRUE(j["command_line"].is_array());
   EXPECT_TRUE(j["warnings"].is_array() && j["warnings"].empty());

@@ -43,7 +43,10 @@ std::string CalibrationJson(const ExtrinsicCalibration& c, const std::string& fi
   Json obs = Json::object();
   for (int i = 0; i < 7; ++i) obs[ExtrinsicParameterName(i)] = c.observable[i];
   j["observable"] = std::move(obs);
-  j["pos_attitude_sigma_deg"] = Vec(c.pos_attitude_sigma_rad, kDeg);
+  j["attitude_reference"] = c.attitude_reference;
+  j["attitude_reference_sigma_deg"] = Vec(c.pos_attitude_sigma_rad, kDeg);
+  j["travel_direction_correction_deg"] = Vec(c.travel_correction_rad, kDeg);
+  j["travel_direction_scans"] = c.travel_samples;
   Json formal = Json::array(), jack = Json::array();
   for (int i = 0; i < 7; ++i) {
     const double s = i < 3 ? kDeg : 1.0;  // deg, m, s
@@ -74,7 +77,7 @@ StatusOr<RunCalibration> CalibrateRunExtrinsics(const DriveReader& reader,
   std::printf("[calibration] offline POS of the drive, then the LiDAR extrinsic against it\n");
   std::fflush(stdout);
   SLAM_MMS_ASSIGN_OR_RETURN(const OfflinePos pos, ComputeOfflinePos(reader, options));
-  ExtrinsicCalibrationOptions co;
+  ExtrinsicCalibrationOptions co = options.level2.extrinsic_calibration;
   co.num_threads = options.num_threads;
   RunCalibration out;
   SLAM_MMS_ASSIGN_OR_RETURN(

@@ -393,6 +393,15 @@ const std::vector<std::pair<std::string, KeyHandler>>& Handlers() {
     SLAM_MMS_KEY_I("level2.max_iterations", o->level2.max_iterations);
     SLAM_MMS_KEY_I("level2.num_threads", o->level2.num_threads);
     SLAM_MMS_KEY_B("level2.estimate_extrinsics", o->level2.estimate_extrinsics);
+    h.emplace_back(
+        "level2.extrinsic_calibration.attitude_reference",
+        Enum<ExtrinsicCalibrationOptions::AttitudeReference>(
+            [](Options* o) { return &o->level2.extrinsic_calibration.attitude_reference; },
+            {{"pos", ExtrinsicCalibrationOptions::AttitudeReference::kPos},
+             {"travel_direction",
+              ExtrinsicCalibrationOptions::AttitudeReference::kTravelDirection}}));
+    SLAM_MMS_KEY_I("level2.extrinsic_calibration.max_scans",
+                   o->level2.extrinsic_calibration.max_scans);
 #undef SLAM_MMS_KEY_D
 #undef SLAM_MMS_KEY_F
 #undef SLAM_MMS_KEY_I

@@ -24,7 +24,7 @@
 // (a straight drive cannot give the lever arm, level roads never its vertical component, constant
 // speed never the time offset apart from the forward lever arm).
 //
-// Scans whose POS position sigma exceeds Options::max_pos_sigma_m (GNSS outages) are not used.
+// Scans where the POS is worse than usual (GNSS outages: Options::max_pos_sigma_*) are not used.
 //
 // Thread safety: a pure function; reads the reader's scans through its const ReadScan.
 
@@ -33,6 +33,7 @@
 #include <array>
 #include <atomic>
 #include <cstddef>
+#include <string>
 #include <vector>
 
 #include "slam_mms/core/sensor_data.hpp"
@@ -75,8 +76,31 @@ struct ExtrinsicCalibrationOptions {
   double huber_m = 0.05;
   int max_rounds = 12;
   int gauss_newton_steps_per_round = 3;
-  /// Scans whose POS position sigma (largest axis) exceeds this are not used [m].
-  double max_pos_sigma_m = 0.10;
+  /// Scans whose POS position sigma (largest axis) exceeds max_pos_sigma_m [m] or
+  /// max_pos_sigma_ratio x its median over the drive (GNSS outages, where the POS drifts) are not
+  /// used. The absolute sigma of a GNSS/INS is mostly a slowly varying offset that moves the
+  /// scans of a few seconds together; it is the drift in outages that breaks their consistency.
+  double max_pos_sigma_m = 0.5;
+  double max_pos_sigma_ratio = 3.0;
+  /// The attitude the boresight is relative to. The map constrains only the sum of the
+  /// boresight and the POS's own attitude error (on level roads the rotations commute), so the
+  /// POS's heading error (0.05-0.3 deg for a tactical or navigation IMU over a minute of driving)
+  /// would go into the yaw. kTravelDirection assumes the body x axis points along the direction of
+  /// travel (an IMU aligned with the vehicle, no side slip on straight stretches): the POS's mean
+  /// heading error is the mean angle of its own horizontal velocity in its own body frame over
+  /// the scans faster than travel_min_speed_mps turning slower than travel_max_yaw_rate_radps,
+  /// and the yaw is moved to the travel frame (pitch stays on the POS: its vertical velocity is
+  /// too noisy, its gravity-levelled pitch good). kPos takes the POS attitude as it is (an IMU
+  /// mounted askew to the vehicle). travel_sigma_rad: allowance for the alignment of the IMU with
+  /// the vehicle axis and for slip, added in quadrature to the reference's own sigma. kPos is the
+  /// default: it makes no assumption, and the estimate is the one that places the scans best on
+  /// this POS (on the real KITTI frames kTravelDirection was 1.6 deg off it, docs/calibration.md).
+  /// "pos" / "travel_direction" in config files (level2.extrinsic_calibration.attitude_reference).
+  enum class AttitudeReference { kPos, kTravelDirection };
+  AttitudeReference attitude_reference = AttitudeReference::kPos;
+  double travel_min_speed_mps = 3.0;
+  double travel_max_yaw_rate_radps = 0.05;
+  double travel_sigma_rad = 0.01 * 3.14159265358979 / 180.0;
   /// Prior (1 sigma) about the initial value: roll/pitch/yaw [rad], lever arm [m], time [s].
   Eigen::Vector3d prior_sigma_rpy_rad = Eigen::Vector3d::Constant(2.0 * 3.14159265358979 / 180.0);
   Eigen::Vector3d prior_sigma_xyz_m = Eigen::Vector3d::Constant(0.3);
@@ -118,8 +142,17 @@ struct ExtrinsicCalibration {
   Eigen::Matrix<double, 7, 1> jackknife_sigma = Eigen::Matrix<double, 7, 1>::Zero();
   /// Whether the drive determines each parameter (false also for one not estimated).
   std::array<bool, 7> observable{};
-  /// Median over the scans used of the POS's own attitude sigma (its covariance), body axes.
+  /// The sigma of the attitude reference, body axes: the median over the scans used of the POS's
+  /// own attitude sigma (its covariance); with kTravelDirection, for pitch and yaw that reference's
+  /// (yaw: the standard error of its time-block means and travel_sigma_rad in quadrature).
   Eigen::Vector3d pos_attitude_sigma_rad = Eigen::Vector3d::Zero();
+  /// kTravelDirection: the POS's mean heading error found [0, 0, yaw] [rad] and the
+  /// number of scans it came from (0: not applied).
+  Eigen::Vector3d travel_correction_rad = Eigen::Vector3d::Zero();
+  /// The reference used: "pos" or "travel_direction" (kTravelDirection falls back to "pos" on a
+  /// drive without straight stretches, logged).
+  std::string attitude_reference = "pos";
+  int travel_samples = 0;
   int scans_used = 0;
   int scans_skipped_pos = 0;         ///< POS sigma above max_pos_sigma_m.
   int scans_skipped_unreadable = 0;  ///< ReadScan failed.

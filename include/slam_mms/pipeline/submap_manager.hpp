@@ -17,6 +17,7 @@
 
 #include "slam_mms/core/status.hpp"
 #include "slam_mms/ins/gnss_prior.hpp"
+#include "slam_mms/pipeline/extrinsic_calibrator.hpp"
 #include "slam_mms/pipeline/localizer.hpp"
 #include "slam_mms/registration/point_icp.hpp"
 
@@ -60,6 +61,8 @@ class SubmapManager {
     /// whole drive (slam_mms_run); a streaming MappingSystem cannot make the second pass and
     /// ignores it. Off until measured to help (docs/calibration.md).
     bool estimate_extrinsics = false;
+    /// Its options (num_threads is taken from MappingSystem::Options::num_threads).
+    ExtrinsicCalibrationOptions extrinsic_calibration;
     PointIcp::Options icp;
     [[nodiscard]] Status Validate() const;
   };

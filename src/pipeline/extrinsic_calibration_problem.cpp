@@ -177,11 +177,7 @@ std::vector<CalibrationProblem::Normal> CalibrationProblem::Accumulate(
   std::vector<Normal> out(blocks);
   for (int t = 0; t < nt; ++t) {
     for (int b = 0; b < blocks; ++b) {
-      out[b].H += part[t][b].H;
-      out[b].g += part[t][b].g;
-      out[b].wrr += part[t][b].wrr;
-      out[b].w += part[t][b].w;
-      out[b].n += part[t][b].n;
+      out[b] += part[t][b];
     }
   }
   for (Normal& nrm : out) nrm.H = nrm.H.selfadjointView<Eigen::Lower>();

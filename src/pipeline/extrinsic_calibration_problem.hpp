@@ -11,10 +11,10 @@
 #include <array>
 #include <atomic>
 #include <memory>
-#include <nanoflann.hpp>
 #include <vector>
 
 #include "core/worker_pool.hpp"
+#include "registration/cloud_kdtree.hpp"
 #include "slam_mms/core/lie.hpp"
 #include "slam_mms/core/sensor_data.hpp"
 #include "slam_mms/core/timestamp.hpp"
@@ -74,17 +74,8 @@ class PosTrack {
 
 // ---- Scans -------------------------------------------------------------------------------------
 
-struct CloudAdaptor {
-  const std::vector<Eigen::Vector3f>* pts = nullptr;
-  size_t kdtree_get_point_count() const { return pts->size(); }
-  float kdtree_get_pt(size_t i, size_t d) const { return (*pts)[i][static_cast<int>(d)]; }
-  template <class BBox>
-  bool kdtree_get_bbox(BBox& /*bb*/) const {
-    return false;
-  }
-};
-using KdTree = nanoflann::KDTreeSingleIndexAdaptor<
-    nanoflann::L2_Simple_Adaptor<float, CloudAdaptor, float, uint32_t>, CloudAdaptor, 3, uint32_t>;
+using registration_internal::CloudAdaptor;
+using KdTree = registration_internal::CloudKdTree;
 
 struct CalScan {
   double t_start = 0.0;  // LiDAR stamp of the first firing, seconds from t0 (LiDAR clock)
@@ -150,8 +141,16 @@ class CalibrationProblem {
   struct Normal {
     Matrix7d H = Matrix7d::Zero();
     Vector7d g = Vector7d::Zero();
-    double wrr = 0.0, w = 0.0;
+    double wrr = 0.0, w = 0.0;  // sum of w r^2, sum of w
     size_t n = 0;
+    Normal& operator+=(const Normal& o) {
+      H += o.H;
+      g += o.g;
+      wrr += o.wrr;
+      w += o.w;
+      n += o.n;
+      return *this;
+    }
   };
   // Huber-weighted normal equations, per jackknife block.
   std::vector<Normal> Accumulate(const std::vector<Association>& as, const Params& p,

@@ -218,13 +218,7 @@ class Solver {
     const std::vector<CalibrationProblem::Normal> blocks =
         cal.Accumulate(last, at, o.jackknife_blocks);
     CalibrationProblem::Normal all;
-    for (const auto& b : blocks) {
-      all.H += b.H;
-      all.g += b.g;
-      all.wrr += b.wrr;
-      all.w += b.w;
-      all.n += b.n;
-    }
+    for (const auto& b : blocks) all += b;
     const double dof = std::max<double>(1.0, static_cast<double>(all.n) - 7.0);
     const double s2 = all.wrr / dof;
     const Vector7d off = Difference(at, initial);

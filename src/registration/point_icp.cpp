@@ -7,6 +7,7 @@
 #include <unordered_set>
 
 #include "core/worker_pool.hpp"
+#include "registration/cloud_kdtree.hpp"
 #include "registration/gauss_newton.hpp"
 #include "registration/point_to_plane.hpp"
 
@@ -19,18 +20,8 @@ using registration_internal::HuberWeight;
 using registration_internal::NormalEquations;
 using registration_internal::PointToPlaneResidual;
 
-struct CloudAdaptor {
-  const std::vector<Eigen::Vector3f>* pts = nullptr;
-  size_t kdtree_get_point_count() const { return pts->size(); }
-  float kdtree_get_pt(size_t i, size_t d) const { return (*pts)[i][static_cast<int>(d)]; }
-  template <class BBox>
-  bool kdtree_get_bbox(BBox& /*bb*/) const {
-    return false;
-  }
-};
-
-using KdTree = nanoflann::KDTreeSingleIndexAdaptor<
-    nanoflann::L2_Simple_Adaptor<float, CloudAdaptor, float, uint32_t>, CloudAdaptor, 3, uint32_t>;
+using registration_internal::CloudAdaptor;
+using KdTree = registration_internal::CloudKdTree;
 
 Status FieldError(const std::string& field, double value, const std::string& rule) {
   return InvalidArgumentError("PointIcp::Options::" + field + " = " + std::to_string(value) + "; " +

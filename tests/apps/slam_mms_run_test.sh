@@ -410,33 +410,51 @@ PY
     fi
     ;;
   calibrate_extrinsics)
-    # Boresight self-calibration on the simulated drive, its file taken back by a second run.
-    run "$tmp/log" --out "$tmp/out" --mode gnss_ins --sim-duration 6 --keep-sim \
+    # Boresight self-calibration on a simulated drive whose calibration file is 0.5 deg off in yaw
+    # and whose LiDAR clock lags 20 ms; the estimate written, then taken back by a second run.
+    sim_bin=$(dirname "$bin")/slam_mms_sim
+    "$sim_bin" --scenario demo --duration 8 --lidar-time-offset-s 0.02 \
+      --calib-error-rpy-deg 0,0,0.5 --no-scene-cloud --out "$tmp/sim" >"$tmp/sim.log" 2>&1 ||
+      fail "slam_mms_sim: $(tail -5 "$tmp/sim.log")"
+    sim_drive=$(find "$tmp/sim" -maxdepth 2 -type d -name '*_sync' | head -1)
+    run "$tmp/log" --kitti-raw "$sim_drive" --out "$tmp/out" --mode gnss_ins \
       --calibrate-extrinsics || fail "exit status $? with --calibrate-extrinsics: $(tail -30 "$tmp/log")"
     grep -q "^\[calibration\] correction rpy" "$tmp/log" || fail "no calibration summary: $(cat "$tmp/log")"
     check_report "$tmp/out/report.json" gnss_ins
     check_files "$tmp/out" calib_imu_to_velo_estimated.txt
     grep -q "^R: " "$tmp/out/calib_imu_to_velo_estimated.txt" &&
       grep -q "^T: " "$tmp/out/calib_imu_to_velo_estimated.txt" || fail "calibration file not in KITTI format"
+    off1=$(awk -F': ' '/^lidar_time_offset_s/ {print $2}' "$tmp/out/calib_imu_to_velo_estimated.txt")
+    awk -v a="${off1:-0}" 'BEGIN { d = a - 0.02; exit !(d < 0.002 && d > -0.002) }' ||
+      fail "estimated clock offset ${off1:-0} s, true 0.02 s"
     if command -v jq >/dev/null; then
       jq -e '.extrinsics | (.observable | keys == ["pitch","roll","time_offset","x","y","yaw","z"]) and
              (.T_body_lidar_estimated | length == 4) and (.correction_rpy_deg | length == 3) and
              (.sigma_xyz_m | length == 3) and ((.time_offset_s | type) == "number") and
-             .calibration_file == "calib_imu_to_velo_estimated.txt" and .scans_used >= 10' \
+             .calibration_file == "calib_imu_to_velo_estimated.txt" and .scans_used >= 10 and
+             .observable.yaw and (.correction_rpy_deg[2] + 0.5 | fabs) < 0.1' \
         "$tmp/out/report.json" >/dev/null || fail "report.json extrinsics: $(jq .extrinsics "$tmp/out/report.json")"
     fi
-    sim_drive=$(find "$tmp/out/sim" -type d -name '*_sync' | head -1)
-    [[ -d $sim_drive ]] || fail "--keep-sim left no drive"
+    # Calibrating again from the estimate: the file's clock offset is the total from the drive's
+    # own stamps (the estimate's again, not estimate + estimate), and the ground truth is kept.
     run "$tmp/log2" --kitti-raw "$sim_drive" --extrinsics "$tmp/out/calib_imu_to_velo_estimated.txt" \
-      --mode gnss_ins --out "$tmp/out2" || fail "the estimated calibration file was not taken: $(tail -20 "$tmp/log2")"
+      --calibrate-extrinsics --mode gnss_ins --out "$tmp/out2" ||
+      fail "the estimated calibration file was not taken: $(tail -20 "$tmp/log2")"
+    off2=$(awk -F': ' '/^lidar_time_offset_s/ {print $2}' "$tmp/out2/calib_imu_to_velo_estimated.txt")
+    awk -v a="${off1:-0}" -v b="${off2:-0}" 'BEGIN { d = a - b; exit !(d < 0.002 && d > -0.002) }' ||
+      fail "recalibrated clock offset ${off2:-0} s vs ${off1:-0} s"
     if command -v jq >/dev/null; then
-      [[ $(jq -r '.extrinsics' "$tmp/out2/report.json") == null ]] || fail "extrinsics not null without the flag"
       [[ $(jq -r '.input.ground_truth' "$tmp/out2/report.json") == simulator ]] || fail "ground truth lost"
     fi
+    run "$tmp/log3" --kitti-raw "$sim_drive" --extrinsics "$tmp/out/calib_imu_to_velo_estimated.txt" \
+      --mode gnss_ins --out "$tmp/out3" || fail "--extrinsics without calibration: $(tail -20 "$tmp/log3")"
+    if command -v jq >/dev/null; then
+      [[ $(jq -r '.extrinsics' "$tmp/out3/report.json") == null ]] || fail "extrinsics not null without the flag"
+    fi
     printf 'calib_time: x\nR: 1 0 0 0 1 0 0 0 1\nT: 0 0\n' >"$tmp/bad_calib.txt"
-    run "$tmp/log3" --kitti-raw "$sim_drive" --extrinsics "$tmp/bad_calib.txt" --mode gnss_ins \
-      --out "$tmp/out3" && fail "a malformed calibration file was accepted"
-    grep -q "bad_calib.txt:3" "$tmp/log3" || fail "the error does not name file:line: $(cat "$tmp/log3")"
+    run "$tmp/log4" --kitti-raw "$sim_drive" --extrinsics "$tmp/bad_calib.txt" --mode gnss_ins \
+      --out "$tmp/out4" && fail "a malformed calibration file was accepted"
+    grep -q "bad_calib.txt:3" "$tmp/log4" || fail "the error does not name file:line: $(cat "$tmp/log4")"
     ;;
   dump_config)
     # --dump-config writes the effective options (defaults + --config) as YAML that --config reads

@@ -29,14 +29,15 @@ Json Vec(const Eigen::Vector3d& v, double scale = 1.0) {
 
 }  // namespace
 
-std::string CalibrationJson(const ExtrinsicCalibration& c, const std::string& file_name) {
+std::string CalibrationJson(const ExtrinsicCalibration& c, const std::string& file_name,
+                            double input_time_offset_s) {
   Json j = Json::object();
   j["T_body_lidar_initial"] = Matrix4(c.T_body_lidar_initial);
   j["T_body_lidar_estimated"] = Matrix4(c.T_body_lidar_estimated);
   j["correction_rpy_deg"] = Vec(c.correction_rpy_rad, kDeg);
   j["correction_xyz_m"] = Vec(c.correction_xyz_m);
-  j["time_offset_s"] = c.time_offset_s;
-  j["time_offset_initial_s"] = c.time_offset_initial_s;
+  j["time_offset_s"] = input_time_offset_s + c.time_offset_s;
+  j["time_offset_initial_s"] = input_time_offset_s + c.time_offset_initial_s;
   j["sigma_rpy_deg"] = Vec(c.sigma_rpy_rad, kDeg);
   j["sigma_xyz_m"] = Vec(c.sigma_xyz_m);
   j["sigma_time_offset_s"] = c.sigma_time_s;
@@ -73,6 +74,7 @@ std::string CalibrationJson(const ExtrinsicCalibration& c, const std::string& fi
 StatusOr<RunCalibration> CalibrateRunExtrinsics(const DriveReader& reader,
                                                 const MappingSystem::Options& options,
                                                 const std::filesystem::path& out_dir,
+                                                double input_time_offset_s,
                                                 const std::atomic<bool>* stop) {
   std::printf("[calibration] offline POS of the drive, then the LiDAR extrinsic against it\n");
   std::fflush(stdout);
@@ -88,9 +90,11 @@ StatusOr<RunCalibration> CalibrateRunExtrinsics(const DriveReader& reader,
   out.extrinsics.lidar_time_offset_s = c.time_offset_s;
   const std::string name = "calib_imu_to_velo_estimated.txt";
   out.file = out_dir / name;
+  DriveExtrinsics written = out.extrinsics;
+  written.lidar_time_offset_s += input_time_offset_s;
   SLAM_MMS_RETURN_IF_ERROR(
-      WriteKittiImuToVelo(out.extrinsics, out.file, "slam_mms_run --calibrate-extrinsics"));
-  out.json = CalibrationJson(c, name);
+      WriteKittiImuToVelo(written, out.file, "slam_mms_run --calibrate-extrinsics"));
+  out.json = CalibrationJson(c, name, input_time_offset_s);
   std::string unobservable;
   for (int i = 0; i < 7; ++i) {
     if (!c.observable[i]) unobservable += std::string(" ") + ExtrinsicParameterName(i);
@@ -104,8 +108,9 @@ StatusOr<RunCalibration> CalibrateRunExtrinsics(const DriveReader& reader,
       c.correction_rpy_rad(0) * kDeg, c.correction_rpy_rad(1) * kDeg,
       c.correction_rpy_rad(2) * kDeg, c.sigma_rpy_rad(0) * kDeg, c.sigma_rpy_rad(1) * kDeg,
       c.sigma_rpy_rad(2) * kDeg, c.correction_xyz_m(0), c.correction_xyz_m(1),
-      c.correction_xyz_m(2), c.sigma_xyz_m(0), c.sigma_xyz_m(1), c.sigma_xyz_m(2), c.time_offset_s,
-      c.sigma_time_s, unobservable.empty() ? " none" : unobservable.c_str());
+      c.correction_xyz_m(2), c.sigma_xyz_m(0), c.sigma_xyz_m(1), c.sigma_xyz_m(2),
+      written.lidar_time_offset_s, c.sigma_time_s,
+      unobservable.empty() ? " none" : unobservable.c_str());
   std::fflush(stdout);
   return out;
 }

@@ -25,15 +25,21 @@ struct RunCalibration {
 };
 
 /// Calibrates `reader`'s extrinsic (its streams().T_body_lidar the initial value and prior) with
-/// `options` (ins, origin, gnss_outages, num_threads), writes the file into `out_dir` and prints a
-/// summary on stdout. Errors: those of ComputeOfflinePos and CalibrateExtrinsics, kUnavailable
-/// when the file cannot be written.
+/// `options` (ins, origin, gnss_outages, level2.extrinsic_calibration, num_threads), writes the
+/// file into `out_dir` and prints a summary on stdout. `input_time_offset_s`: the clock offset the
+/// reader already applies (an --extrinsics file's); the file and report.json give the total
+/// offset from the drive's own LiDAR stamps, RunCalibration::extrinsics the one still to apply
+/// over `reader`. Errors: those of ComputeOfflinePos and CalibrateExtrinsics, kUnavailable when
+/// the file cannot be written.
 [[nodiscard]] StatusOr<RunCalibration> CalibrateRunExtrinsics(const DriveReader& reader,
                                                               const MappingSystem::Options& options,
                                                               const std::filesystem::path& out_dir,
+                                                              double input_time_offset_s,
                                                               const std::atomic<bool>* stop);
 
-/// The "extrinsics" object of report.json for `c` and the file name written.
-std::string CalibrationJson(const ExtrinsicCalibration& c, const std::string& file_name);
+/// The "extrinsics" object of report.json for `c` and the file name written; time offsets from
+/// the drive's own stamps (`input_time_offset_s` added).
+std::string CalibrationJson(const ExtrinsicCalibration& c, const std::string& file_name,
+                            double input_time_offset_s);
 
 }  // namespace slam_mms::app

@@ -35,6 +35,7 @@
 #include "slam_mms/eval/ground_truth.hpp"
 #include "slam_mms/eval/map_entropy.hpp"
 #include "slam_mms/eval/report.hpp"
+#include "slam_mms/io/kitti_calibration.hpp"
 #include "slam_mms/io/kitti_drive_reader.hpp"
 #include "slam_mms/io/map_io.hpp"
 #include "slam_mms/io/trajectory_io.hpp"
@@ -407,8 +408,14 @@ int RunMain(int argc, const char* const* argv) {
     if (input->streams().t_body_antenna_m) {
       cal_options.ins.gnss.t_body_antenna = *input->streams().t_body_antenna_m;
     }
+    // The offset an --extrinsics file already applies (the file read fine: OpenRunInput did).
+    double input_offset_s = 0.0;
+    if (!args.extrinsics.empty()) {
+      StatusOr<DriveExtrinsics> given = ReadExtrinsicsFile(args.extrinsics);
+      if (given.ok()) input_offset_s = given->lidar_time_offset_s;
+    }
     StatusOr<RunCalibration> calibration =
-        CalibrateRunExtrinsics(*input, cal_options, args.out_dir, &g_stop);
+        CalibrateRunExtrinsics(*input, cal_options, args.out_dir, input_offset_s, &g_stop);
     if (!calibration.ok()) {
       return Fail(calibration.status().WithContext("--calibrate-extrinsics"),
                   g_stop.load() ? StopExitCode() : kExitError);

@@ -210,7 +210,7 @@ class Solver {
 
   // Formal and jackknife (over time blocks) sigmas from the normal equations at `at`.
   void Sigmas(const Params& at, const std::array<bool, 7>& fr, const std::vector<Association>& last,
-              Vector7d* formal, Vector7d* jack) const {
+              Vector7d* formal, Vector7d* jack, Vector7d* floor) const {
     const auto& o = o_;
     const auto& cal = cal_;
     const auto& initial = initial_;
@@ -232,6 +232,13 @@ class Solver {
     }
     const Matrix7d cov = A.inverse();
     for (int i = 0; i < 7; ++i) (*formal)(i) = fr[i] ? std::sqrt(std::max(0.0, cov(i, i))) : 0.0;
+    // The systematic floor: a parameter whose unit change moves the residuals by `sensitivity`
+    // (weighted RMS) cannot be known better than systematic_error_m / sensitivity, however many
+    // residuals there are.
+    for (int i = 0; i < 7; ++i) {
+      const double sensitivity = std::sqrt(std::max(0.0, all.H(i, i)) / std::max(all.w, 1e-12));
+      (*floor)(i) = fr[i] ? o.systematic_error_m / std::max(sensitivity, 1e-12) : 0.0;
+    }
     std::vector<Vector7d> loo;
     for (const auto& b : blocks) {
       if (b.n == 0) continue;
@@ -376,6 +383,8 @@ Status ExtrinsicCalibrationOptions::Validate() const {
         prior_sigma_time_s > 0.0) ||
       !prior_sigma_rpy_rad.allFinite() || !prior_sigma_xyz_m.allFinite())
     return FieldError("prior_sigma_*", prior_sigma_time_s, "every prior sigma must be > 0, finite");
+  if (!(systematic_error_m >= 0.0))
+    return FieldError("systematic_error_m", systematic_error_m, "must be >= 0");
   if (!(min_prior_reduction >= 1.0))
     return FieldError("min_prior_reduction", min_prior_reduction, "must be >= 1");
   if (jackknife_blocks < 2) return FieldError("jackknife_blocks", jackknife_blocks, "must be >= 2");
@@ -435,10 +444,11 @@ StatusOr<ExtrinsicCalibration> CalibrateExtrinsics(const DriveReader& reader,
   std::vector<Association> last;
   SLAM_MMS_RETURN_IF_ERROR(solver.Solve(&p, free, o.max_rounds, &last, &result));
 
-  Vector7d formal, jack;
-  solver.Sigmas(p, free, last, &formal, &jack);
+  Vector7d formal, jack, floor;
+  solver.Sigmas(p, free, last, &formal, &jack, &floor);
   result.formal_sigma = formal;
   result.jackknife_sigma = jack;
+  result.systematic_sigma = floor;
   Vector7d prior_sigma;
   prior_sigma << o.prior_sigma_rpy_rad, o.prior_sigma_xyz_m, o.prior_sigma_time_s;
   Vector7d max_sigma;
@@ -447,7 +457,7 @@ StatusOr<ExtrinsicCalibration> CalibrateExtrinsics(const DriveReader& reader,
   std::array<bool, 7> observable{};
   bool all_observable = true;
   for (int i = 0; i < 7; ++i) {
-    const double s = std::max(formal(i), jack(i));
+    const double s = std::max({formal(i), jack(i), floor(i)});
     observable[i] = free[i] && s <= max_sigma(i) && s * o.min_prior_reduction <= prior_sigma(i);
     if (free[i] && !observable[i]) all_observable = false;
   }
@@ -467,10 +477,11 @@ StatusOr<ExtrinsicCalibration> CalibrateExtrinsics(const DriveReader& reader,
       SLAM_MMS_RETURN_IF_ERROR(solver.Solve(&q, fr, std::max(3, o.max_rounds / 2), &last, &result));
     }
     p = q;
-    Vector7d f2, j2;
-    solver.Sigmas(p, fr, last, &f2, &j2);
+    Vector7d f2, j2, s2;
+    solver.Sigmas(p, fr, last, &f2, &j2, &s2);
     formal = f2;
     jack = j2;
+    floor = s2;
   }
   result.observable = observable;
   cal.Deskew(p);
@@ -497,12 +508,13 @@ StatusOr<ExtrinsicCalibration> CalibrateExtrinsics(const DriveReader& reader,
   result.correction_rpy_rad = RpyFromRotation(p.R * initial.R.transpose());
   result.correction_xyz_m = corr.segment<3>(3);
   for (int i = 0; i < 3; ++i) {
-    result.sigma_rpy_rad(i) =
-        observable[i] ? std::hypot(std::max(formal(i), jack(i)), result.pos_attitude_sigma_rad(i))
-                      : 0.0;
-    result.sigma_xyz_m(i) = observable[3 + i] ? std::max(formal(3 + i), jack(3 + i)) : 0.0;
+    result.sigma_rpy_rad(i) = observable[i] ? std::hypot(std::max({formal(i), jack(i), floor(i)}),
+                                                         result.pos_attitude_sigma_rad(i))
+                                            : 0.0;
+    result.sigma_xyz_m(i) =
+        observable[3 + i] ? std::max({formal(3 + i), jack(3 + i), floor(3 + i)}) : 0.0;
   }
-  result.sigma_time_s = observable[6] ? std::max(formal(6), jack(6)) : 0.0;
+  result.sigma_time_s = observable[6] ? std::max({formal(6), jack(6), floor(6)}) : 0.0;
   result.residuals = last.size();
   result.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_wall).count();
   return result;

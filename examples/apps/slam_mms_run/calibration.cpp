@@ -48,15 +48,17 @@ std::string CalibrationJson(const ExtrinsicCalibration& c, const std::string& fi
   j["attitude_reference_sigma_deg"] = Vec(c.pos_attitude_sigma_rad, kDeg);
   j["travel_direction_correction_deg"] = Vec(c.travel_correction_rad, kDeg);
   j["travel_direction_scans"] = c.travel_samples;
-  Json formal = Json::array(), jack = Json::array();
+  Json formal = Json::array(), jack = Json::array(), sys = Json::array();
   for (int i = 0; i < 7; ++i) {
     const double s = i < 3 ? kDeg : 1.0;  // deg, m, s
     formal.push_back(c.formal_sigma(i) * s);
     jack.push_back(c.jackknife_sigma(i) * s);
+    sys.push_back(c.systematic_sigma(i) * s);
   }
   j["data_sigma"] = Json{{"order", "roll_deg pitch_deg yaw_deg x_m y_m z_m time_offset_s"},
                          {"formal", std::move(formal)},
-                         {"jackknife", std::move(jack)}};
+                         {"jackknife", std::move(jack)},
+                         {"systematic", std::move(sys)}};
   j["scans_used"] = c.scans_used;
   j["scans_skipped_pos"] = c.scans_skipped_pos;
   j["scans_skipped_unreadable"] = c.scans_skipped_unreadable;

@@ -17,14 +17,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct ScopedDir {
-  fs::path path;
-  explicit ScopedDir(const std::string& tag) : path(testing::MakeTempDir(tag)) {}
-  ~ScopedDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-};
+using ScopedDir = testing::ScopedTempDir;
 
 // The T_lidar_body of the file, derived here from the definition in DriveSimulator::Options.
 Eigen::Isometry3d ExpectedWritten(const Eigen::Isometry3d& T_lidar_body_true, double yaw_deg,

@@ -34,16 +34,7 @@ std::vector<std::string> Lines(const fs::path& p) {
   return out;
 }
 
-// Removes a scratch folder at the end of a test (the drives are tens of MB).
-struct ScopedDir {
-  fs::path path;
-  explicit ScopedDir(const std::string& tag) : path(testing::MakeTempDir(tag)) {}
-  ~ScopedDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-  operator const fs::path&() const { return path; }  // NOLINT(google-explicit-constructor)
-};
+using ScopedDir = testing::ScopedTempDir;
 
 DriveSimulator::Options ShortDrive(uint64_t seed) {
   DriveSimulator::Options o;

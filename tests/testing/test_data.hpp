@@ -2,6 +2,7 @@
 // Test helpers: the location of the real KITTI data in ../shared/data and scratch folders.
 #include <filesystem>
 #include <string>
+#include <system_error>
 
 namespace slam_mms::testing {
 
@@ -17,6 +18,22 @@ bool HasKittiRaw();
 /// A fresh empty folder under the system temp dir, unique per test; removed by the caller if
 /// wanted.
 std::filesystem::path MakeTempDir(const std::string& tag);
+
+/// MakeTempDir(tag), removed with everything in it when this goes out of scope (the simulated
+/// drives are tens of MB).
+struct ScopedTempDir {
+  std::filesystem::path path;
+  explicit ScopedTempDir(const std::string& tag) : path(MakeTempDir(tag)) {}
+  ~ScopedTempDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(path, ec);
+  }
+  ScopedTempDir(const ScopedTempDir&) = delete;
+  ScopedTempDir& operator=(const ScopedTempDir&) = delete;
+  operator const std::filesystem::path&() const {
+    return path;
+  }  // NOLINT(google-explicit-constructor)
+};
 
 }  // namespace slam_mms::testing
 

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "io/file_util.hpp"
+#include "slam_mms/core/lie.hpp"
 #include "slam_mms/core/logging.hpp"
 
 namespace slam_mms {
@@ -90,10 +91,7 @@ StatusOr<Eigen::Isometry3d> ParseTransform(const YAML::Node& node, const std::st
     SLAM_MMS_RETURN_IF_ERROR(Numbers(node["xyz"], "T_body_lidar.xyz", 3, file, &v));
     SLAM_MMS_RETURN_IF_ERROR(Numbers(node["rpy_deg"], "T_body_lidar.rpy_deg", 3, file, &rpy));
     constexpr double kDegToRad = M_PI / 180.0;
-    T.linear() = (Eigen::AngleAxisd(rpy[2] * kDegToRad, Eigen::Vector3d::UnitZ()) *
-                  Eigen::AngleAxisd(rpy[1] * kDegToRad, Eigen::Vector3d::UnitY()) *
-                  Eigen::AngleAxisd(rpy[0] * kDegToRad, Eigen::Vector3d::UnitX()))
-                     .toRotationMatrix();
+    T.linear() = FromRollPitchYaw(rpy[0] * kDegToRad, rpy[1] * kDegToRad, rpy[2] * kDegToRad);
     T.translation() = Eigen::Vector3d(v[0], v[1], v[2]);
     return T;
   }

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <unordered_set>
 
+#include "registration/point_to_plane.hpp"
 #include "slam_mms/core/lie.hpp"
 
 namespace slam_mms::calib_internal {
@@ -164,8 +165,7 @@ std::vector<CalibrationProblem::Normal> CalibrationProblem::Accumulate(
     Vector7d J;
     for (size_t i = begin; i < end; ++i) {
       const double r = Residual(as[i], p, &J);
-      const double ar = std::abs(r);
-      const double w = ar <= o_.huber_m ? 1.0 : o_.huber_m / ar;
+      const double w = registration_internal::HuberWeight(r, o_.huber_m);
       Normal& nrm = part[t][blocks == 1 ? 0 : scans_[as[i].a].block];
       nrm.H.selfadjointView<Eigen::Lower>().rankUpdate(J, w);
       nrm.g += w * r * J;
@@ -190,22 +190,26 @@ double CalibrationProblem::Rms(const std::vector<Association>& as, const Params&
   return as.empty() ? 0.0 : std::sqrt(s / as.size());
 }
 
-Vector7d SolveStep(const Matrix7d& H, const Vector7d& g, const Vector7d& offset_from_prior,
-                   const Vector7d& prior_info, const std::array<bool, 7>& free) {
+Matrix7d WithPriorAndFixed(const Matrix7d& H, const Vector7d& prior_info,
+                           const std::array<bool, 7>& free) {
   Matrix7d A = H;
-  Vector7d b = -g;
-  for (int i = 0; i < 7; ++i) {
-    A(i, i) += prior_info(i);
-    b(i) -= prior_info(i) * offset_from_prior(i);
-  }
+  A.diagonal() += prior_info;
   for (int i = 0; i < 7; ++i) {
     if (free[i]) continue;
     A.row(i).setZero();
     A.col(i).setZero();
     A(i, i) = 1.0;
-    b(i) = 0.0;
   }
-  return A.ldlt().solve(b);
+  return A;
+}
+
+Vector7d SolveStep(const Matrix7d& H, const Vector7d& g, const Vector7d& offset_from_prior,
+                   const Vector7d& prior_info, const std::array<bool, 7>& free) {
+  Vector7d b = -g - prior_info.cwiseProduct(offset_from_prior);
+  for (int i = 0; i < 7; ++i) {
+    if (!free[i]) b(i) = 0.0;
+  }
+  return WithPriorAndFixed(H, prior_info, free).ldlt().solve(b);
 }
 
 }  // namespace slam_mms::calib_internal

@@ -173,6 +173,9 @@ class CalibrationProblem {
   mutable internal::WorkerPool pool_;
 };
 
+// H + diag(prior_info) with the rows and columns of the fixed parameters replaced by identity.
+Matrix7d WithPriorAndFixed(const Matrix7d& H, const Vector7d& prior_info,
+                           const std::array<bool, 7>& free);
 // Solves (H + prior) d = -(g + prior gradient) over the free parameters.
 Vector7d SolveStep(const Matrix7d& H, const Vector7d& g, const Vector7d& offset_from_prior,
                    const Vector7d& prior_info, const std::array<bool, 7>& free);

@@ -1,13 +1,9 @@
 #include "slam_mms/pipeline/extrinsic_calibrator.hpp"
 
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <memory>
-#include <nanoflann.hpp>
 #include <string>
-#include <unordered_set>
 
 #include "pipeline/extrinsic_calibration_problem.hpp"
 #include "slam_mms/core/lie.hpp"
@@ -21,6 +17,13 @@ using namespace calib_internal;
 Status FieldError(const std::string& field, double value, const std::string& rule) {
   return InvalidArgumentError("ExtrinsicCalibrationOptions::" + field + " = " +
                               std::to_string(value) + "; " + rule);
+}
+
+// The median (upper for an even count) of `v`; 0 for none.
+double Median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
 }
 
 // The scans used (see the header): evenly spaced, inside the POS span, where the POS is as good
@@ -43,14 +46,9 @@ StatusOr<std::vector<CalScan>> SelectScans(const DriveReader& reader, const PosT
     pos_sigmas.push_back(track.At(ts).pos_sigma_m);
     candidates.push_back(i);
   }
-  const auto median = [](std::vector<double> v) {
-    if (v.empty()) return 0.0;
-    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-    return v[v.size() / 2];
-  };
   {
     // The POS where it is as good as usual on this drive: not in outages, where it drifts.
-    const double gate = std::min(o.max_pos_sigma_m, o.max_pos_sigma_ratio * median(pos_sigmas));
+    const double gate = std::min(o.max_pos_sigma_m, o.max_pos_sigma_ratio * Median(pos_sigmas));
     std::vector<size_t> kept;
     for (size_t k = 0; k < candidates.size(); ++k) {
       if (pos_sigmas[k] <= gate) {
@@ -87,13 +85,12 @@ StatusOr<std::vector<CalScan>> SelectScans(const DriveReader& reader, const PosT
         " usable scans (need 10; scans outside the POS span or with a POS sigma above " +
         std::to_string(o.max_pos_sigma_m) + " m or " + std::to_string(o.max_pos_sigma_ratio) +
         " x its median are not used: " + std::to_string(result.scans_skipped_pos) +
-        " so; median POS sigma " + std::to_string(median(pos_sigmas)) + " m)");
+        " so; median POS sigma " + std::to_string(Median(pos_sigmas)) + " m)");
   }
   for (int axis = 0; axis < 3; ++axis) {
     std::vector<double> v;
     for (const Eigen::Vector3d& a : att_sigmas) v.push_back(a(axis));
-    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-    result.pos_attitude_sigma_rad(axis) = v[v.size() / 2];
+    result.pos_attitude_sigma_rad(axis) = Median(std::move(v));
   }
   const double span = scans.back().t_start - scans.front().t_start;
   for (CalScan& s : scans) {
@@ -169,34 +166,29 @@ class Solver {
   // `last` gets the associations of the last round.
   Status Solve(Params* p, const std::array<bool, 7>& fr, int rounds, std::vector<Association>* last,
                ExtrinsicCalibration* result) {
-    const auto& o = o_;
-    auto& cal = cal_;
-    const auto& initial = initial_;
-    const auto& prior_info = prior_info_;
-    const auto* stop = stop_;
     for (int round = 0; round < rounds; ++round) {
-      if (stop != nullptr && stop->load()) {
+      if (stop_ != nullptr && stop_->load()) {
         return FailedPreconditionError("CalibrateExtrinsics: stopped");
       }
       const double f = rounds > 1 ? std::min(1.0, round / 4.0) : 1.0;
-      const double gate = o.initial_gate_m * std::pow(o.final_gate_m / o.initial_gate_m, f);
-      cal.UpdatePoses(*p);
-      cal.Deskew(*p);
-      *last = cal.Associate(*p, gate);
+      const double gate = o_.initial_gate_m * std::pow(o_.final_gate_m / o_.initial_gate_m, f);
+      cal_.UpdatePoses(*p);
+      cal_.Deskew(*p);
+      *last = cal_.Associate(*p, gate);
       if (last->size() < 100) {
         return FailedPreconditionError("CalibrateExtrinsics: " + std::to_string(last->size()) +
                                        " point-to-plane associations (need 100): the scans do not "
                                        "overlap or the initial extrinsic is far off");
       }
       double step_norm = 0.0;
-      for (int it = 0; it < o.gauss_newton_steps_per_round; ++it) {
-        cal.UpdatePoses(*p);
-        const std::vector<CalibrationProblem::Normal> nb = cal.Accumulate(*last, *p, 1);
+      for (int it = 0; it < o_.gauss_newton_steps_per_round; ++it) {
+        const std::vector<CalibrationProblem::Normal> nb = cal_.Accumulate(*last, *p, 1);
         // Data weighted by the residual variance, so that the prior has its stated weight.
         const double s2 = std::max(nb[0].wrr / std::max(1.0, nb[0].n - 7.0), 1e-6);
         const Vector7d d =
-            SolveStep(nb[0].H / s2, nb[0].g / s2, Difference(*p, initial), prior_info, fr);
+            SolveStep(nb[0].H / s2, nb[0].g / s2, Difference(*p, initial_), prior_info_, fr);
         Apply(d, p);
+        cal_.UpdatePoses(*p);
         step_norm = std::max(
             {d.head<3>().norm() / 1e-5, d.segment<3>(3).norm() / 1e-4, std::abs(d(6)) / 1e-5});
       }
@@ -204,45 +196,32 @@ class Solver {
       result->converged = f >= 1.0 && step_norm < 1.0;
       if (result->converged) break;
     }
-    cal.UpdatePoses(*p);
     return OkStatus();
   }
 
   // Formal and jackknife (over time blocks) sigmas from the normal equations at `at`.
   void Sigmas(const Params& at, const std::array<bool, 7>& fr, const std::vector<Association>& last,
               Vector7d* formal, Vector7d* jack, Vector7d* floor) const {
-    const auto& o = o_;
-    const auto& cal = cal_;
-    const auto& initial = initial_;
-    const auto& prior_info = prior_info_;
     const std::vector<CalibrationProblem::Normal> blocks =
-        cal.Accumulate(last, at, o.jackknife_blocks);
+        cal_.Accumulate(last, at, o_.jackknife_blocks);
     CalibrationProblem::Normal all;
     for (const auto& b : blocks) all += b;
     const double dof = std::max<double>(1.0, static_cast<double>(all.n) - 7.0);
     const double s2 = all.wrr / dof;
-    const Vector7d off = Difference(at, initial);
-    Matrix7d A = all.H / s2;
-    for (int i = 0; i < 7; ++i) A(i, i) += prior_info(i);
-    for (int i = 0; i < 7; ++i) {
-      if (fr[i]) continue;
-      A.row(i).setZero();
-      A.col(i).setZero();
-      A(i, i) = 1.0;
-    }
-    const Matrix7d cov = A.inverse();
+    const Vector7d off = Difference(at, initial_);
+    const Matrix7d cov = WithPriorAndFixed(all.H / s2, prior_info_, fr).inverse();
     for (int i = 0; i < 7; ++i) (*formal)(i) = fr[i] ? std::sqrt(std::max(0.0, cov(i, i))) : 0.0;
     // The systematic floor: a parameter whose unit change moves the residuals by `sensitivity`
     // (weighted RMS) cannot be known better than systematic_error_m / sensitivity, however many
     // residuals there are.
     for (int i = 0; i < 7; ++i) {
       const double sensitivity = std::sqrt(std::max(0.0, all.H(i, i)) / std::max(all.w, 1e-12));
-      (*floor)(i) = fr[i] ? o.systematic_error_m / std::max(sensitivity, 1e-12) : 0.0;
+      (*floor)(i) = fr[i] ? o_.systematic_error_m / std::max(sensitivity, 1e-12) : 0.0;
     }
     std::vector<Vector7d> loo;
     for (const auto& b : blocks) {
       if (b.n == 0) continue;
-      loo.push_back(SolveStep((all.H - b.H) / s2, (all.g - b.g) / s2, off, prior_info, fr));
+      loo.push_back(SolveStep((all.H - b.H) / s2, (all.g - b.g) / s2, off, prior_info_, fr));
     }
     jack->setZero();
     if (loo.size() >= 2) {
@@ -271,10 +250,12 @@ void ApplyTravelReference(const CalibrationProblem& cal, const PosTrack& track,
                           ExtrinsicCalibration* out) {
   Params& p = *p_io;
   ExtrinsicCalibration& result = *out;
-  // The POS's mean attitude error about the body y and z axes from its own velocity in its body
-  // frame (v_body = v (1, -eps_z, eps_y) for an error R_est = R_true Exp(eps)), per time block;
-  // the map placed the scans with R_est, so the extrinsic in the true body frame is Exp(eps) X.
-  std::vector<Eigen::Vector2d> block_sum(o.jackknife_blocks, Eigen::Vector2d::Zero());
+  // The POS's mean heading error from its own velocity in its body frame (v_body =
+  // v (1, -eps_z, eps_y) for an attitude error R_est = R_true Exp(eps)), per time block; the map
+  // placed the scans with R_est, so the extrinsic in the true body frame is Exp(eps) X. Heading
+  // only: the vertical velocity of a GNSS/INS is too noisy for pitch (0.03-0.27 deg off on the
+  // simulated drives), while its roll and pitch, levelled by gravity, are good.
+  std::vector<double> block_sum(o.jackknife_blocks, 0.0);
   std::vector<int> block_n(o.jackknife_blocks, 0);
   for (const CalScan& sc : cal.scans()) {
     const PosTrack::Sample smp = track.At(sc.t_start + p.time);
@@ -284,11 +265,11 @@ void ApplyTravelReference(const CalibrationProblem& cal, const PosTrack& track,
       continue;
     }
     const Eigen::Vector3d vb = smp.T_world_body.linear().transpose() * smp.v_world;
-    block_sum[sc.block] += Eigen::Vector2d(std::atan2(vb.z(), vb.x()), -std::atan2(vb.y(), vb.x()));
+    block_sum[sc.block] -= std::atan2(vb.y(), vb.x());
     ++block_n[sc.block];
   }
-  std::vector<Eigen::Vector2d> means;
-  Eigen::Vector2d total = Eigen::Vector2d::Zero();
+  std::vector<double> means;
+  double total = 0.0;
   int n_total = 0;
   for (int b = 0; b < o.jackknife_blocks; ++b) {
     if (block_n[b] == 0) continue;
@@ -298,16 +279,13 @@ void ApplyTravelReference(const CalibrationProblem& cal, const PosTrack& track,
   }
   result.travel_samples = n_total;
   if (means.size() >= 2) {
-    const Eigen::Vector2d eps = total / n_total;
-    Eigen::Vector2d var = Eigen::Vector2d::Zero();
-    for (const Eigen::Vector2d& m : means) var += (m - eps).cwiseAbs2();
-    const Eigen::Vector2d sem =
-        (var / static_cast<double>(means.size() * (means.size() - 1))).cwiseSqrt();
-    // Heading only: the vertical velocity of a GNSS/INS is too noisy for pitch (0.03-0.27 deg
-    // off on the simulated drives), while its roll and pitch, levelled by gravity, are good.
-    result.travel_correction_rad = Eigen::Vector3d(0.0, 0.0, eps(1));
+    const double eps_z = total / n_total;
+    double var = 0.0;
+    for (const double m : means) var += (m - eps_z) * (m - eps_z);
+    const double sem = std::sqrt(var / static_cast<double>(means.size() * (means.size() - 1)));
+    result.travel_correction_rad = Eigen::Vector3d(0.0, 0.0, eps_z);
     result.attitude_reference = "travel_direction";
-    result.pos_attitude_sigma_rad(2) = std::hypot(sem(1), o.travel_sigma_rad);
+    result.pos_attitude_sigma_rad(2) = std::hypot(sem, o.travel_sigma_rad);
     Eigen::Vector3d e = result.travel_correction_rad;
     if (!observable[2]) e(2) = 0.0;
     const Eigen::Matrix3d Re = so3::Exp(e);
@@ -331,18 +309,6 @@ void ApplyTravelReference(const CalibrationProblem& cal, const PosTrack& track,
 const char* ExtrinsicParameterName(int i) {
   static const char* kNames[7] = {"roll", "pitch", "yaw", "x", "y", "z", "time_offset"};
   return i >= 0 && i < 7 ? kNames[i] : "?";
-}
-
-Eigen::Matrix3d RotationFromRpy(const Eigen::Vector3d& rpy) {
-  return (Eigen::AngleAxisd(rpy(2), Eigen::Vector3d::UnitZ()) *
-          Eigen::AngleAxisd(rpy(1), Eigen::Vector3d::UnitY()) *
-          Eigen::AngleAxisd(rpy(0), Eigen::Vector3d::UnitX()))
-      .toRotationMatrix();
-}
-
-Eigen::Vector3d RpyFromRotation(const Eigen::Matrix3d& R) {
-  const double pitch = std::asin(std::clamp(-R(2, 0), -1.0, 1.0));
-  return Eigen::Vector3d(std::atan2(R(2, 1), R(2, 2)), pitch, std::atan2(R(1, 0), R(0, 0)));
 }
 
 Status ExtrinsicCalibrationOptions::Validate() const {
@@ -492,7 +458,7 @@ StatusOr<ExtrinsicCalibration> CalibrateExtrinsics(const DriveReader& reader,
   {
     // Held rotation axes exactly at the initial value in the reported (roll, pitch, yaw) terms
     // (the steps kept them at zero to first order only).
-    Eigen::Vector3d rpy = RpyFromRotation(p.R * initial.R.transpose());
+    Eigen::Vector3d rpy = RollPitchYaw(p.R * initial.R.transpose());
     bool changed = false;
     for (int i = 0; i < 3; ++i) {
       if (!observable[i] && rpy(i) != 0.0) {
@@ -500,12 +466,12 @@ StatusOr<ExtrinsicCalibration> CalibrateExtrinsics(const DriveReader& reader,
         changed = true;
       }
     }
-    if (changed) p.R = RotationFromRpy(rpy) * initial.R;
+    if (changed) p.R = FromRollPitchYaw(rpy(0), rpy(1), rpy(2)) * initial.R;
   }
   const Vector7d corr = Difference(p, initial);
   result.T_body_lidar_estimated = p.X();
   result.time_offset_s = p.time;
-  result.correction_rpy_rad = RpyFromRotation(p.R * initial.R.transpose());
+  result.correction_rpy_rad = RollPitchYaw(p.R * initial.R.transpose());
   result.correction_xyz_m = corr.segment<3>(3);
   for (int i = 0; i < 3; ++i) {
     result.sigma_rpy_rad(i) = observable[i] ? std::hypot(std::max({formal(i), jack(i), floor(i)}),

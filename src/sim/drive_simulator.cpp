@@ -14,6 +14,7 @@
 #include "sim/drive_outputs.hpp"
 #include "sim/oxts_synthesis.hpp"
 #include "sim/random.hpp"
+#include "slam_mms/core/lie.hpp"
 #include "slam_mms/core/logging.hpp"
 #include "slam_mms/core/trajectory.hpp"
 #include "slam_mms/io/kitti_raw_writer.hpp"
@@ -40,10 +41,8 @@ Eigen::Isometry3d WrittenTLidarBody(const DriveSimulator::Options& o) {
   constexpr double kDegToRad = M_PI / 180.0;
   const Eigen::Vector3d& rpy = o.calib_error_rpy_deg;
   // The error is a rotation about the body axes (on the left) and a lever-arm error in body.
-  const Eigen::Matrix3d R_err = (Eigen::AngleAxisd(rpy.z() * kDegToRad, Eigen::Vector3d::UnitZ()) *
-                                 Eigen::AngleAxisd(rpy.y() * kDegToRad, Eigen::Vector3d::UnitY()) *
-                                 Eigen::AngleAxisd(rpy.x() * kDegToRad, Eigen::Vector3d::UnitX()))
-                                    .toRotationMatrix();
+  const Eigen::Matrix3d R_err =
+      FromRollPitchYaw(rpy.x() * kDegToRad, rpy.y() * kDegToRad, rpy.z() * kDegToRad);
   const Eigen::Isometry3d T_body_lidar_true = o.T_lidar_body.inverse();
   Eigen::Isometry3d T_body_lidar_written = Eigen::Isometry3d::Identity();
   T_body_lidar_written.linear() = R_err * T_body_lidar_true.linear();

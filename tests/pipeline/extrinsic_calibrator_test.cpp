@@ -4,18 +4,19 @@
 #include "slam_mms/pipeline/extrinsic_calibrator.hpp"
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 
+#include "slam_mms/core/lie.hpp"
 #include "slam_mms/io/trajectory_io.hpp"
 #include "slam_mms/pipeline/drive_runner.hpp"
 #include "slam_mms/pipeline/open_drive.hpp"
 #include "slam_mms/sim/drive_simulator.hpp"
 #include "slam_mms/sim/imu_simulator.hpp"
+#include "testing/test_data.hpp"
 
 namespace slam_mms {
 namespace {
@@ -42,7 +43,7 @@ Case Open(const std::filesystem::path& drive_dir) {
 
 void Print(const ExtrinsicCalibration& r, const Eigen::Isometry3d& truth, double true_offset) {
   const Eigen::Vector3d rot_err =
-      RpyFromRotation(r.T_body_lidar_estimated.linear() * truth.linear().transpose()) / kDeg;
+      RollPitchYaw(r.T_body_lidar_estimated.linear() * truth.linear().transpose()) / kDeg;
   const Eigen::Vector3d t_err = r.T_body_lidar_estimated.translation() - truth.translation();
   std::printf(
       "scans %d (pos-skipped %d), residuals %zu, rounds %d, converged %d, wall %.2f s, "
@@ -68,20 +69,16 @@ void Print(const ExtrinsicCalibration& r, const Eigen::Isometry3d& truth, double
 // A simulated drive whose calibration file is wrong by `rpy_deg` / `xyz_m` and whose LiDAR clock
 // lags by `offset_s`, with a navigation-grade IMU under open sky (a calibration drive).
 struct PerturbedDrive {
-  std::filesystem::path dir;
+  explicit PerturbedDrive(const std::string& name) : dir(name) {}
+  testing::ScopedTempDir dir;
   Eigen::Isometry3d T_body_lidar_true;
-  ~PerturbedDrive() {
-    std::error_code ec;
-    if (!dir.empty()) std::filesystem::remove_all(dir, ec);
-  }
 };
 
 std::unique_ptr<PerturbedDrive> Simulate(const std::string& name, const std::string& scenario,
                                          double duration_s, const Eigen::Vector3d& rpy_deg,
                                          const Eigen::Vector3d& xyz_m, double offset_s,
                                          std::filesystem::path* drive_dir) {
-  auto d = std::make_unique<PerturbedDrive>();
-  d->dir = std::filesystem::temp_directory_path() / (name + "_" + std::to_string(::getpid()));
+  auto d = std::make_unique<PerturbedDrive>(name);
   sim::DriveSimulator::Options o;
   o.scenario = scenario;
   o.duration_s = duration_s;
@@ -94,7 +91,7 @@ std::unique_ptr<PerturbedDrive> Simulate(const std::string& name, const std::str
   StatusOr<sim::DriveSimulator> simulator = sim::DriveSimulator::Create(o);
   EXPECT_TRUE(simulator.ok()) << simulator.status().ToString();
   if (!simulator.ok()) return nullptr;
-  StatusOr<sim::DriveSimulator::Summary> summary = simulator->Run(d->dir);
+  StatusOr<sim::DriveSimulator::Summary> summary = simulator->Run(d->dir.path);
   EXPECT_TRUE(summary.ok()) << summary.status().ToString();
   if (!summary.ok()) return nullptr;
   d->T_body_lidar_true = o.T_lidar_body.inverse();
@@ -121,7 +118,7 @@ TEST(ExtrinsicCalibratorTest, RecoversAPerturbedExtrinsicAndClockOffsetOnADriveW
   Print(*r, truth, 0.02);
   EXPECT_EQ(r->attitude_reference, "travel_direction");
   const Eigen::Vector3d rot_err =
-      RpyFromRotation(r->T_body_lidar_estimated.linear() * truth.linear().transpose());
+      RollPitchYaw(r->T_body_lidar_estimated.linear() * truth.linear().transpose());
   const Eigen::Vector3d t_err = r->T_body_lidar_estimated.translation() - truth.translation();
   EXPECT_GT(r->total_heading_change_rad, 90.0 * kDeg);
   // The target, 0.03 deg per axis. The map observes only boresight + POS attitude error (they
@@ -176,8 +173,8 @@ TEST(ExtrinsicCalibratorTest, StraightDriveHoldsTheLeverArmAndRollAtTheirInitial
   // Pitch is observable straight ahead (the ground seen at different ranges): the 0.2 deg error
   // is corrected.
   EXPECT_TRUE(r->observable[1]);
-  const Eigen::Vector3d rot_err = RpyFromRotation(r->T_body_lidar_estimated.linear() *
-                                                  drive->T_body_lidar_true.linear().transpose());
+  const Eigen::Vector3d rot_err = RollPitchYaw(r->T_body_lidar_estimated.linear() *
+                                               drive->T_body_lidar_true.linear().transpose());
   EXPECT_LT(std::abs(rot_err(1)), 0.05 * kDeg);
   // Yaw too: a yaw error shifts each scan sideways by the distance driven since the last one,
   // which the facades along the road see.
@@ -195,14 +192,11 @@ TEST(ExtrinsicCalibratorTest, OptionsAndInputsAreChecked) {
   o = ExtrinsicCalibrationOptions{};
   o.jackknife_blocks = 1;
   EXPECT_NE(o.Validate().message().find("jackknife_blocks"), std::string::npos);
-  EXPECT_NEAR((RotationFromRpy(RpyFromRotation(RotationFromRpy(Eigen::Vector3d(0.1, -0.2, 2.5)))) -
-               RotationFromRpy(Eigen::Vector3d(0.1, -0.2, 2.5)))
-                  .norm(),
-              0.0, 1e-12);
-  EXPECT_NEAR((RpyFromRotation(RotationFromRpy(Eigen::Vector3d(0.1, -0.2, 2.5))) -
-               Eigen::Vector3d(0.1, -0.2, 2.5))
-                  .norm(),
-              0.0, 1e-12);
+  // The report's roll, pitch, yaw convention (core's RollPitchYaw) reads back.
+  const Eigen::Matrix3d R = FromRollPitchYaw(0.1, -0.2, 2.5);
+  const Eigen::Vector3d rpy = RollPitchYaw(R);
+  EXPECT_NEAR((FromRollPitchYaw(rpy(0), rpy(1), rpy(2)) - R).norm(), 0.0, 1e-12);
+  EXPECT_NEAR((rpy - Eigen::Vector3d(0.1, -0.2, 2.5)).norm(), 0.0, 1e-12);
 }
 
 // A measurement, not a check (docs/calibration.md): SLAM_MMS_CAL_DRIVE=<simulated KITTI raw drive>
@@ -225,7 +219,7 @@ TEST(ExtrinsicCalibratorTest, ExploreDrive) {
     const StatusOr<Eigen::Isometry3d> T = gt->Interpolate(c.pos.states[i].stamp);
     if (!T.ok()) continue;
     const Eigen::Vector3d e =
-        RpyFromRotation(c.pos.states[i].T_world_body.linear() * T->linear().transpose()) / kDeg;
+        RollPitchYaw(c.pos.states[i].T_world_body.linear() * T->linear().transpose()) / kDeg;
     sum += e;
     sq += e.cwiseAbs2();
     ++n;
@@ -247,8 +241,8 @@ TEST(ExtrinsicCalibratorTest, ExploreDrive) {
   const double scale =
       std::getenv("SLAM_MMS_CAL_SCALE") ? std::atof(std::getenv("SLAM_MMS_CAL_SCALE")) : 1.0;
   Eigen::Isometry3d initial = truth;
-  initial.linear() =
-      RotationFromRpy(scale * Eigen::Vector3d(0.4, -0.3, 1.0) * kDeg) * truth.linear();
+  initial.linear() = FromRollPitchYaw(scale * 0.4 * kDeg, scale * -0.3 * kDeg, scale * 1.0 * kDeg) *
+                     truth.linear();
   initial.translation() += scale * Eigen::Vector3d(0.08, -0.06, 0.05);
   ExtrinsicCalibrationOptions o;
   if (std::getenv("SLAM_MMS_CAL_TRAVEL"))

@@ -35,7 +35,6 @@
 #include "slam_mms/eval/ground_truth.hpp"
 #include "slam_mms/eval/map_entropy.hpp"
 #include "slam_mms/eval/report.hpp"
-#include "slam_mms/io/kitti_calibration.hpp"
 #include "slam_mms/io/kitti_drive_reader.hpp"
 #include "slam_mms/io/map_io.hpp"
 #include "slam_mms/io/trajectory_io.hpp"
@@ -400,37 +399,31 @@ int RunMain(int argc, const char* const* argv) {
   if (input->NumScans() == 0) {
     return Fail(OutOfRangeError(input->Describe() + ": no scan in the frame range"), kExitError);
   }
-  // Boresight self-calibration first: every method then runs with the estimate.
+  options.T_body_lidar = input->streams().T_body_lidar;
+  if (input->streams().t_body_antenna_m) {
+    options.ins.gnss.t_body_antenna = *input->streams().t_body_antenna_m;
+  }
+  options.gnss_outages = args.gnss_outages;
+  const Status valid = options.Validate();
+  if (!valid.ok()) return Fail(valid, kExitUsage);
+  // Boresight self-calibration first: every method then runs with the estimate (the antenna and
+  // everything else as the input gives them).
   std::string extrinsics_json;
   if (args.calibrate_extrinsics || options.level2.estimate_extrinsics) {
-    MappingSystem::Options cal_options = options;
-    cal_options.gnss_outages = args.gnss_outages;
-    if (input->streams().t_body_antenna_m) {
-      cal_options.ins.gnss.t_body_antenna = *input->streams().t_body_antenna_m;
-    }
-    // The offset an --extrinsics file already applies (the file read fine: OpenRunInput did).
-    double input_offset_s = 0.0;
-    if (!args.extrinsics.empty()) {
-      StatusOr<DriveExtrinsics> given = ReadExtrinsicsFile(args.extrinsics);
-      if (given.ok()) input_offset_s = given->lidar_time_offset_s;
-    }
+    // The clock offset the reader already applies (an --extrinsics file's): its scans' shift.
+    const double input_offset_s =
+        input->ScanStart(0).SecondsSince(input->Underlying().ScanStart(0));
     StatusOr<RunCalibration> calibration =
-        CalibrateRunExtrinsics(*input, cal_options, args.out_dir, input_offset_s, &g_stop);
+        CalibrateRunExtrinsics(*input, options, args.out_dir, input_offset_s, &g_stop);
     if (!calibration.ok()) {
       return Fail(calibration.status().WithContext("--calibrate-extrinsics"),
                   g_stop.load() ? StopExitCode() : kExitError);
     }
     input = OverrideExtrinsics(std::move(input), calibration->extrinsics);
+    options.T_body_lidar = input->streams().T_body_lidar;
     extrinsics_json = std::move(calibration->json);
   }
   const DriveReader& reader = *input;
-  options.T_body_lidar = reader.streams().T_body_lidar;
-  if (reader.streams().t_body_antenna_m) {
-    options.ins.gnss.t_body_antenna = *reader.streams().t_body_antenna_m;
-  }
-  options.gnss_outages = args.gnss_outages;
-  const Status valid = options.Validate();
-  if (!valid.ok()) return Fail(valid, kExitUsage);
 
   // The checkpoint (checkpoint.hpp): a fresh one, or the killed run's with --resume.
   const RunFingerprint fingerprint =

@@ -193,8 +193,5 @@ const char* ExtrinsicParameterName(int i);
     const Eigen::Isometry3d& T_body_lidar_initial, double time_offset_initial_s,
     const ExtrinsicCalibrationOptions& options, const std::atomic<bool>* stop = nullptr);
 
-/// Rz(yaw) Ry(pitch) Rx(roll) and back ([roll, pitch, yaw] in rad; pitch in [-pi/2, pi/2]).
-Eigen::Matrix3d RotationFromRpy(const Eigen::Vector3d& rpy_rad);
-Eigen::Vector3d RpyFromRotation(const Eigen::Matrix3d& R);
 
 }  // namespace slam_mms

@@ -6,9 +6,9 @@
 #include <random>
 
 #include "slam_mms/core/lie.hpp"
+#include "slam_mms/core/voxel_downsample.hpp"
 #include "slam_mms/eval/map_entropy.hpp"
 #include "slam_mms/eval/trajectory_error.hpp"
-#include "slam_mms/eval/voxel_downsample.hpp"
 
 namespace {
 
@@ -67,7 +67,7 @@ void BM_VoxelDownsample(benchmark::State& state) {
   const slam_mms::PointCloud map = StreetMap(static_cast<size_t>(state.range(0)));
   size_t out = 0;
   for (auto _ : state) {
-    auto r = slam_mms::eval::VoxelDownsample(map, 0.1);
+    auto r = slam_mms::VoxelDownsample(map, 0.1);
     out = r.ok() ? r->size() : 0;
     benchmark::DoNotOptimize(out);
   }

@@ -6,12 +6,13 @@
 #include <cmath>
 #include <random>
 
+#include "backend/gnss_position_factor.hpp"
+#include "backend/imu_preintegration_factor.hpp"
+#include "backend/pose_block.hpp"
 #include "slam_mms/core/lie.hpp"
 #include "slam_mms/ins/gnss_prior.hpp"
 #include "slam_mms/ins/imu_preintegration.hpp"
-#include "slam_mms/ins/imu_preintegration_factor.hpp"
 #include "slam_mms/ins/ins_filter.hpp"
-#include "slam_mms/ins/pose_block.hpp"
 
 namespace {
 

@@ -153,7 +153,7 @@ BENCHMARK(BM_WritePly)->Arg(100000)->Arg(1000000)->Unit(benchmark::kMillisecond)
 void BM_WriteLas(benchmark::State& state) {
   const slam_mms::MapCloud map = BenchMap(static_cast<size_t>(state.range(0)));
   const fs::path file = BenchFile("map.las");
-  const slam_mms::GeoOrigin origin{49.013141872681, 8.4378138518088, 114.06644439697};
+  const slam_mms::GeodeticPoint origin{49.013141872681, 8.4378138518088, 114.06644439697};
   for (auto _ : state) {
     const slam_mms::Status s = slam_mms::WriteLas(map, origin, file);
     if (!s.ok()) {

@@ -14,7 +14,9 @@
 #include <random>
 #include <vector>
 
+#if SLAM_MMS_HAVE_EGL
 #include "slam_mms/render_egl/egl_surfel_renderer.hpp"
+#endif
 #include "slam_mms/surfel/cpu_surfel_renderer.hpp"
 #include "slam_mms/surfel/range_projection.hpp"
 #include "slam_mms/surfel/surfel_map.hpp"
@@ -55,6 +57,12 @@ BENCHMARK(BM_RenderCpu)->Arg(100000)->Arg(1000000)->Unit(benchmark::kMillisecond
 
 void BM_RenderEgl(benchmark::State& state) {
   const auto& surfels = StreetSurfels(static_cast<size_t>(state.range(0)));
+#if !SLAM_MMS_HAVE_EGL
+  (void)surfels;
+  state.SkipWithError("EGL was not built (SLAM_MMS_WITH_EGL=OFF)");
+  for (auto _ : state) {
+  }
+#else
   auto renderer = slam_mms::EglSurfelRenderer::Create(slam_mms::SurfelRendererOptions());
   if (!renderer.ok()) {
     state.SkipWithError(renderer.status().ToString().c_str());
@@ -73,6 +81,7 @@ void BM_RenderEgl(benchmark::State& state) {
   }
   state.counters["valid_px"] = img.CountVertices();
   state.SetLabel((*renderer)->gl_renderer());
+#endif
 }
 BENCHMARK(BM_RenderEgl)->Arg(100000)->Arg(1000000)->Unit(benchmark::kMillisecond);
 

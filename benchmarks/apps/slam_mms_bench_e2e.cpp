@@ -31,10 +31,10 @@
 #include <vector>
 
 #include "slam_mms/core/logging.hpp"
+#include "slam_mms/drive/drive_runner.hpp"
+#include "slam_mms/drive/open_drive.hpp"
 #include "slam_mms/io/drive_reader.hpp"
-#include "slam_mms/pipeline/drive_runner.hpp"
 #include "slam_mms/pipeline/mapping_system.hpp"
-#include "slam_mms/pipeline/open_drive.hpp"
 #include "slam_mms/sim/drive_simulator.hpp"
 #include "slam_mms/version.hpp"
 

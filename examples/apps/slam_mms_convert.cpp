@@ -21,8 +21,8 @@
 #include <string>
 
 #include "slam_mms/core/logging.hpp"
+#include "slam_mms/drive/open_drive.hpp"
 #include "slam_mms/io/kitti_drive_reader.hpp"
-#include "slam_mms/pipeline/open_drive.hpp"
 #include "slam_mms/version.hpp"
 #include "slam_mms_convert/writers.hpp"
 

@@ -356,8 +356,7 @@ void RegisterEval(py::module_& m) {
           s = WithoutGil([&] { return WritePcd(map, f); });
         } else if (ext == ".las") {
           if (!origin) throw py::value_error("write_map: a .las file needs the origin");
-          const GeoOrigin o{origin->latitude_deg, origin->longitude_deg, origin->height_m};
-          s = WithoutGil([&] { return WriteLas(map, o, f); });
+          s = WithoutGil([&] { return WriteLas(map, *origin, f); });
         } else {
           throw py::value_error("write_map: " + f.string() +
                                 ": extension must be .ply, .pcd, .las");

@@ -7,9 +7,9 @@
 #include <atomic>
 
 #include "common.hpp"
-#include "slam_mms/pipeline/drive_runner.hpp"
-#include "slam_mms/pipeline/georeferenced_outputs.hpp"
-#include "slam_mms/pipeline/scan_results_csv.hpp"
+#include "slam_mms/drive/drive_runner.hpp"
+#include "slam_mms/drive/georeferenced_outputs.hpp"
+#include "slam_mms/drive/scan_results_csv.hpp"
 
 namespace slam_mms::python {
 namespace {

@@ -18,7 +18,7 @@
 #include "slam_mms/rosbag/rosbag_writer.hpp"
 #endif
 #ifdef SLAM_MMS_PY_WITH_OPEN_DRIVE
-#include "slam_mms/pipeline/open_drive.hpp"
+#include "slam_mms/drive/open_drive.hpp"
 #endif
 
 namespace slam_mms::python {

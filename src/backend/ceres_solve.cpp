@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "backend/backend_math.hpp"
-#include "slam_mms/ins/pose_block.hpp"
+#include "backend/pose_block.hpp"
 
 namespace slam_mms::backend_internal {
 

@@ -1,7 +1,7 @@
-#include "slam_mms/backend/pose_prior_factor.hpp"
+#include "backend/pose_prior_factor.hpp"
 
 #include "backend/backend_math.hpp"
-#include "slam_mms/ins/pose_block.hpp"
+#include "backend/pose_block.hpp"
 
 namespace slam_mms {
 

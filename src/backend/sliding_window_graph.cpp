@@ -13,10 +13,11 @@
 #include "backend/backend_math.hpp"
 #include "backend/ceres_solve.hpp"
 #include "backend/marginalization.hpp"
-#include "slam_mms/backend/pose_prior_factor.hpp"
-#include "slam_mms/backend/relative_pose_factor.hpp"
+#include "backend/pose_block.hpp"
+#include "backend/pose_prior_factor.hpp"
+#include "backend/relative_pose_factor.hpp"
+#include "core/option_error.hpp"
 #include "slam_mms/core/logging.hpp"
-#include "slam_mms/ins/pose_block.hpp"
 
 namespace slam_mms {
 
@@ -54,32 +55,32 @@ std::string Id(StateId id) { return std::to_string(id); }
 
 Status SlidingWindowGraph::Options::Validate() const {
   if (window_size <= 0) {
-    return InvalidArgumentError("SlidingWindowGraph::Options::window_size = " +
-                                std::to_string(window_size) + "; must be > 0");
+    return internal::OptionError("SlidingWindowGraph::Options", "window_size", window_size,
+                                 "must be > 0");
   }
   if (max_iterations <= 0) {
-    return InvalidArgumentError("SlidingWindowGraph::Options::max_iterations = " +
-                                std::to_string(max_iterations) + "; must be > 0");
+    return internal::OptionError("SlidingWindowGraph::Options", "max_iterations", max_iterations,
+                                 "must be > 0");
   }
   if (!(max_solve_time_s > 0.0)) {
-    return InvalidArgumentError("SlidingWindowGraph::Options::max_solve_time_s = " +
-                                std::to_string(max_solve_time_s) + "; must be > 0");
+    return internal::OptionError("SlidingWindowGraph::Options", "max_solve_time_s",
+                                 max_solve_time_s, "must be > 0");
   }
   if (num_threads <= 0) {
-    return InvalidArgumentError("SlidingWindowGraph::Options::num_threads = " +
-                                std::to_string(num_threads) + "; must be > 0");
+    return internal::OptionError("SlidingWindowGraph::Options", "num_threads", num_threads,
+                                 "must be > 0");
   }
   if (!(function_tolerance > 0.0)) {
-    return InvalidArgumentError("SlidingWindowGraph::Options::function_tolerance = " +
-                                std::to_string(function_tolerance) + "; must be > 0");
+    return internal::OptionError("SlidingWindowGraph::Options", "function_tolerance",
+                                 function_tolerance, "must be > 0");
   }
   if (!(consistency_gate_chi2 > 0.0)) {
-    return InvalidArgumentError("SlidingWindowGraph::Options::consistency_gate_chi2 = " +
-                                std::to_string(consistency_gate_chi2) + "; must be > 0");
+    return internal::OptionError("SlidingWindowGraph::Options", "consistency_gate_chi2",
+                                 consistency_gate_chi2, "must be > 0");
   }
   if (!(marginalization_eigen_threshold >= 0.0)) {
-    return InvalidArgumentError("SlidingWindowGraph::Options::marginalization_eigen_threshold = " +
-                                std::to_string(marginalization_eigen_threshold) + "; must be >= 0");
+    return internal::OptionError("SlidingWindowGraph::Options", "marginalization_eigen_threshold",
+                                 marginalization_eigen_threshold, "must be >= 0");
   }
   return OkStatus();
 }

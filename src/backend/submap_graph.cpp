@@ -10,11 +10,12 @@
 
 #include "backend/backend_math.hpp"
 #include "backend/ceres_solve.hpp"
-#include "slam_mms/backend/pose_prior_factor.hpp"
-#include "slam_mms/backend/relative_pose_factor.hpp"
+#include "backend/gnss_position_factor.hpp"
+#include "backend/pose_block.hpp"
+#include "backend/pose_prior_factor.hpp"
+#include "backend/relative_pose_factor.hpp"
+#include "core/option_error.hpp"
 #include "slam_mms/core/logging.hpp"
-#include "slam_mms/ins/gnss_position_factor.hpp"
-#include "slam_mms/ins/pose_block.hpp"
 
 namespace slam_mms {
 
@@ -41,8 +42,7 @@ std::string Id(SubmapId id) { return std::to_string(id); }
 
 Status Positive(const char* field, double v) {
   if (v > 0.0) return OkStatus();
-  return InvalidArgumentError(std::string("SubmapGraph::Options::") + field + " = " +
-                              std::to_string(v) + "; must be > 0");
+  return internal::OptionError("SubmapGraph::Options", field, v, "must be > 0");
 }
 
 }  // namespace

@@ -11,7 +11,7 @@
 #include <thread>
 #include <vector>
 
-#include "slam_mms/eval/voxel_downsample.hpp"
+#include "slam_mms/core/voxel_downsample.hpp"
 
 namespace slam_mms::eval {
 namespace {

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <string>
 
+#include "core/option_error.hpp"
 #include "slam_mms/core/lie.hpp"
 
 namespace slam_mms::eval {
@@ -16,12 +17,12 @@ constexpr double kRadToDeg = 180.0 / M_PI;
 
 Status MatchOptions::Validate() const {
   if (!(max_ground_truth_gap_s > 0.0)) {
-    return InvalidArgumentError("MatchOptions::max_ground_truth_gap_s = " +
-                                std::to_string(max_ground_truth_gap_s) + "; must be > 0");
+    return internal::OptionError("MatchOptions", "max_ground_truth_gap_s", max_ground_truth_gap_s,
+                                 "must be > 0");
   }
   if (!(end_tolerance_s >= 0.0)) {
-    return InvalidArgumentError(
-        "MatchOptions::end_tolerance_s = " + std::to_string(end_tolerance_s) + "; must be >= 0");
+    return internal::OptionError("MatchOptions", "end_tolerance_s", end_tolerance_s,
+                                 "must be >= 0");
   }
   return OkStatus();
 }

@@ -6,6 +6,7 @@
 #include <optional>
 #include <sstream>
 
+#include "core/option_error.hpp"
 #include "slam_mms/core/logging.hpp"
 
 namespace slam_mms {
@@ -33,9 +34,7 @@ namespace {
 bool PositiveFinite(double x) { return std::isfinite(x) && x > 0.0; }
 
 Status FieldError(const char* field, double value, const char* rule) {
-  std::ostringstream s;
-  s << "GnssPrior::Options::" << field << " = " << value << "; " << rule;
-  return InvalidArgumentError(s.str());
+  return internal::OptionError("GnssPrior::Options", field, value, rule);
 }
 
 struct FixRecord {
@@ -313,11 +312,5 @@ int GnssPrior::num_used() const { return impl_->num_used; }
 int GnssPrior::num_downweighted() const { return impl_->num_downweighted; }
 int GnssPrior::num_rejected() const { return impl_->num_rejected; }
 int GnssPrior::num_withheld() const { return impl_->num_withheld; }
-
-StatusOr<std::unique_ptr<GnssPositionFactor>> GnssPrior::MakeFactor(
-    const GnssMeasurement& measurement) const {
-  return GnssPositionFactor::Create(measurement.p_world_antenna, measurement.cov_world_antenna,
-                                    impl_->options.t_body_antenna);
-}
 
 }  // namespace slam_mms

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <string>
 
+#include "core/option_error.hpp"
 #include "slam_mms/core/lie.hpp"
 
 namespace slam_mms {
@@ -14,20 +15,20 @@ bool PositiveFinite(double x) { return std::isfinite(x) && x > 0.0; }
 
 Status ImuPreintegration::Options::Validate() const {
   if (!PositiveFinite(gyro_noise_density))
-    return InvalidArgumentError("ImuPreintegration::Options::gyro_noise_density = " +
-                                std::to_string(gyro_noise_density) + "; must be > 0");
+    return internal::OptionError("ImuPreintegration::Options", "gyro_noise_density",
+                                 gyro_noise_density, "must be > 0");
   if (!PositiveFinite(accel_noise_density))
-    return InvalidArgumentError("ImuPreintegration::Options::accel_noise_density = " +
-                                std::to_string(accel_noise_density) + "; must be > 0");
+    return internal::OptionError("ImuPreintegration::Options", "accel_noise_density",
+                                 accel_noise_density, "must be > 0");
   if (!PositiveFinite(gyro_bias_random_walk))
-    return InvalidArgumentError("ImuPreintegration::Options::gyro_bias_random_walk = " +
-                                std::to_string(gyro_bias_random_walk) + "; must be > 0");
+    return internal::OptionError("ImuPreintegration::Options", "gyro_bias_random_walk",
+                                 gyro_bias_random_walk, "must be > 0");
   if (!PositiveFinite(accel_bias_random_walk))
-    return InvalidArgumentError("ImuPreintegration::Options::accel_bias_random_walk = " +
-                                std::to_string(accel_bias_random_walk) + "; must be > 0");
+    return internal::OptionError("ImuPreintegration::Options", "accel_bias_random_walk",
+                                 accel_bias_random_walk, "must be > 0");
   if (!PositiveFinite(max_sample_dt_s))
-    return InvalidArgumentError("ImuPreintegration::Options::max_sample_dt_s = " +
-                                std::to_string(max_sample_dt_s) + "; must be > 0");
+    return internal::OptionError("ImuPreintegration::Options", "max_sample_dt_s", max_sample_dt_s,
+                                 "must be > 0");
   return OkStatus();
 }
 

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "core/option_error.hpp"
 #include "slam_mms/core/lie.hpp"
 #include "slam_mms/core/logging.hpp"
 
@@ -20,9 +21,7 @@ constexpr double kWhiteBiasVariance = 1e-10;
 bool PositiveFinite(double x) { return std::isfinite(x) && x > 0.0; }
 
 Status FieldError(const char* field, double value, const char* rule) {
-  std::ostringstream s;
-  s << "InsFilter::Options::" << field << " = " << value << "; " << rule;
-  return InvalidArgumentError(s.str());
+  return internal::OptionError("InsFilter::Options", field, value, rule);
 }
 
 struct Nominal {
@@ -511,14 +510,6 @@ Status InsFilter::InitializeAttitude(const Eigen::Quaterniond& q_world_body,
   impl_->pending_stamp = stamp;
   impl_->initialized = false;
   impl_->mode = Mode::kImu;
-  return OkStatus();
-}
-
-Status InsFilter::InitializeFromOxts(const OxtsRecord& record, Timestamp stamp) {
-  const Eigen::Quaterniond q(OxtsAttitude(record));
-  SLAM_MMS_RETURN_IF_ERROR(InitializeAttitude(q, Eigen::Vector3d(record.ve, record.vn, record.vu)));
-  auto r = AddGnss(ToGnssFix(record, stamp));
-  if (!r.ok()) return r.status();
   return OkStatus();
 }
 

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "core/option_error.hpp"
 #include "io/drive_folder_parsers.hpp"
 #include "io/file_util.hpp"
 #include "io/nmea.hpp"
@@ -56,12 +57,12 @@ void KeepWithin(Timestamp t_min, Timestamp t_max, std::vector<T>* records,
 
 Status FolderDriveReader::Options::Validate() const {
   if (first_frame < 0) {
-    return InvalidArgumentError("FolderDriveReader::Options::first_frame = " +
-                                std::to_string(first_frame) + "; must be >= 0");
+    return internal::OptionError("FolderDriveReader::Options", "first_frame", first_frame,
+                                 "must be >= 0");
   }
   if (last_frame < -1) {
-    return InvalidArgumentError("FolderDriveReader::Options::last_frame = " +
-                                std::to_string(last_frame) + "; must be >= 0 or -1 (all)");
+    return internal::OptionError("FolderDriveReader::Options", "last_frame", last_frame,
+                                 "must be >= 0 or -1 (all)");
   }
   if (last_frame >= 0 && last_frame < first_frame) {
     return InvalidArgumentError(
@@ -69,13 +70,12 @@ Status FolderDriveReader::Options::Validate() const {
         "; must be >= first_frame = " + std::to_string(first_frame));
   }
   if (!std::isfinite(vertical_correction_deg) || std::abs(vertical_correction_deg) > 5.0) {
-    return InvalidArgumentError("FolderDriveReader::Options::vertical_correction_deg = " +
-                                std::to_string(vertical_correction_deg) +
-                                "; must be finite and within [-5, 5] deg");
+    return internal::OptionError("FolderDriveReader::Options", "vertical_correction_deg",
+                                 vertical_correction_deg, "must be finite and within [-5, 5] deg");
   }
   if (!std::isfinite(stream_time_margin_s) || stream_time_margin_s < 0.0) {
-    return InvalidArgumentError("FolderDriveReader::Options::stream_time_margin_s = " +
-                                std::to_string(stream_time_margin_s) + "; must be >= 0");
+    return internal::OptionError("FolderDriveReader::Options", "stream_time_margin_s",
+                                 stream_time_margin_s, "must be >= 0");
   }
   int64_t days = 0;
   if (!nmea_utc_date.empty() && !ParseDate(nmea_utc_date, &days)) {

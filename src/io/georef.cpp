@@ -68,7 +68,7 @@ GeoReference::GeoReference(GeoReference&& other) noexcept = default;
 GeoReference& GeoReference::operator=(GeoReference&& other) noexcept = default;
 GeoReference::~GeoReference() = default;
 
-StatusOr<GeoReference> GeoReference::Create(const GeoOrigin& origin, const std::string& crs) {
+StatusOr<GeoReference> GeoReference::Create(const GeodeticPoint& origin, const std::string& crs) {
   const std::string where = "GeoReference: ";
   if (!std::isfinite(origin.latitude_deg) || !std::isfinite(origin.longitude_deg) ||
       !std::isfinite(origin.height_m) || std::abs(origin.latitude_deg) > 90.0 ||
@@ -191,8 +191,7 @@ StatusOr<GeoReference> GeoReference::Create(const GeoOrigin& origin, const std::
   p.enu = std::make_unique<GeographicLib::LocalCartesian>(origin.latitude_deg, origin.longitude_deg,
                                                           origin.height_m);
   // The operation PROJ uses at the origin (and a check that the origin lies in the CRS's domain).
-  StatusOr<Eigen::Vector3d> o = g.GeodeticToProjected(
-      GeodeticCoordinates{origin.latitude_deg, origin.longitude_deg, origin.height_m});
+  StatusOr<Eigen::Vector3d> o = g.GeodeticToProjected(origin);
   if (!o.ok()) {
     return InvalidArgumentError(where + "the origin cannot be expressed in " + what + ": " +
                                 o.status().message());
@@ -210,7 +209,7 @@ StatusOr<GeoReference> GeoReference::Create(const GeoOrigin& origin, const std::
 
 Status GeoReference::CheckCrs(const std::string& crs) {
   if (crs.empty()) return OkStatus();
-  GeoOrigin probe;
+  GeodeticPoint probe;
   PJ_CONTEXT* ctx = proj_context_create();
   if (ctx != nullptr) {
     proj_log_func(ctx, nullptr, NoLog);
@@ -228,20 +227,20 @@ Status GeoReference::CheckCrs(const std::string& crs) {
   return Create(probe, crs).status();
 }
 
-GeodeticCoordinates GeoReference::EnuToGeodetic(const Eigen::Vector3d& p_world) const {
-  GeodeticCoordinates g;
+GeodeticPoint GeoReference::EnuToGeodetic(const Eigen::Vector3d& p_world) const {
+  GeodeticPoint g;
   proj_->enu->Reverse(p_world.x(), p_world.y(), p_world.z(), g.latitude_deg, g.longitude_deg,
                       g.height_m);
   return g;
 }
 
-Eigen::Vector3d GeoReference::GeodeticToEnu(const GeodeticCoordinates& g) const {
+Eigen::Vector3d GeoReference::GeodeticToEnu(const GeodeticPoint& g) const {
   Eigen::Vector3d p;
   proj_->enu->Forward(g.latitude_deg, g.longitude_deg, g.height_m, p.x(), p.y(), p.z());
   return p;
 }
 
-StatusOr<Eigen::Vector3d> GeoReference::GeodeticToProjected(const GeodeticCoordinates& g) const {
+StatusOr<Eigen::Vector3d> GeoReference::GeodeticToProjected(const GeodeticPoint& g) const {
   proj_errno_reset(proj_->op);
   const PJ_COORD c =
       proj_trans(proj_->op, PJ_FWD, proj_coord(g.longitude_deg, g.latitude_deg, g.height_m, 0.0));
@@ -257,7 +256,7 @@ StatusOr<Eigen::Vector3d> GeoReference::GeodeticToProjected(const GeodeticCoordi
   return Eigen::Vector3d(c.xyz.x, c.xyz.y, g.height_m);  // heights stay WGS-84 ellipsoidal
 }
 
-StatusOr<GeodeticCoordinates> GeoReference::ProjectedToGeodetic(const Eigen::Vector3d& enh) const {
+StatusOr<GeodeticPoint> GeoReference::ProjectedToGeodetic(const Eigen::Vector3d& enh) const {
   proj_errno_reset(proj_->op);
   const PJ_COORD c = proj_trans(proj_->op, PJ_INV, proj_coord(enh.x(), enh.y(), enh.z(), 0.0));
   if (proj_errno(proj_->op) != 0 || !std::isfinite(c.lpz.lam) || !std::isfinite(c.lpz.phi) ||
@@ -266,7 +265,7 @@ StatusOr<GeodeticCoordinates> GeoReference::ProjectedToGeodetic(const Eigen::Vec
                                 ", " + std::to_string(enh.y()) + ") of " + crs_name_ +
                                 " to WGS 84");
   }
-  return GeodeticCoordinates{c.lpz.phi, c.lpz.lam, enh.z()};  // normalised: x = lon, y = lat
+  return GeodeticPoint{c.lpz.phi, c.lpz.lam, enh.z()};  // normalised: x = lon, y = lat
 }
 
 StatusOr<Eigen::Vector3d> GeoReference::EnuToProjected(const Eigen::Vector3d& p_world) const {
@@ -280,7 +279,7 @@ Status GeoReference::EnuToProjected(const std::vector<Eigen::Vector3d>& p_world,
   out->resize(n);
   std::vector<double> h(n);
   for (size_t i = 0; i < n; ++i) {
-    const GeodeticCoordinates g = EnuToGeodetic(p_world[i]);
+    const GeodeticPoint g = EnuToGeodetic(p_world[i]);
     (*out)[i] = Eigen::Vector3d(g.longitude_deg, g.latitude_deg, g.height_m);
     h[i] = g.height_m;
   }
@@ -306,11 +305,11 @@ Status GeoReference::EnuToProjected(const std::vector<Eigen::Vector3d>& p_world,
 }
 
 StatusOr<Eigen::Vector3d> GeoReference::ProjectedToEnu(const Eigen::Vector3d& enh) const {
-  SLAM_MMS_ASSIGN_OR_RETURN(const GeodeticCoordinates g, ProjectedToGeodetic(enh));
+  SLAM_MMS_ASSIGN_OR_RETURN(const GeodeticPoint g, ProjectedToGeodetic(enh));
   return GeodeticToEnu(g);
 }
 
-Eigen::Matrix3d GeoReference::R_world_level(const GeodeticCoordinates& g) const {
+Eigen::Matrix3d GeoReference::R_world_level(const GeodeticPoint& g) const {
   std::vector<double> M(9);
   double x, y, z;
   proj_->enu->Forward(g.latitude_deg, g.longitude_deg, g.height_m, x, y, z, M);
@@ -319,9 +318,9 @@ Eigen::Matrix3d GeoReference::R_world_level(const GeodeticCoordinates& g) const 
   return R;  // v_world = M v_level (GeographicLib: v0 = M v1)
 }
 
-StatusOr<double> GeoReference::TrueNorthFromGridNorthDeg(const GeodeticCoordinates& g) const {
+StatusOr<double> GeoReference::TrueNorthFromGridNorthDeg(const GeodeticPoint& g) const {
   constexpr double kStepDeg = 1e-6;
-  GeodeticCoordinates a = g, b = g;
+  GeodeticPoint a = g, b = g;
   // Centred difference along the meridian (one-sided at the poles).
   a.latitude_deg = std::max(-90.0, g.latitude_deg - kStepDeg);
   b.latitude_deg = std::min(90.0, g.latitude_deg + kStepDeg);
@@ -331,7 +330,7 @@ StatusOr<double> GeoReference::TrueNorthFromGridNorthDeg(const GeodeticCoordinat
 }
 
 LocalAttitude LocalAttitudeOf(const GeoReference& geo, const Eigen::Isometry3d& T_world_body) {
-  const GeodeticCoordinates g = geo.EnuToGeodetic(T_world_body.translation());
+  const GeodeticPoint g = geo.EnuToGeodetic(T_world_body.translation());
   const Eigen::Matrix3d R_level_body = geo.R_world_level(g).transpose() * T_world_body.linear();
   const Eigen::Vector3d e = EulerNedFrd(R_level_body) / kDeg;
   LocalAttitude a;
@@ -384,10 +383,9 @@ StatusOr<double> AdjustedGpsTimeFromUtc(Timestamp utc) {
 
 StatusOr<std::string> GeoReferenceJson(const GeoReference& geo) {
   using json = nlohmann::ordered_json;
-  const GeoOrigin& o = geo.origin();
-  const GeodeticCoordinates og{o.latitude_deg, o.longitude_deg, o.height_m};
-  SLAM_MMS_ASSIGN_OR_RETURN(const Eigen::Vector3d op, geo.GeodeticToProjected(og));
-  SLAM_MMS_ASSIGN_OR_RETURN(const double north_deg, geo.TrueNorthFromGridNorthDeg(og));
+  const GeodeticPoint& o = geo.origin();
+  SLAM_MMS_ASSIGN_OR_RETURN(const Eigen::Vector3d op, geo.GeodeticToProjected(o));
+  SLAM_MMS_ASSIGN_OR_RETURN(const double north_deg, geo.TrueNorthFromGridNorthDeg(o));
   json j;
   j["format"] = "slam_mms georef";
   j["format_version"] = 1;
@@ -458,7 +456,7 @@ Status WriteGeorefJson(const GeoReference& geo, const fs::path& file) {
 namespace {
 
 struct PoseRow {
-  GeodeticCoordinates g;
+  GeodeticPoint g;
   Eigen::Vector3d attitude_deg;                  ///< roll, pitch, heading (true)
   std::optional<Eigen::Vector3d> sigma_enu_m;    ///< local level east, north, up
   std::optional<Eigen::Matrix2d> cov_en;         ///< local level east/north covariance

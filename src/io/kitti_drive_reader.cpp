@@ -48,7 +48,7 @@ KittiDriveReader::KittiDriveReader(KittiRawReader reader) : reader_(std::move(re
     InsState state;
     state.stamp = first->stamp;
     state.T_world_body.linear() = OxtsAttitude(first->record);
-    state.v_world_mps = Eigen::Vector3d(first->record.ve, first->record.vn, first->record.vu);
+    state.v_world_mps = OxtsVelocityEnu(first->record);
     s.initial_state = state;
     s.initial_state_source = NumberedFile(dir, first_folder, first->index, ".txt");
   }

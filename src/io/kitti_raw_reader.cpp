@@ -9,6 +9,7 @@
 #include <map>
 #include <sstream>
 
+#include "core/option_error.hpp"
 #include "io/file_util.hpp"
 #include "io/parsers.hpp"
 #include "slam_mms/core/logging.hpp"
@@ -135,12 +136,12 @@ StatusOr<std::vector<StampedOxts>> ReadOxtsFolder(const fs::path& dir, bool allo
 // ---------------------------------------------------------------------------------------------
 Status KittiRawReader::Options::Validate() const {
   if (first_frame < 0) {
-    return InvalidArgumentError(
-        "KittiRawReader::Options::first_frame = " + std::to_string(first_frame) + "; must be >= 0");
+    return internal::OptionError("KittiRawReader::Options", "first_frame", first_frame,
+                                 "must be >= 0");
   }
   if (last_frame < -1) {
-    return InvalidArgumentError("KittiRawReader::Options::last_frame = " +
-                                std::to_string(last_frame) + "; must be >= 0 or -1 (all)");
+    return internal::OptionError("KittiRawReader::Options", "last_frame", last_frame,
+                                 "must be >= 0 or -1 (all)");
   }
   if (last_frame >= 0 && last_frame < first_frame) {
     return InvalidArgumentError(
@@ -148,13 +149,12 @@ Status KittiRawReader::Options::Validate() const {
         "; must be >= first_frame = " + std::to_string(first_frame));
   }
   if (!std::isfinite(vertical_correction_deg) || std::abs(vertical_correction_deg) > 5.0) {
-    return InvalidArgumentError("KittiRawReader::Options::vertical_correction_deg = " +
-                                std::to_string(vertical_correction_deg) +
-                                "; must be finite and within [-5, 5] deg");
+    return internal::OptionError("KittiRawReader::Options", "vertical_correction_deg",
+                                 vertical_correction_deg, "must be finite and within [-5, 5] deg");
   }
   if (!std::isfinite(imu_time_margin_s) || imu_time_margin_s < 0.0) {
-    return InvalidArgumentError("KittiRawReader::Options::imu_time_margin_s = " +
-                                std::to_string(imu_time_margin_s) + "; must be >= 0");
+    return internal::OptionError("KittiRawReader::Options", "imu_time_margin_s", imu_time_margin_s,
+                                 "must be >= 0");
   }
   return OkStatus();
 }

@@ -244,11 +244,11 @@ Status WriteLas(const MapCloud& map, const GeoReference& geo, const fs::path& fi
                         options);
 }
 
-Status WriteLas(const MapCloud& map, const GeoOrigin& origin, const fs::path& file) {
+Status WriteLas(const MapCloud& map, const GeodeticPoint& origin, const fs::path& file) {
   return WriteLas(map, origin, file, LasWriteOptions());
 }
 
-Status WriteLas(const MapCloud& map, const GeoOrigin& origin, const fs::path& file,
+Status WriteLas(const MapCloud& map, const GeodeticPoint& origin, const fs::path& file,
                 const LasWriteOptions& options) {
   SLAM_MMS_RETURN_IF_ERROR(options.Validate());
   std::string crs = options.crs;

@@ -205,6 +205,10 @@ Eigen::Matrix3d OxtsAttitude(const OxtsRecord& record) {
       .toRotationMatrix();
 }
 
+Eigen::Vector3d OxtsVelocityEnu(const OxtsRecord& record) {
+  return Eigen::Vector3d(record.ve, record.vn, record.vu);
+}
+
 void SetOxtsAttitude(const Eigen::Matrix3d& R, OxtsRecord* record) {
   // R = Rz(yaw) Ry(pitch) Rx(roll): R(2,0) = -sin(pitch), R(2,1) = cos(p) sin(r),
   // R(2,2) = cos(p) cos(r), R(1,0) = sin(y) cos(p), R(0,0) = cos(y) cos(p).

@@ -13,12 +13,14 @@
 #include <string>
 #include <system_error>
 
+#include "backend/imu_preintegration_factor.hpp"
+#include "core/option_error.hpp"
 #include "pipeline/cloud_file.hpp"
 #include "pipeline/pose_covariance.hpp"
 #include "pipeline/submap_cloud_builder.hpp"
+#include "pipeline/surfel_renderer_factory.hpp"
 #include "slam_mms/core/lie.hpp"
 #include "slam_mms/core/logging.hpp"
-#include "slam_mms/ins/imu_preintegration_factor.hpp"
 #include "surfel/parallel_range_image.hpp"
 
 namespace slam_mms {
@@ -55,9 +57,8 @@ SurfelMapOptions Localizer::DefaultSurfelOptions() {
 }
 
 Status Localizer::Options::Validate() const {
-  auto bad = [](const std::string& field, double v, const std::string& rule) {
-    return InvalidArgumentError("Localizer::Options::" + field + " = " + std::to_string(v) + "; " +
-                                rule);
+  auto bad = [](const char* field, double v, const char* rule) {
+    return internal::OptionError("Localizer::Options", field, v, rule);
   };
   if (!(submap_duration_s > 0.0)) return bad("submap_duration_s", submap_duration_s, "must be > 0");
   if (!(model_radius_m > 0.0)) return bad("model_radius_m", model_radius_m, "must be > 0");

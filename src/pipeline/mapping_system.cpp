@@ -7,10 +7,11 @@
 #include <string>
 #include <thread>
 
+#include "core/option_error.hpp"
 #include "pipeline/voxel_accumulator.hpp"
 #include "slam_mms/core/lie.hpp"
 #include "slam_mms/core/logging.hpp"
-#include "slam_mms/eval/voxel_downsample.hpp"
+#include "slam_mms/core/voxel_downsample.hpp"
 #include "slam_mms/ins/imu_preintegration.hpp"
 #include "slam_mms/pipeline/scan_deskewer.hpp"
 
@@ -35,21 +36,24 @@ Status MappingSystem::Options::Validate() const {
     }
   }
   if (!(map_max_range_m > 0.0)) {
-    return InvalidArgumentError("MappingSystem::Options::map_max_range_m = " +
-                                std::to_string(map_max_range_m) + "; must be > 0");
+    return internal::OptionError("MappingSystem::Options", "map_max_range_m", map_max_range_m,
+                                 "must be > 0");
   }
   if (!(map_voxel_m > 0.0)) {
-    return InvalidArgumentError(
-        "MappingSystem::Options::map_voxel_m = " + std::to_string(map_voxel_m) + "; must be > 0");
+    return internal::OptionError("MappingSystem::Options", "map_voxel_m", map_voxel_m,
+                                 "must be > 0");
   }
-  if (!(max_pos_jump_m > 0.0) || !(max_pos_jump_rad > 0.0)) {
-    return InvalidArgumentError(
-        "MappingSystem::Options::max_pos_jump_m = " + std::to_string(max_pos_jump_m) +
-        ", max_pos_jump_rad = " + std::to_string(max_pos_jump_rad) + "; both must be > 0");
+  if (!(max_pos_jump_m > 0.0)) {
+    return internal::OptionError("MappingSystem::Options", "max_pos_jump_m", max_pos_jump_m,
+                                 "must be > 0");
+  }
+  if (!(max_pos_jump_rad > 0.0)) {
+    return internal::OptionError("MappingSystem::Options", "max_pos_jump_rad", max_pos_jump_rad,
+                                 "must be > 0");
   }
   if (num_threads < 1) {
-    return InvalidArgumentError(
-        "MappingSystem::Options::num_threads = " + std::to_string(num_threads) + "; must be >= 1");
+    return internal::OptionError("MappingSystem::Options", "num_threads", num_threads,
+                                 "must be >= 1");
   }
   if (mode == MappingMode::kGnssInsSmoothed) {
     return InvalidArgumentError(
@@ -390,10 +394,21 @@ struct MappingSystem::Impl {
             s->T_world_body.linear() * R_sb.transpose(),
             R_sb * s->cov_T_world_body.topLeftCorner<3, 3>() * R_sb.transpose()};
       }
-      SLAM_MMS_RETURN_IF_ERROR(
-          level2->OnSubmapFinished(loc.get(), id, gnss_returned_pending, attitude));
+      SLAM_MMS_ASSIGN_OR_RETURN(
+          const std::vector<SubmapPoseUpdate> updates,
+          level2->OnSubmapFinished(*loc, id, gnss_returned_pending, attitude));
+      SLAM_MMS_RETURN_IF_ERROR(ApplyLevel2(updates));
       gnss_returned_pending = false;
       ++submaps_reported;
+    }
+    return OkStatus();
+  }
+
+  /// The one way level 2 reaches level 1: its estimates, applied to the submaps (and their
+  /// surfels) in order.
+  Status ApplyLevel2(const std::vector<SubmapPoseUpdate>& updates) {
+    for (const SubmapPoseUpdate& u : updates) {
+      SLAM_MMS_RETURN_IF_ERROR(loc->SetSubmapPose(u.id, u.T_world_submap));
     }
     return OkStatus();
   }
@@ -544,7 +559,11 @@ Status MappingSystem::Finish() {
   if (m.loc) {
     m.loc->FinishCurrentSubmap();
     SLAM_MMS_RETURN_IF_ERROR(m.ReportFinishedSubmaps());
-    if (m.level2) SLAM_MMS_RETURN_IF_ERROR(m.level2->Finish(m.loc.get()));
+    if (m.level2) {
+      SLAM_MMS_ASSIGN_OR_RETURN(const std::vector<SubmapPoseUpdate> updates,
+                                m.level2->Finish(*m.loc));
+      SLAM_MMS_RETURN_IF_ERROR(m.ApplyLevel2(updates));
+    }
   }
   return OkStatus();
 }
@@ -582,7 +601,7 @@ PointCloud MappingSystem::FinalMap() const { return FinalMap(nullptr); }
 
 namespace {
 
-// Per voxel of eval::VoxelDownsample(cloud, voxel_m), in its output order (voxels sorted by
+// Per voxel of VoxelDownsample(cloud, voxel_m), in its output order (voxels sorted by
 // integer key, the same floor(p / voxel) of the float point): the stamps of the voxel's earliest
 // point. Empty when `in` does not match `cloud`.
 MapPointStamps EarliestPerVoxel(const PointCloud& cloud, const MapPointStamps& in, double voxel_m) {
@@ -673,7 +692,7 @@ PointCloud MappingSystem::FinalMap(MapPointStamps* stamps) const {
   } else if (all_stamped) {
     earliest = EarliestPerVoxel(merged, merged_stamps, m.opt.map_voxel_m);
   }
-  auto down = eval::VoxelDownsample(merged, m.opt.map_voxel_m);
+  auto down = VoxelDownsample(merged, m.opt.map_voxel_m);
   if (stamp_thread.joinable()) stamp_thread.join();
   if (!down.ok()) {
     if (all_stamped) *stamps = std::move(merged_stamps);

@@ -6,18 +6,19 @@
 #include <thread>
 #include <vector>
 
+#include "core/option_error.hpp"
 #include "slam_mms/core/lie.hpp"
 
 namespace slam_mms {
 
 Status ScanDeskewer::Options::Validate() const {
   if (num_threads < 1) {
-    return InvalidArgumentError(
-        "ScanDeskewer::Options::num_threads = " + std::to_string(num_threads) + "; must be >= 1");
+    return internal::OptionError("ScanDeskewer::Options", "num_threads", num_threads,
+                                 "must be >= 1");
   }
   if (num_knots < 0 || num_knots == 1) {
-    return InvalidArgumentError("ScanDeskewer::Options::num_knots = " + std::to_string(num_knots) +
-                                "; must be 0 (exact) or >= 2");
+    return internal::OptionError("ScanDeskewer::Options", "num_knots", num_knots,
+                                 "must be 0 (exact) or >= 2");
   }
   return OkStatus();
 }

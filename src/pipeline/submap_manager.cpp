@@ -7,6 +7,7 @@
 #include <optional>
 #include <string>
 
+#include "core/option_error.hpp"
 #include "pipeline/pose_covariance.hpp"
 #include "slam_mms/backend/submap_graph.hpp"
 #include "slam_mms/core/lie.hpp"
@@ -15,7 +16,7 @@
 namespace slam_mms {
 namespace {
 
-const SubmapRecord* FindSubmap(const Localizer& loc, int32_t id) {
+const SubmapRecord* FindSubmap(const SubmapSource& loc, int32_t id) {
   for (const SubmapRecord& rec : loc.submaps()) {
     if (rec.id == id) return &rec;
   }
@@ -36,9 +37,8 @@ Eigen::Isometry3d BodyPoseAt(const SubmapRecord& rec, Timestamp t) {
 }  // namespace
 
 Status SubmapManager::Options::Validate() const {
-  auto bad = [](const std::string& f, double v, const std::string& rule) {
-    return InvalidArgumentError("SubmapManager::Options::" + f + " = " + std::to_string(v) + "; " +
-                                rule);
+  auto bad = [](const char* f, double v, const char* rule) {
+    return internal::OptionError("SubmapManager::Options", f, v, rule);
   };
   if (!(loop_distance_m > 0.0)) return bad("loop_distance_m", loop_distance_m, "must be > 0");
   if (loop_min_submap_gap < 1)
@@ -97,7 +97,7 @@ struct SubmapManager::Impl {
     return 0.5 * (cov + cov.transpose());
   }
 
-  Status AttachGnss(const Localizer& loc, const SubmapRecord& rec, Timestamp next_start) {
+  Status AttachGnss(const SubmapRecord& rec, Timestamp next_start) {
     while (!pending_gnss.empty() && pending_gnss.front().m.stamp < next_start) {
       const PendingGnss g = pending_gnss.front();
       pending_gnss.pop_front();
@@ -118,28 +118,27 @@ struct SubmapManager::Impl {
     return OkStatus();
   }
 
-  /// After a solve: move the localizer's submaps (and the unfinished current one, rigidly with the
-  /// last finished one) to the graph's estimates.
-  Status ApplySolution(Localizer* loc) {
-    const auto& submaps = loc->submaps();
-    std::vector<std::pair<int32_t, Eigen::Isometry3d>> updates;
-    const SubmapRecord* last_in_graph = FindSubmap(*loc, last_id);
+  /// After a solve: the graph's estimates of level 1's submaps (the unfinished current one moved
+  /// rigidly with the last finished one).
+  StatusOr<std::vector<SubmapPoseUpdate>> Solution(const SubmapSource& loc) const {
+    const auto& submaps = loc.submaps();
+    std::vector<SubmapPoseUpdate> updates;
+    const SubmapRecord* last_in_graph = FindSubmap(loc, last_id);
     for (const SubmapRecord& rec : submaps) {
       if (graph->HasSubmap(rec.id)) {
         SLAM_MMS_ASSIGN_OR_RETURN(Eigen::Isometry3d T, graph->SubmapPose(rec.id));
-        updates.emplace_back(rec.id, T);
+        updates.push_back({rec.id, T});
       } else if (last_in_graph != nullptr) {
         SLAM_MMS_ASSIGN_OR_RETURN(Eigen::Isometry3d T_last_new, graph->SubmapPose(last_id));
         const Eigen::Isometry3d T_last_rec =
             last_in_graph->T_world_submap.inverse() * rec.T_world_submap;
-        updates.emplace_back(rec.id, T_last_new * T_last_rec);
+        updates.push_back({rec.id, T_last_new * T_last_rec});
       }
     }
-    for (const auto& [id, T] : updates) SLAM_MMS_RETURN_IF_ERROR(loc->SetSubmapPose(id, T));
-    return OkStatus();
+    return updates;
   }
 
-  Status Solve(Localizer* loc, SolveTrigger trigger) {
+  StatusOr<std::vector<SubmapPoseUpdate>> Solve(const SubmapSource& loc, SolveTrigger trigger) {
     const auto t0 = std::chrono::steady_clock::now();
     SLAM_MMS_ASSIGN_OR_RETURN(SolveSummary summary, graph->Solve(trigger));
     stats.last_solve_ms =
@@ -149,8 +148,8 @@ struct SubmapManager::Impl {
                         << graph->num_submaps()
                         << " submaps: " << SolveTerminationName(summary.termination) << ", "
                         << summary.iterations << " iterations, " << stats.last_solve_ms << " ms";
-    if (!summary.usable()) return OkStatus();
-    return ApplySolution(loc);
+    if (!summary.usable()) return std::vector<SubmapPoseUpdate>();
+    return Solution(loc);
   }
 };
 
@@ -182,11 +181,11 @@ void SubmapManager::AddGnssMeasurement(const GnssMeasurement& measurement,
   impl_->pending_gnss.push_back({measurement, t_body_antenna});
 }
 
-Status SubmapManager::OnSubmapFinished(Localizer* localizer, int32_t submap_id,
-                                       bool gnss_returned_after_outage,
-                                       const std::optional<PosAttitude>& pos_attitude) {
+StatusOr<std::vector<SubmapPoseUpdate>> SubmapManager::OnSubmapFinished(
+    const SubmapSource& submaps, int32_t submap_id, bool gnss_returned_after_outage,
+    const std::optional<PosAttitude>& pos_attitude) {
   Impl& m = *impl_;
-  const SubmapRecord* rec = FindSubmap(*localizer, submap_id);
+  const SubmapRecord* rec = FindSubmap(submaps, submap_id);
   if (rec == nullptr) {
     return NotFoundError("SubmapManager: level 1 has no submap " + std::to_string(submap_id));
   }
@@ -220,7 +219,7 @@ Status SubmapManager::OnSubmapFinished(Localizer* localizer, int32_t submap_id,
     }
     SLAM_MMS_RETURN_IF_ERROR(m.graph->AddPosePrior(submap_id, T_prior, cov));
   }
-  const SubmapRecord* prev = m.last_id >= 0 ? FindSubmap(*localizer, m.last_id) : nullptr;
+  const SubmapRecord* prev = m.last_id >= 0 ? FindSubmap(submaps, m.last_id) : nullptr;
   if (prev != nullptr) {
     // F_Reckon (eq 21): the serial chain from level 1.
     SLAM_MMS_RETURN_IF_ERROR(m.graph->AddReckonFactor(
@@ -228,7 +227,7 @@ Status SubmapManager::OnSubmapFinished(Localizer* localizer, int32_t submap_id,
         internal::DiagonalPoseCovariance(m.opt.reckon_sigma_rot_rad, m.opt.reckon_sigma_trans_m)));
     // F_Reg (§5.2.1): map-to-map registration with the previous submap (point-based ICP).
     if (m.opt.use_map_to_map) {
-      auto prev_cloud = localizer->SubmapCloud(prev->id, Localizer::CloudKind::kRegistration);
+      auto prev_cloud = submaps.SubmapCloud(prev->id, SubmapSource::CloudKind::kRegistration);
       if (!prev_cloud.ok()) {
         SLAM_MMS_LOG(kWarning) << "level 2: map-to-map registration " << prev->id << " -> "
                                << submap_id << " skipped: " << prev_cloud.status().ToString();
@@ -247,12 +246,12 @@ Status SubmapManager::OnSubmapFinished(Localizer* localizer, int32_t submap_id,
     }
   }
   // F_GNSS (eq 24): the fixes the POS used while this submap was mapped.
-  const auto& all = localizer->submaps();
+  const auto& all = submaps.submaps();
   Timestamp next_start = rec->end.PlusSeconds(0.2);
   for (size_t i = 0; i + 1 < all.size(); ++i) {
     if (all[i].id == submap_id) next_start = all[i + 1].start;
   }
-  if (m.opt.use_gnss) SLAM_MMS_RETURN_IF_ERROR(m.AttachGnss(*localizer, *rec, next_start));
+  if (m.opt.use_gnss) SLAM_MMS_RETURN_IF_ERROR(m.AttachGnss(*rec, next_start));
   m.last_id = submap_id;
 
   // F_Loop (eqs 22-23): candidates within D_thr, not recent; verified by registration.
@@ -260,11 +259,11 @@ Status SubmapManager::OnSubmapFinished(Localizer* localizer, int32_t submap_id,
   if (m.opt.use_loops) {
     const Eigen::Vector3d center = rec->T_world_submap * rec->T_submap_scan.back().translation();
     for (const LoopCandidate& c : m.graph->LoopCandidates(center, submap_id)) {
-      const SubmapRecord* cand = FindSubmap(*localizer, static_cast<int32_t>(c.submap));
+      const SubmapRecord* cand = FindSubmap(submaps, static_cast<int32_t>(c.submap));
       if (cand == nullptr) continue;
       ++m.stats.loops_tested;
       const Eigen::Isometry3d T_init = cand->T_world_submap.inverse() * rec->T_world_submap;
-      auto cand_cloud = localizer->SubmapCloud(cand->id, Localizer::CloudKind::kRegistration);
+      auto cand_cloud = submaps.SubmapCloud(cand->id, SubmapSource::CloudKind::kRegistration);
       if (!cand_cloud.ok()) {
         SLAM_MMS_LOG(kWarning) << "level 2: loop candidate " << cand->id
                                << " skipped: " << cand_cloud.status().ToString();
@@ -290,15 +289,15 @@ Status SubmapManager::OnSubmapFinished(Localizer* localizer, int32_t submap_id,
       break;  // the most compatible (nearest verified) candidate
     }
   }
-  if (loop) return m.Solve(localizer, SolveTrigger::kLoopClosed);
-  if (gnss_returned_after_outage) return m.Solve(localizer, SolveTrigger::kGnssReturned);
-  return OkStatus();
+  if (loop) return m.Solve(submaps, SolveTrigger::kLoopClosed);
+  if (gnss_returned_after_outage) return m.Solve(submaps, SolveTrigger::kGnssReturned);
+  return std::vector<SubmapPoseUpdate>();
 }
 
-Status SubmapManager::Finish(Localizer* localizer) {
+StatusOr<std::vector<SubmapPoseUpdate>> SubmapManager::Finish(const SubmapSource& submaps) {
   Impl& m = *impl_;
-  if (m.graph->num_submaps() == 0) return OkStatus();
-  return m.Solve(localizer, SolveTrigger::kFinish);
+  if (m.graph->num_submaps() == 0) return std::vector<SubmapPoseUpdate>();
+  return m.Solve(submaps, SolveTrigger::kFinish);
 }
 
 const SubmapManager::Stats& SubmapManager::stats() const { return impl_->stats; }

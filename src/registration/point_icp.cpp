@@ -6,6 +6,7 @@
 #include <string>
 #include <unordered_set>
 
+#include "core/option_error.hpp"
 #include "core/worker_pool.hpp"
 #include "registration/cloud_kdtree.hpp"
 #include "registration/gauss_newton.hpp"
@@ -24,8 +25,7 @@ using registration_internal::CloudAdaptor;
 using KdTree = registration_internal::CloudKdTree;
 
 Status FieldError(const std::string& field, double value, const std::string& rule) {
-  return InvalidArgumentError("PointIcp::Options::" + field + " = " + std::to_string(value) + "; " +
-                              rule);
+  return internal::OptionError("PointIcp::Options", field, value, rule);
 }
 
 }  // namespace

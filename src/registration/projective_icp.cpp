@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "core/float_transform.hpp"
+#include "core/option_error.hpp"
 #include "core/worker_pool.hpp"
 #include "registration/gauss_newton.hpp"
 #include "registration/point_to_plane.hpp"
@@ -138,8 +139,7 @@ struct Accumulator {
 };
 
 Status FieldError(const std::string& field, double value, const std::string& rule) {
-  return InvalidArgumentError("ProjectiveIcp::Options::" + field + " = " + std::to_string(value) +
-                              "; " + rule);
+  return internal::OptionError("ProjectiveIcp::Options", field, value, rule);
 }
 
 Status CheckMap(const VertexNormalMap& m, const char* what) {

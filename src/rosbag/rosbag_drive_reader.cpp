@@ -13,6 +13,7 @@
 #include <map>
 #include <mutex>
 
+#include "core/option_error.hpp"
 #include "rosbag/point_cloud2_codec.hpp"
 #include "rosbag/ros_conversions.hpp"
 #include "slam_mms/core/logging.hpp"
@@ -125,8 +126,8 @@ double Median(std::vector<double> v) {
 // ---------------------------------------------------------------------------------------------
 Status RosbagDriveReader::Options::Validate() const {
   if (first_scan < 0) {
-    return InvalidArgumentError("RosbagDriveReader::Options::first_scan = " +
-                                std::to_string(first_scan) + "; must be >= 0");
+    return internal::OptionError("RosbagDriveReader::Options", "first_scan", first_scan,
+                                 "must be >= 0");
   }
   if (last_scan < -1 || (last_scan >= 0 && last_scan < first_scan)) {
     return InvalidArgumentError(
@@ -134,12 +135,12 @@ Status RosbagDriveReader::Options::Validate() const {
         "; must be -1 or >= first_scan (" + std::to_string(first_scan) + ")");
   }
   if (!(scan_period_s >= 0.0) || !std::isfinite(scan_period_s)) {
-    return InvalidArgumentError("RosbagDriveReader::Options::scan_period_s = " +
-                                std::to_string(scan_period_s) + "; must be >= 0 (0 = auto)");
+    return internal::OptionError("RosbagDriveReader::Options", "scan_period_s", scan_period_s,
+                                 "must be >= 0 (0 = auto)");
   }
   if (!(stream_time_margin_s >= 0.0) || !std::isfinite(stream_time_margin_s)) {
-    return InvalidArgumentError("RosbagDriveReader::Options::stream_time_margin_s = " +
-                                std::to_string(stream_time_margin_s) + "; must be >= 0");
+    return internal::OptionError("RosbagDriveReader::Options", "stream_time_margin_s",
+                                 stream_time_margin_s, "must be >= 0");
   }
   for (auto [name, v] :
        {std::pair<const char*, double>{"unknown_covariance_sigma_horizontal_m",
@@ -147,8 +148,7 @@ Status RosbagDriveReader::Options::Validate() const {
         {"unknown_covariance_sigma_vertical_m", unknown_covariance_sigma_vertical_m},
         {"rtk_fixed_max_sigma_horizontal_m", rtk_fixed_max_sigma_horizontal_m}}) {
     if (!(v > 0.0) || !std::isfinite(v)) {
-      return InvalidArgumentError(std::string("RosbagDriveReader::Options::") + name + " = " +
-                                  std::to_string(v) + "; must be > 0 and finite");
+      return internal::OptionError("RosbagDriveReader::Options", name, v, "must be > 0 and finite");
     }
   }
   if (!T_body_lidar.matrix().allFinite() || !T_body_lidar.linear().isUnitary(1e-6)) {

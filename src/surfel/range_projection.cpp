@@ -6,15 +6,15 @@
 #include <limits>
 #include <sstream>
 
+#include "core/option_error.hpp"
+
 namespace slam_mms {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
 Status FieldError(const char* field, double value, const char* rule) {
-  std::ostringstream os;
-  os << "RangeProjectionOptions::" << field << " = " << value << "; " << rule;
-  return InvalidArgumentError(os.str());
+  return internal::OptionError("RangeProjectionOptions", field, value, rule);
 }
 
 }  // namespace

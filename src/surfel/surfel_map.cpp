@@ -5,6 +5,7 @@
 #include <sstream>
 #include <utility>
 
+#include "core/option_error.hpp"
 #include "surfel/fast_math.hpp"
 #include "surfel/surfel_map_impl.hpp"
 #include "surfel/surfel_projection_block.hpp"
@@ -13,9 +14,7 @@ namespace slam_mms {
 namespace {
 
 Status FieldError(const char* field, double value, const char* rule) {
-  std::ostringstream os;
-  os << "SurfelMapOptions::" << field << " = " << value << "; " << rule;
-  return InvalidArgumentError(os.str());
+  return internal::OptionError("SurfelMapOptions", field, value, rule);
 }
 
 enum PixelState : uint8_t { kNone = 0, kExplained = 1, kConflict = 2 };

@@ -7,10 +7,10 @@
 #include <vector>
 
 #include "backend/backend_test_util.hpp"
-#include "slam_mms/backend/pose_prior_factor.hpp"
-#include "slam_mms/backend/relative_pose_factor.hpp"
+#include "backend/pose_block.hpp"
+#include "backend/pose_prior_factor.hpp"
+#include "backend/relative_pose_factor.hpp"
 #include "slam_mms/core/lie.hpp"
-#include "slam_mms/ins/pose_block.hpp"
 
 namespace slam_mms {
 namespace {

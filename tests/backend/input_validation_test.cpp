@@ -9,8 +9,8 @@
 #include <limits>
 
 #include "backend/backend_test_util.hpp"
-#include "slam_mms/backend/pose_prior_factor.hpp"
-#include "slam_mms/backend/relative_pose_factor.hpp"
+#include "backend/pose_prior_factor.hpp"
+#include "backend/relative_pose_factor.hpp"
 #include "slam_mms/backend/sliding_window_graph.hpp"
 #include "slam_mms/backend/submap_graph.hpp"
 

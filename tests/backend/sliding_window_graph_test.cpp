@@ -10,11 +10,11 @@
 #include <vector>
 
 #include "backend/backend_test_util.hpp"
+#include "backend/imu_preintegration_factor.hpp"
 #include "backend/marginalization.hpp"
-#include "slam_mms/backend/pose_prior_factor.hpp"
-#include "slam_mms/backend/relative_pose_factor.hpp"
-#include "slam_mms/ins/imu_preintegration_factor.hpp"
-#include "slam_mms/ins/pose_block.hpp"
+#include "backend/pose_block.hpp"
+#include "backend/pose_prior_factor.hpp"
+#include "backend/relative_pose_factor.hpp"
 
 namespace slam_mms {
 namespace {

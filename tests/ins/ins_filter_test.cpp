@@ -7,6 +7,7 @@
 
 #include "ins/synthetic_drive.hpp"
 #include "slam_mms/core/lie.hpp"
+#include "slam_mms/io/oxts_record.hpp"
 
 namespace slam_mms {
 namespace {
@@ -391,7 +392,10 @@ TEST(InsFilterTest, InitializeFromOxtsRecord) {
   rec.pos_accuracy_m = 0.05;
   rec.navstat = kOxtsNavstatLocked;
   rec.posmode = 6;
-  ASSERT_TRUE(filter.InitializeFromOxts(rec, kT0).ok());
+  // The OXTS adapter (io): attitude and velocity, then the record's own fix sets the position.
+  ASSERT_TRUE(
+      filter.InitializeAttitude(Eigen::Quaterniond(OxtsAttitude(rec)), OxtsVelocityEnu(rec)).ok());
+  ASSERT_TRUE(filter.AddGnss(ToGnssFix(rec, kT0)).ok());
   ASSERT_TRUE(filter.initialized());
   const InsState s = filter.CurrentState().value();
   EXPECT_LT(s.T_world_body.translation().norm(), 1e-9);  // origin at the fix, no lever arm

@@ -38,7 +38,11 @@ KittiRun RunOxts(const std::vector<StampedOxts>& oxts, double outage_start_s,
         filter.mutable_gnss_prior().AddOutageWindow(outage_start_s, outage_duration_s).ok());
   }
   EXPECT_TRUE(filter.AddImu(ToImuSample(oxts.front().record, oxts.front().stamp)).ok());
-  EXPECT_TRUE(filter.InitializeFromOxts(oxts.front().record, oxts.front().stamp).ok());
+  EXPECT_TRUE(filter
+                  .InitializeAttitude(Eigen::Quaterniond(OxtsAttitude(oxts.front().record)),
+                                      OxtsVelocityEnu(oxts.front().record))
+                  .ok());
+  EXPECT_TRUE(filter.AddGnss(ToGnssFix(oxts.front().record, oxts.front().stamp)).ok());
   EXPECT_TRUE(filter.initialized());
   for (size_t i = 1; i < oxts.size(); ++i) {
     const OxtsRecord& rec = oxts[i].record;

@@ -22,9 +22,9 @@ namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 
 constexpr double kDeg = M_PI / 180.0;
-const GeoOrigin kKitti{49.013141872681, 8.4378138518088, 114.06644439697};  // KITTI 0013 start
+const GeodeticPoint kKitti{49.013141872681, 8.4378138518088, 114.06644439697};  // KITTI 0013 start
 
-GeoReference Make(const GeoOrigin& o, const std::string& crs = "") {
+GeoReference Make(const GeodeticPoint& o, const std::string& crs = "") {
   StatusOr<GeoReference> g = GeoReference::Create(o, crs);
   EXPECT_TRUE(g.ok()) << g.status().ToString();
   return std::move(g).value();
@@ -178,7 +178,7 @@ TEST(GeoReferenceTest, AttitudeConventions) {
   // heading differing by that angle.
   T = Eigen::Isometry3d::Identity();
   T.translation() = Eigen::Vector3d(10000.0, 0.0, 0.0);
-  const GeodeticCoordinates p = g.EnuToGeodetic(T.translation());
+  const GeodeticPoint p = g.EnuToGeodetic(T.translation());
   const double dlon = p.longitude_deg - kKitti.longitude_deg;
   EXPECT_NEAR(LocalAttitudeOf(g, T).heading_deg, 90.0 + dlon * std::sin(kKitti.latitude_deg * kDeg),
               2e-3);
@@ -254,7 +254,7 @@ TEST_F(GeorefTest, Wgs84AndProjectedCsvRoundTripToTheEnuPoses) {
       EXPECT_EQ(std::stoll(w[i][0]), pose.stamp.nanoseconds());
       EXPECT_EQ(std::stoll(p[i][0]), pose.stamp.nanoseconds());
       EXPECT_NEAR(std::stod(w[i][1]), pose.stamp.seconds(), 1e-6);
-      const GeodeticCoordinates geo{std::stod(w[i][2]), std::stod(w[i][3]), std::stod(w[i][4])};
+      const GeodeticPoint geo{std::stod(w[i][2]), std::stod(w[i][3]), std::stod(w[i][4])};
       worst_w = std::max(worst_w, (g.GeodeticToEnu(geo) - pose.T_world_body.translation()).norm());
       auto back = g.ProjectedToEnu(
           Eigen::Vector3d(std::stod(p[i][2]), std::stod(p[i][3]), std::stod(p[i][4])));

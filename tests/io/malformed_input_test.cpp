@@ -312,7 +312,7 @@ TEST(KittiRawReaderOptionsValidateTest, EachBadValueIsNamedWithItsRule) {
       {[](auto* o) { o->vertical_correction_deg = std::nan(""); },
        "vertical_correction_deg = nan; must be finite and within [-5, 5] deg"},
       {[](auto* o) { o->vertical_correction_deg = 6.0; }, "within [-5, 5] deg"},
-      {[](auto* o) { o->imu_time_margin_s = -0.5; }, "imu_time_margin_s = -0.500000; must be >= 0"},
+      {[](auto* o) { o->imu_time_margin_s = -0.5; }, "imu_time_margin_s = -0.5; must be >= 0"},
   };
   for (const Case& c : cases) {
     KittiRawReader::Options o;

@@ -165,7 +165,8 @@ double MeridianArc(double lat_rad) {
 }
 
 TEST_F(MapIoTest, LasGeoReferencedRoundTrip) {
-  const GeoOrigin origin{49.013141872681, 8.4378138518088, 114.06644439697};  // KITTI 0013 start
+  const GeodeticPoint origin{49.013141872681, 8.4378138518088,
+                             114.06644439697};  // KITTI 0013 start
   const MapCloud map = RandomMap(20000, false, 5, 2000.0f);
   const fs::path file = tmp_ / "map.las";
   ASSERT_TRUE(WriteLas(map, origin, file).ok());
@@ -215,7 +216,7 @@ TEST_F(MapIoTest, LasGeoReferencedRoundTrip) {
 TEST_F(MapIoTest, LasMatchesIndependentMeridianArc) {
   // A point on zone 32's central meridian (9 deg E) at 49 deg N, given in ENU about an origin near
   // it: UTM easting 500000, northing 0.9996 * meridian arc, height as given.
-  const GeoOrigin origin{48.999, 9.001, 100.0};
+  const GeodeticPoint origin{48.999, 9.001, 100.0};
   const GeographicLib::LocalCartesian enu(origin.latitude_deg, origin.longitude_deg,
                                           origin.height_m);
   double x, y, z;
@@ -234,7 +235,7 @@ TEST_F(MapIoTest, LasMatchesIndependentMeridianArc) {
 }
 
 TEST_F(MapIoTest, LasSouthernHemisphereAndForcedZone) {
-  const GeoOrigin cape_town{-33.92, 18.42, 10.0};
+  const GeodeticPoint cape_town{-33.92, 18.42, 10.0};
   const MapCloud map = RandomMap(100, false, 6);
   ASSERT_TRUE(WriteLas(map, cape_town, tmp_ / "s.las").ok());
   auto las = ReadLas(tmp_ / "s.las");
@@ -277,7 +278,7 @@ TEST(UtmWktTest, MatchesProjWkt1Gdal) {
 
 TEST_F(MapIoTest, LasOriginMatchesProj) {
   struct Case {
-    GeoOrigin origin;
+    GeodeticPoint origin;
     double easting, northing;
   };
   const Case cases[] = {
@@ -298,16 +299,16 @@ TEST_F(MapIoTest, LasOriginMatchesProj) {
 
 TEST_F(MapIoTest, LasErrors) {
   const MapCloud map = RandomMap(10, false, 7);
-  EXPECT_EQ(WriteLas(map, GeoOrigin{85.0, 0.0, 0.0}, tmp_ / "x.las").code(),
+  EXPECT_EQ(WriteLas(map, GeodeticPoint{85.0, 0.0, 0.0}, tmp_ / "x.las").code(),
             StatusCode::kInvalidArgument);
   LasWriteOptions o;
   o.scale_m = 0.0;
-  EXPECT_THAT(WriteLas(map, GeoOrigin{49, 8, 0}, tmp_ / "x.las", o).message(),
+  EXPECT_THAT(WriteLas(map, GeodeticPoint{49, 8, 0}, tmp_ / "x.las", o).message(),
               HasSubstr("LasWriteOptions::scale_m"));
   o = {};
   o.utm_zone = 61;
   EXPECT_THAT(o.Validate().message(), HasSubstr("utm_zone = 61"));
-  ASSERT_TRUE(WriteLas(map, GeoOrigin{49, 8, 0}, tmp_ / "t.las").ok());
+  ASSERT_TRUE(WriteLas(map, GeodeticPoint{49, 8, 0}, tmp_ / "t.las").ok());
   fs::resize_file(tmp_ / "t.las", fs::file_size(tmp_ / "t.las") - 1);
   EXPECT_THAT(ReadLas(tmp_ / "t.las").status().message(), HasSubstr("header says 10 points"));
   std::ofstream(tmp_ / "n.las") << "not a las file at all";

@@ -45,8 +45,7 @@ StatusOr<RunOutput> RunDrive(const std::filesystem::path& drive, MappingSystem::
   if (!oxts.empty()) {
     InsState init;
     init.T_world_body.linear() = OxtsAttitude(oxts.front().record);
-    init.v_world_mps =
-        Eigen::Vector3d(oxts.front().record.ve, oxts.front().record.vn, oxts.front().record.vu);
+    init.v_world_mps = OxtsVelocityEnu(oxts.front().record);
     SLAM_MMS_RETURN_IF_ERROR(system->InitializePos(init));
   }
   const std::vector<ImuSample> imu = reader.ImuSamples();
@@ -211,7 +210,7 @@ TEST(MappingSystemTest, OptionsAreValidatedByName) {
   MappingSystem::Options o;
   o.map_voxel_m = 0.0;
   EXPECT_EQ(MappingSystem::Create(o).status().message(),
-            "MappingSystem::Options::map_voxel_m = 0.000000; must be > 0");
+            "MappingSystem::Options::map_voxel_m = 0; must be > 0");
   o = MappingSystem::Options();
   o.gnss_outages = {{10.0, -1.0}};
   EXPECT_EQ(MappingSystem::Create(o).status().code(), StatusCode::kInvalidArgument);

@@ -54,8 +54,7 @@ class SensorFaultTest : public ::testing::Test {
     const auto& oxts = reader->OxtsRecords();
     ASSERT_FALSE(oxts.empty());
     drive_->init.T_world_body.linear() = OxtsAttitude(oxts.front().record);
-    drive_->init.v_world_mps =
-        Eigen::Vector3d(oxts.front().record.ve, oxts.front().record.vn, oxts.front().record.vu);
+    drive_->init.v_world_mps = OxtsVelocityEnu(oxts.front().record);
     drive_->imu = reader->ImuSamples();
     drive_->gnss = reader->GnssFixes();
     for (size_t k = 0; k < reader->NumScans(); ++k) {

@@ -6,7 +6,6 @@
 #include <cstdio>
 #include <memory>
 
-#include "slam_mms/render_egl/surfel_renderer_factory.hpp"
 #include "slam_mms/surfel/cpu_surfel_renderer.hpp"
 #include "slam_mms/surfel/surfel_map.hpp"
 #include "surfel/synthetic_surfels.hpp"
@@ -161,31 +160,6 @@ TEST(EglSurfelRendererTest, SurfelMapIntegratesTheSameWithEitherRenderer) {
   other.projection.cols = 1024;
   REQUIRE_EGL(egl_other, other);
   EXPECT_EQ(with_egl.SetRenderer(egl_other.get()).code(), StatusCode::kInvalidArgument);
-}
-
-TEST(SurfelRendererFactoryTest, ChoosesCpuOnSoftwareGlAndHonoursExplicitChoice) {
-  const SurfelRendererOptions options;
-  auto cpu = MakeSurfelRenderer(options, SurfelRendererBackend::kCpu);
-  ASSERT_TRUE(cpu.ok());
-  EXPECT_EQ((*cpu)->Name(), "cpu");
-  auto autos = MakeSurfelRenderer(options);
-  ASSERT_TRUE(autos.ok());
-  auto egl = EglSurfelRenderer::Create(options);
-  if (!egl.ok() || (*egl)->IsSoftware()) {
-    EXPECT_EQ((*autos)->Name(), "cpu");
-  } else {
-    EXPECT_NE((*autos)->Name().find("egl"), std::string::npos);
-  }
-  // A later kAuto choice is the first one's (on a machine without a GPU it skips the EGL probe),
-  // and kEgl still tries EGL.
-  auto again = MakeSurfelRenderer(options);
-  ASSERT_TRUE(again.ok());
-  EXPECT_EQ((*again)->Name(), (*autos)->Name());
-  auto forced = MakeSurfelRenderer(options, SurfelRendererBackend::kEgl);
-  EXPECT_EQ(forced.ok(), egl.ok());
-  SurfelRendererOptions bad;
-  bad.num_threads = 0;
-  EXPECT_EQ(MakeSurfelRenderer(bad).status().code(), StatusCode::kInvalidArgument);
 }
 
 }  // namespace

@@ -4,8 +4,8 @@
 #include <cstdio>
 #include <nlohmann/json.hpp>
 
+#include "slam_mms/drive/drive_runner.hpp"
 #include "slam_mms/io/kitti_calibration.hpp"
-#include "slam_mms/pipeline/drive_runner.hpp"
 
 namespace slam_mms::app {
 namespace {

@@ -10,9 +10,9 @@
 #include <string>
 
 #include "slam_mms/core/status.hpp"
+#include "slam_mms/drive/extrinsic_calibrator.hpp"
 #include "slam_mms/io/drive_reader.hpp"
 #include "slam_mms/io/extrinsics_yaml.hpp"
-#include "slam_mms/pipeline/extrinsic_calibrator.hpp"
 #include "slam_mms/pipeline/mapping_system.hpp"
 
 namespace slam_mms::app {

@@ -16,7 +16,7 @@
 
 #include "slam_mms/core/logging.hpp"
 #include "slam_mms/core/status.hpp"
-#include "slam_mms/pipeline/drive_runner.hpp"
+#include "slam_mms/drive/drive_runner.hpp"
 #include "slam_mms/pipeline/localization_result.hpp"
 
 namespace slam_mms::app {

@@ -1,14 +1,14 @@
 #pragma once
 // Geo-referenced outputs of slam_mms_run (issue 22): georef.json once per run, and per method the
 // WGS-84 and projected trajectory CSVs and the LAS map (one file or tiles), through the library's
-// slam_mms/pipeline/georeferenced_outputs.hpp (the Python package writes the same files with it).
+// slam_mms/drive/georeferenced_outputs.hpp (the Python package writes the same files with it).
 
 #include <filesystem>
 #include <string>
 
 #include "slam_mms/core/status.hpp"
+#include "slam_mms/drive/georeferenced_outputs.hpp"
 #include "slam_mms/ins/gnss_prior.hpp"
-#include "slam_mms/pipeline/georeferenced_outputs.hpp"
 #include "slam_mms_run/run_mode.hpp"
 
 namespace slam_mms::app {

@@ -1,6 +1,6 @@
 #include "slam_mms_run/input.hpp"
 
-#include "slam_mms/pipeline/open_drive.hpp"
+#include "slam_mms/drive/open_drive.hpp"
 
 namespace slam_mms::app {
 

@@ -6,11 +6,11 @@
 #include <sstream>
 
 #include "slam_mms/core/logging.hpp"
+#include "slam_mms/drive/scan_results_csv.hpp"
 #include "slam_mms/eval/map_entropy.hpp"
 #include "slam_mms/eval/relative_error.hpp"
 #include "slam_mms/io/map_io.hpp"
 #include "slam_mms/io/trajectory_io.hpp"
-#include "slam_mms/pipeline/scan_results_csv.hpp"
 
 namespace slam_mms::app {
 namespace {

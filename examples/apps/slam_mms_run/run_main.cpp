@@ -32,6 +32,7 @@
 #include <vector>
 
 #include "slam_mms/core/logging.hpp"
+#include "slam_mms/drive/open_drive.hpp"
 #include "slam_mms/eval/ground_truth.hpp"
 #include "slam_mms/eval/map_entropy.hpp"
 #include "slam_mms/eval/report.hpp"
@@ -39,7 +40,6 @@
 #include "slam_mms/io/map_io.hpp"
 #include "slam_mms/io/trajectory_io.hpp"
 #include "slam_mms/pipeline/mapping_system.hpp"
-#include "slam_mms/pipeline/open_drive.hpp"
 #include "slam_mms/sim/drive_simulator.hpp"
 #include "slam_mms/version.hpp"
 #include "slam_mms_run/calibration.hpp"

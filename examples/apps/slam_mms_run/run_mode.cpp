@@ -4,8 +4,8 @@
 
 #include <fstream>
 
+#include "slam_mms/drive/drive_runner.hpp"
 #include "slam_mms/eval/report.hpp"
-#include "slam_mms/pipeline/drive_runner.hpp"
 #include "slam_mms_run/progress.hpp"
 
 namespace slam_mms::app {

@@ -15,9 +15,9 @@
 #include "slam_mms/core/sensor_data.hpp"
 #include "slam_mms/core/status.hpp"
 #include "slam_mms/core/trajectory.hpp"
+#include "slam_mms/drive/drive_runner.hpp"
 #include "slam_mms/eval/map_entropy.hpp"
 #include "slam_mms/io/drive_reader.hpp"
-#include "slam_mms/pipeline/drive_runner.hpp"
 #include "slam_mms/pipeline/map_point_stamps.hpp"
 #include "slam_mms/pipeline/mapping_system.hpp"
 

@@ -7,10 +7,10 @@
 #include <optional>
 
 #include "slam_mms/core/logging.hpp"
+#include "slam_mms/drive/open_drive.hpp"
 #include "slam_mms/eval/ground_truth.hpp"
 #include "slam_mms/eval/relative_error.hpp"
 #include "slam_mms/eval/trajectory_error.hpp"
-#include "slam_mms/pipeline/open_drive.hpp"
 #include "slam_mms/sim/drive_simulator.hpp"
 #include "slam_mms_run/config_file.hpp"
 #include "slam_mms_run/json_file.hpp"

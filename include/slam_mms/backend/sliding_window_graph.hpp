@@ -3,7 +3,7 @@
 //
 // States are the scans in the current window, keyed by a caller-chosen, strictly increasing
 // StateId (e.g. the scan index). Each state has a pose T_frame_body (one 7-double block, see
-// slam_mms/ins/pose_block.hpp) and, where IMU preintegration factors are used, a velocity (3) and
+// backend/pose_block.hpp) and, where IMU preintegration factors are used, a velocity (3) and
 // IMU biases (6, [ba, bg]). `frame` is whatever frame the caller works in (the Localizer uses the
 // world frame or the frame of the current submap, eqs 12/16).
 //

@@ -28,10 +28,10 @@
 #include <string>
 #include <vector>
 
+#include "slam_mms/core/geodesy.hpp"
 #include "slam_mms/core/sensor_data.hpp"
 #include "slam_mms/core/status.hpp"
 #include "slam_mms/core/timestamp.hpp"
-#include "slam_mms/ins/gnss_position_factor.hpp"
 
 namespace slam_mms {
 
@@ -69,13 +69,6 @@ struct GnssDecisionResult {
   bool usable() const {
     return decision == GnssDecision::kUse || decision == GnssDecision::kDownWeight;
   }
-};
-
-/// WGS-84 point [deg, deg, m].
-struct GeodeticPoint {
-  double latitude_deg = 0.0;
-  double longitude_deg = 0.0;
-  double height_m = 0.0;
 };
 
 /// A maximal interval of constant availability, [start, end).
@@ -149,11 +142,6 @@ class GnssPrior {
   int num_downweighted() const;
   int num_rejected() const;
   int num_withheld() const;
-
-  // ---- factors (eq 24) -----------------------------------------------------------------------
-  /// A GNSS position factor on a pose block for a usable measurement, with this prior's lever arm.
-  StatusOr<std::unique_ptr<GnssPositionFactor>> MakeFactor(
-      const GnssMeasurement& measurement) const;
 
   const Options& options() const;
 

@@ -49,7 +49,6 @@
 #include "slam_mms/core/status.hpp"
 #include "slam_mms/core/timestamp.hpp"
 #include "slam_mms/ins/gnss_prior.hpp"
-#include "slam_mms/io/oxts_record.hpp"
 
 namespace slam_mms {
 
@@ -149,8 +148,6 @@ class InsFilter {
   [[nodiscard]] Status InitializeAttitude(const Eigen::Quaterniond& q_world_body,
                                           const Eigen::Vector3d& v_world_mps,
                                           std::optional<Timestamp> stamp = std::nullopt);
-  /// Attitude and velocity from an OXTS record (KITTI), position from its fix (or the next usable).
-  [[nodiscard]] Status InitializeFromOxts(const OxtsRecord& record, Timestamp stamp);
   /// Static alignment: roll and pitch from the mean specific force, gyro bias from the mean rate,
   /// yaw given (ENU, 0 = east, counter-clockwise); velocity zero; position from the next usable
   /// fix.

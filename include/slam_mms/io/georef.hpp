@@ -4,14 +4,14 @@
 // trajectory CSVs, GPS time of LAS points).
 //
 // The world frame is the local ENU frame of the run: x east, y north, z up, tangent to the WGS-84
-// ellipsoid at the origin (GeoOrigin: latitude, longitude, ellipsoidal height; the first valid GNSS
-// fix). A point p_world goes to geodetic WGS-84 coordinates through GeographicLib's LocalCartesian
-// (exact, no approximation), then to the output CRS through PROJ: proj_create_crs_to_crs from
-// EPSG:4979 (WGS 84 geographic 3D) to the target, normalised for visualisation so that the axes are
-// always (easting, northing). The output CRS is any projected CRS PROJ knows with metre axes east
-// and north: "" picks WGS 84 / UTM of the origin's zone (EPSG 326zz north, 327zz south),
-// "EPSG:25832" ETRS89 / UTM 32N, "EPSG:32632", ... Geographic, geocentric, compound or unknown CRSs
-// are rejected with kInvalidArgument naming the string.
+// ellipsoid at the origin (GeodeticPoint: latitude, longitude, ellipsoidal height; the first valid
+// GNSS fix). A point p_world goes to geodetic WGS-84 coordinates through GeographicLib's
+// LocalCartesian (exact, no approximation), then to the output CRS through PROJ:
+// proj_create_crs_to_crs from EPSG:4979 (WGS 84 geographic 3D) to the target, normalised for
+// visualisation so that the axes are always (easting, northing). The output CRS is any projected
+// CRS PROJ knows with metre axes east and north: "" picks WGS 84 / UTM of the origin's zone (EPSG
+// 326zz north, 327zz south), "EPSG:25832" ETRS89 / UTM 32N, "EPSG:32632", ... Geographic,
+// geocentric, compound or unknown CRSs are rejected with kInvalidArgument naming the string.
 //
 // Heights stay ellipsoidal (height above the WGS-84 ellipsoid, as the GNSS gives it): no geoid
 // model is applied and no vertical CRS is attached (georef.json says so under "vertical"). For a
@@ -35,25 +35,12 @@
 #include <string>
 #include <vector>
 
+#include "slam_mms/core/geodesy.hpp"
 #include "slam_mms/core/status.hpp"
 #include "slam_mms/core/timestamp.hpp"
 #include "slam_mms/core/trajectory.hpp"
 
 namespace slam_mms {
-
-/// WGS-84 origin of the local ENU world frame (ellipsoidal height).
-struct GeoOrigin {
-  double latitude_deg = 0.0;
-  double longitude_deg = 0.0;
-  double height_m = 0.0;
-};
-
-/// Geodetic WGS-84 coordinates of a point.
-struct GeodeticCoordinates {
-  double latitude_deg = 0.0;
-  double longitude_deg = 0.0;
-  double height_m = 0.0;  ///< Above the WGS-84 ellipsoid.
-};
 
 /// Attitude of the body frame w.r.t. the local level frame at the body's own position (Applanix
 /// SBET convention): z-y'-x'' Tait-Bryan angles of the body's forward-right-down axes (the
@@ -72,7 +59,7 @@ class GeoReference {
   /// ("EPSG:25832", a WKT, ...). kInvalidArgument for a bad origin (non-finite, |lat| > 90, or
   /// outside UTM's -80..84 deg when crs is ""), an unknown CRS, or one that is not projected with
   /// east/north metre axes; the message names the CRS string and PROJ's reason.
-  static StatusOr<GeoReference> Create(const GeoOrigin& origin, const std::string& crs = "");
+  static StatusOr<GeoReference> Create(const GeodeticPoint& origin, const std::string& crs = "");
   /// Checks `crs` as Create would, before the origin is known (at the centre of the CRS's area of
   /// use): lets an app refuse a bad --crs before any processing. OK for "".
   [[nodiscard]] static Status CheckCrs(const std::string& crs);
@@ -83,7 +70,7 @@ class GeoReference {
   GeoReference& operator=(const GeoReference&) = delete;
   ~GeoReference();
 
-  const GeoOrigin& origin() const { return origin_; }
+  const GeodeticPoint& origin() const { return origin_; }
   /// The CRS string given to Create ("" for the default UTM).
   const std::string& crs_request() const { return crs_request_; }
   /// EPSG code of the output CRS; 0 where the CRS has none.
@@ -99,14 +86,14 @@ class GeoReference {
   double operation_accuracy_m() const { return operation_accuracy_m_; }
 
   /// p_world (ENU) -> WGS-84 geodetic (GeographicLib LocalCartesian, exact).
-  GeodeticCoordinates EnuToGeodetic(const Eigen::Vector3d& p_world) const;
+  GeodeticPoint EnuToGeodetic(const Eigen::Vector3d& p_world) const;
   /// WGS-84 geodetic -> p_world (ENU).
-  Eigen::Vector3d GeodeticToEnu(const GeodeticCoordinates& g) const;
+  Eigen::Vector3d GeodeticToEnu(const GeodeticPoint& g) const;
   /// Geodetic -> (easting, northing, ellipsoidal height) in the output CRS. kInvalidArgument
   /// naming the point when PROJ cannot transform it.
-  StatusOr<Eigen::Vector3d> GeodeticToProjected(const GeodeticCoordinates& g) const;
+  StatusOr<Eigen::Vector3d> GeodeticToProjected(const GeodeticPoint& g) const;
   /// (easting, northing, height) -> geodetic (PROJ inverse).
-  StatusOr<GeodeticCoordinates> ProjectedToGeodetic(const Eigen::Vector3d& enh) const;
+  StatusOr<GeodeticPoint> ProjectedToGeodetic(const Eigen::Vector3d& enh) const;
   /// p_world -> (easting, northing, height).
   StatusOr<Eigen::Vector3d> EnuToProjected(const Eigen::Vector3d& p_world) const;
   /// Many points at once (one PROJ call); `out` gets points.size() rows.
@@ -117,15 +104,15 @@ class GeoReference {
 
   /// R_world_level: the rotation from the local ENU frame at `g` to the world ENU frame (the
   /// two differ by the meridian convergence and the curvature of the Earth).
-  Eigen::Matrix3d R_world_level(const GeodeticCoordinates& g) const;
+  Eigen::Matrix3d R_world_level(const GeodeticPoint& g) const;
   /// Angle of true north measured clockwise from grid north at `g` [deg], from PROJ on two points
   /// 1e-6 deg apart: grid heading = true heading + this angle.
-  StatusOr<double> TrueNorthFromGridNorthDeg(const GeodeticCoordinates& g) const;
+  StatusOr<double> TrueNorthFromGridNorthDeg(const GeodeticPoint& g) const;
 
  private:
   GeoReference() = default;
   struct Proj;
-  GeoOrigin origin_;
+  GeodeticPoint origin_;
   std::string crs_request_;
   int epsg_ = 0;
   std::string crs_name_, wkt1_, wkt2_, operation_name_;

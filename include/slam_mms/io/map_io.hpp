@@ -71,11 +71,11 @@ struct MapCloud {
 struct LasWriteOptions {
   /// Coordinate resolution [m] (LAS scale of x, y, z); must be > 0.
   double scale_m = 0.001;
-  /// Only for WriteLas(map, GeoOrigin, ...): the output CRS ("" = WGS 84 / UTM of the origin's
+  /// Only for WriteLas(map, GeodeticPoint, ...): the output CRS ("" = WGS 84 / UTM of the origin's
   /// zone; "EPSG:25832", ...; see GeoReference::Create). Overrides utm_zone when not empty.
   std::string crs;
-  /// Only for WriteLas(map, GeoOrigin, ...) with crs "": a UTM zone 1..60 to force (WGS 84 / UTM,
-  /// EPSG 326zz/327zz); 0 = the zone of the origin.
+  /// Only for WriteLas(map, GeodeticPoint, ...) with crs "": a UTM zone 1..60 to force (WGS 84 /
+  /// UTM, EPSG 326zz/327zz); 0 = the zone of the origin.
   int utm_zone = 0;
   /// Hemisphere when utm_zone is forced (ignored otherwise: taken from the origin's latitude).
   bool north = true;
@@ -96,9 +96,9 @@ struct LasWriteOptions {
 [[nodiscard]] Status WriteLas(const MapCloud& map, const GeoReference& geo,
                               const std::filesystem::path& file, const LasWriteOptions& options);
 /// The same with a GeoReference built from `origin` and options.crs / options.utm_zone.
-[[nodiscard]] Status WriteLas(const MapCloud& map, const GeoOrigin& origin,
+[[nodiscard]] Status WriteLas(const MapCloud& map, const GeodeticPoint& origin,
                               const std::filesystem::path& file, const LasWriteOptions& options);
-[[nodiscard]] Status WriteLas(const MapCloud& map, const GeoOrigin& origin,
+[[nodiscard]] Status WriteLas(const MapCloud& map, const GeodeticPoint& origin,
                               const std::filesystem::path& file);
 
 /// One tile written by WriteLasTiles.

@@ -110,6 +110,9 @@ ImuSample ToImuSample(const OxtsRecord& record, Timestamp stamp);
 /// Attitude of the body in local ENU: R_enu_body = Rz(yaw) * Ry(pitch) * Rx(roll) (KITTI devkit).
 Eigen::Matrix3d OxtsAttitude(const OxtsRecord& record);
 
+/// Velocity in local ENU [m/s]: (ve, vn, vu).
+Eigen::Vector3d OxtsVelocityEnu(const OxtsRecord& record);
+
 /// Fills roll/pitch/yaw of `record` from R_enu_body (inverse of OxtsAttitude).
 void SetOxtsAttitude(const Eigen::Matrix3d& R_enu_body, OxtsRecord* record);
 

@@ -40,8 +40,8 @@
 #include "slam_mms/pipeline/localization_result.hpp"
 #include "slam_mms/pipeline/map_point_stamps.hpp"
 #include "slam_mms/pipeline/scan_deskewer.hpp"
+#include "slam_mms/pipeline/submap_source.hpp"
 #include "slam_mms/registration/projective_icp.hpp"
-#include "slam_mms/render_egl/surfel_renderer_factory.hpp"
 #include "slam_mms/surfel/surfel_map.hpp"
 
 namespace slam_mms {
@@ -60,37 +60,7 @@ struct ScanMotionInput {
   Eigen::Vector3d g_world = Eigen::Vector3d(0.0, 0.0, -9.80665);
 };
 
-/// A finished or current submap as level 1 hands it to level 2.
-struct SubmapRecord {
-  int32_t id = 0;
-  Eigen::Isometry3d T_world_submap = Eigen::Isometry3d::Identity();  ///< Level-1 estimate.
-  Timestamp start;
-  Timestamp end;
-  std::vector<int64_t> scan_indices;
-  std::vector<Timestamp> scan_stamps;
-  std::vector<Eigen::Isometry3d> T_submap_scan;  ///< Body poses in the submap frame.
-  std::vector<Matrix6d> cov_submap_scan;
-  /// Relative pose of the previous submap's reference to this one's (the reckon chain, eq 21), and
-  /// its covariance; identity for the first.
-  Eigen::Isometry3d T_prev_this = Eigen::Isometry3d::Identity();
-  Matrix6d cov_prev_this = Matrix6d::Identity();
-  /// De-skewed points of the submap's scans in the submap frame, voxel-downsampled (map output).
-  /// Empty once spilled to `cloud_file` (Localizer::Options::spill_dir): read it with
-  /// Localizer::SubmapCloud, which serves both cases.
-  PointCloud cloud;
-  /// Per point of `cloud`: the time and scan of the voxel's first point (empty once spilled, like
-  /// `cloud`; SubmapCloud returns them).
-  MapPointStamps cloud_stamps;
-  /// A coarser cloud for map-to-map registration and loop closure; spilled like `cloud` once the
-  /// submap is two behind the current one.
-  PointCloud registration_cloud;
-  std::filesystem::path cloud_file;               ///< Empty while `cloud` is in memory.
-  std::filesystem::path registration_cloud_file;  ///< Empty while in memory.
-  size_t cloud_size = 0;                          ///< Points of the map cloud, wherever it is.
-  bool finished = false;
-};
-
-class Localizer {
+class Localizer final : public SubmapSource {
  public:
   /// SurfelMapOptions with the Localizer's image width (see Options::surfels).
   static SurfelMapOptions DefaultSurfelOptions();
@@ -164,17 +134,17 @@ class Localizer {
   /// (nothing is changed then).
   StatusOr<LocalizationResult> ProcessScan(const Scan& scan, const ScanMotionInput& motion);
 
-  /// Submaps so far (the last one may be unfinished). Level 2 moves them with SetSubmapPose.
-  const std::vector<SubmapRecord>& submaps() const;
+  /// Submaps so far (the last one may be unfinished). The host (MappingSystem) moves them with
+  /// SetSubmapPose to level 2's estimates.
+  const std::vector<SubmapRecord>& submaps() const override;
   /// Moves submap `id` to T_world_submap (after a level-2 solve): its surfels follow.
   Status SetSubmapPose(int32_t id, const Eigen::Isometry3d& T_world_submap);
   /// Frees the point clouds of submaps that level 2 no longer needs (memory bound).
   void ReleaseSubmapClouds(int32_t id, bool keep_registration_cloud);
-  enum class CloudKind { kMap, kRegistration };
   /// A submap's map or registration cloud (submap frame), from memory or read back from its spill
   /// file. NotFound for an unknown id; DataLoss / NotFound naming the file when the spill file is
   /// unreadable or corrupt.
-  StatusOr<PointCloud> SubmapCloud(int32_t id, CloudKind kind) const;
+  StatusOr<PointCloud> SubmapCloud(int32_t id, CloudKind kind) const override;
   /// The same; `stamps` (may be null) gets the map cloud's MapPointStamps (empty for
   /// kRegistration).
   StatusOr<PointCloud> SubmapCloud(int32_t id, CloudKind kind, MapPointStamps* stamps) const;

@@ -17,8 +17,8 @@
 
 #include "slam_mms/core/status.hpp"
 #include "slam_mms/ins/gnss_prior.hpp"
-#include "slam_mms/pipeline/extrinsic_calibrator.hpp"
-#include "slam_mms/pipeline/localizer.hpp"
+#include "slam_mms/pipeline/extrinsic_calibration_options.hpp"
+#include "slam_mms/pipeline/submap_source.hpp"
 #include "slam_mms/registration/point_icp.hpp"
 
 namespace slam_mms {
@@ -79,18 +79,21 @@ class SubmapManager {
   /// A GNSS measurement that the POS used (antenna position in world; lever arm in the factor).
   void AddGnssMeasurement(const GnssMeasurement& measurement,
                           const Eigen::Vector3d& t_body_antenna);
-  /// Level 1 finished `submap_id`: add its factors, test loops, solve when triggered; then the
-  /// Localizer's submaps are moved to the new estimates.
+  /// Level 1 finished `submap_id` (read from `submaps`, which level 2 never changes): add its
+  /// factors, test loops, solve when triggered. Returns the new estimates of level 1's submaps
+  /// after a usable solve (the unfinished current one moved rigidly with the last finished one),
+  /// in `submaps` order, for the host to apply (Localizer::SetSubmapPose); empty without a solve.
   /// `pos_attitude` (may be absent): the submap frame's attitude from the POS and its 3x3 rotation
   /// covariance (right perturbation, submap axes, rad^2) for the attitude prior (yaw included).
   struct PosAttitude {
     Eigen::Matrix3d R_world_submap = Eigen::Matrix3d::Identity();
     Eigen::Matrix3d cov_rotation = Eigen::Matrix3d::Identity();
   };
-  Status OnSubmapFinished(Localizer* localizer, int32_t submap_id, bool gnss_returned_after_outage,
-                          const std::optional<PosAttitude>& pos_attitude = std::nullopt);
-  /// The final solve.
-  Status Finish(Localizer* localizer);
+  StatusOr<std::vector<SubmapPoseUpdate>> OnSubmapFinished(
+      const SubmapSource& submaps, int32_t submap_id, bool gnss_returned_after_outage,
+      const std::optional<PosAttitude>& pos_attitude = std::nullopt);
+  /// The final solve; its estimates as for OnSubmapFinished.
+  StatusOr<std::vector<SubmapPoseUpdate>> Finish(const SubmapSource& submaps);
   const Stats& stats() const;
 
  private:

@@ -81,4 +81,9 @@ class SurfelRenderer {
 /// Checks the input array/ids (shared by the implementations).
 [[nodiscard]] Status ValidateRenderInput(const SurfelRenderInput& input);
 
+/// Which renderer a Localizer uses (the choice is made in pipeline's MakeSurfelRenderer):
+/// kAuto = EGL on a hardware GPU where the render_egl module is built, else the CPU renderer;
+/// kCpu / kEgl = that one.
+enum class SurfelRendererBackend { kAuto = 0, kCpu = 1, kEgl = 2 };
+
 }  // namespace slam_mms

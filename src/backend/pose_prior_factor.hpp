@@ -5,7 +5,7 @@
 //   r = S * [ Log(R~^T R) ;  R~^T (p - p~) ]        (rotation first, right perturbation)
 //
 // with S^T S = Sigma^-1 of the 6x6 prior covariance (library convention: T = T~ * Exp(xi)).
-// Parameter block: one 7-double pose block (slam_mms/ins/pose_block.hpp). Analytic Jacobian with
+// Parameter block: one 7-double pose block (backend/pose_block.hpp). Analytic Jacobian with
 // respect to the ambient 7-vector.
 //
 // Thread safety: Evaluate is const and may run concurrently.

@@ -1,4 +1,4 @@
-#include "slam_mms/pipeline/drive_runner.hpp"
+#include "slam_mms/drive/drive_runner.hpp"
 
 #include <GeographicLib/LocalCartesian.hpp>
 #include <chrono>

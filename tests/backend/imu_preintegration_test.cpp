@@ -6,12 +6,12 @@
 
 #include <random>
 
+#include "backend/gnss_position_factor.hpp"
+#include "backend/imu_preintegration_factor.hpp"
+#include "backend/pose_block.hpp"
 #include "ins/numeric_jacobian.hpp"
 #include "ins/synthetic_drive.hpp"
 #include "slam_mms/core/lie.hpp"
-#include "slam_mms/ins/gnss_position_factor.hpp"
-#include "slam_mms/ins/imu_preintegration_factor.hpp"
-#include "slam_mms/ins/pose_block.hpp"
 
 namespace slam_mms {
 namespace {

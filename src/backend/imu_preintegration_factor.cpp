@@ -1,10 +1,10 @@
-#include "slam_mms/ins/imu_preintegration_factor.hpp"
+#include "backend/imu_preintegration_factor.hpp"
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 
+#include "backend/pose_block.hpp"
 #include "slam_mms/core/lie.hpp"
-#include "slam_mms/ins/pose_block.hpp"
 
 namespace slam_mms {
 

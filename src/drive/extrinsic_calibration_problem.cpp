@@ -1,4 +1,4 @@
-#include "pipeline/extrinsic_calibration_problem.hpp"
+#include "drive/extrinsic_calibration_problem.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/SVD>

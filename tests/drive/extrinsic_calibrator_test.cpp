@@ -1,7 +1,7 @@
 // CalibrateExtrinsics on simulated drives whose true extrinsic is known: started from a wrong
 // calibration (rotation, lever arm and LiDAR clock offset), it recovers the truth where the drive
 // observes it and flags what a straight drive cannot give.
-#include "slam_mms/pipeline/extrinsic_calibrator.hpp"
+#include "slam_mms/drive/extrinsic_calibrator.hpp"
 
 #include <gtest/gtest.h>
 
@@ -11,9 +11,9 @@
 #include <filesystem>
 
 #include "slam_mms/core/lie.hpp"
+#include "slam_mms/drive/drive_runner.hpp"
+#include "slam_mms/drive/open_drive.hpp"
 #include "slam_mms/io/trajectory_io.hpp"
-#include "slam_mms/pipeline/drive_runner.hpp"
-#include "slam_mms/pipeline/open_drive.hpp"
 #include "slam_mms/sim/drive_simulator.hpp"
 #include "slam_mms/sim/imu_simulator.hpp"
 #include "testing/test_data.hpp"

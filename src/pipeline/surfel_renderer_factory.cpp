@@ -1,4 +1,4 @@
-#include "slam_mms/render_egl/surfel_renderer_factory.hpp"
+#include "pipeline/surfel_renderer_factory.hpp"
 
 #include <filesystem>
 #include <mutex>
@@ -6,20 +6,14 @@
 #include <utility>
 
 #include "slam_mms/core/logging.hpp"
-#include "slam_mms/render_egl/egl_surfel_renderer.hpp"
 #include "slam_mms/surfel/cpu_surfel_renderer.hpp"
+#if SLAM_MMS_HAVE_EGL
+#include "slam_mms/render_egl/egl_surfel_renderer.hpp"
+#endif
 
 namespace slam_mms {
 
-const char* SurfelRendererBackendName(SurfelRendererBackend backend) {
-  switch (backend) {
-    case SurfelRendererBackend::kAuto: return "auto";
-    case SurfelRendererBackend::kCpu: return "cpu";
-    case SurfelRendererBackend::kEgl: return "egl";
-  }
-  return "unknown";
-}
-
+#if SLAM_MMS_HAVE_EGL
 namespace {
 
 // kAuto's answer where EGL gave no hardware renderer: probing costs a Mesa load, a context and a
@@ -49,10 +43,18 @@ bool NoGpuDeviceNode(std::string* reason) {
 }
 
 }  // namespace
+#endif  // SLAM_MMS_HAVE_EGL
 
 StatusOr<std::unique_ptr<SurfelRenderer>> MakeSurfelRenderer(const SurfelRendererOptions& options,
                                                              SurfelRendererBackend backend) {
   SLAM_MMS_RETURN_IF_ERROR(options.Validate());
+#if !SLAM_MMS_HAVE_EGL
+  if (backend == SurfelRendererBackend::kEgl) {
+    return UnavailableError("MakeSurfelRenderer: EGL was not built (SLAM_MMS_WITH_EGL=OFF)");
+  }
+  SLAM_MMS_ASSIGN_OR_RETURN(auto cpu_only, CpuSurfelRenderer::Create(options));
+  return std::unique_ptr<SurfelRenderer>(std::move(cpu_only));
+#else
   if (backend == SurfelRendererBackend::kAuto) {
     std::lock_guard<std::mutex> lock(g_auto_mutex);
     if (!g_auto_is_cpu && NoGpuDeviceNode(&g_auto_reason)) g_auto_is_cpu = true;
@@ -83,6 +85,7 @@ StatusOr<std::unique_ptr<SurfelRenderer>> MakeSurfelRenderer(const SurfelRendere
   }
   SLAM_MMS_ASSIGN_OR_RETURN(auto cpu, CpuSurfelRenderer::Create(options));
   return std::unique_ptr<SurfelRenderer>(std::move(cpu));
+#endif
 }
 
 }  // namespace slam_mms

@@ -1,4 +1,4 @@
-#include "slam_mms/pipeline/open_drive.hpp"
+#include "slam_mms/drive/open_drive.hpp"
 
 #include <cmath>
 #include <optional>

@@ -8,10 +8,10 @@
 
 #include "io/folder_test_util.hpp"
 #include "slam_mms/core/lie.hpp"
+#include "slam_mms/drive/open_drive.hpp"
 #include "slam_mms/io/drive_folder_writer.hpp"
 #include "slam_mms/io/extrinsics_yaml.hpp"
 #include "slam_mms/io/kitti_calibration.hpp"
-#include "slam_mms/pipeline/open_drive.hpp"
 #include "testing/test_data.hpp"
 
 namespace slam_mms {

@@ -18,7 +18,7 @@
 #include "slam_mms/core/lie.hpp"
 #include "slam_mms/core/sensor_data.hpp"
 #include "slam_mms/core/timestamp.hpp"
-#include "slam_mms/pipeline/extrinsic_calibrator.hpp"
+#include "slam_mms/drive/extrinsic_calibrator.hpp"
 
 namespace slam_mms::calib_internal {
 

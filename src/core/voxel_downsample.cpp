@@ -1,4 +1,4 @@
-#include "slam_mms/eval/voxel_downsample.hpp"
+#include "slam_mms/core/voxel_downsample.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -8,7 +8,7 @@
 #include <utility>
 #include <vector>
 
-namespace slam_mms::eval {
+namespace slam_mms {
 namespace {
 
 struct VoxelKey {
@@ -121,4 +121,4 @@ StatusOr<PointCloud> VoxelDownsample(const PointCloud& cloud, double voxel_size_
   return VoxelDownsample(cloud.View(), voxel_size_m);
 }
 
-}  // namespace slam_mms::eval
+}  // namespace slam_mms

@@ -7,7 +7,9 @@
 //          the CPU renderer without probing EGL again (a probe costs about 0.15 s). On Linux
 //          a machine without any GPU device node (/dev/dri/renderD*, /dev/nvidia*, /dev/dxg)
 //          is not probed at all.
-//   kCpu / kEgl: that one (kEgl returns EGL's Unavailable status when it cannot start).
+//   kCpu / kEgl: that one (kEgl returns EGL's Unavailable status when it cannot start, and
+//   Unavailable in a build without the render_egl module, SLAM_MMS_WITH_EGL=OFF, where kAuto is
+//   always the CPU renderer).
 //
 // Thread safety: the function is thread-safe; the renderer it returns is not (see each class).
 
@@ -17,10 +19,6 @@
 #include "slam_mms/surfel/surfel_renderer.hpp"
 
 namespace slam_mms {
-
-enum class SurfelRendererBackend { kAuto = 0, kCpu = 1, kEgl = 2 };
-
-const char* SurfelRendererBackendName(SurfelRendererBackend backend);
 
 StatusOr<std::unique_ptr<SurfelRenderer>> MakeSurfelRenderer(
     const SurfelRendererOptions& options,

@@ -1,9 +1,9 @@
-#include "slam_mms/ins/gnss_position_factor.hpp"
+#include "backend/gnss_position_factor.hpp"
 
 #include <Eigen/Cholesky>
 
+#include "backend/pose_block.hpp"
 #include "slam_mms/core/lie.hpp"
-#include "slam_mms/ins/pose_block.hpp"
 
 namespace slam_mms {
 

@@ -1,4 +1,4 @@
-#include "slam_mms/pipeline/georeferenced_outputs.hpp"
+#include "slam_mms/drive/georeferenced_outputs.hpp"
 
 #include <cmath>
 #include <vector>
@@ -15,10 +15,6 @@ void KeepFirst(Status* first, const Status& s) {
     SLAM_MMS_LOG(kError) << s.ToString();
     if (first->ok()) *first = s;
   }
-}
-
-GeoOrigin ToGeoOrigin(const GeodeticPoint& p) {
-  return GeoOrigin{p.latitude_deg, p.longitude_deg, p.height_m};
 }
 
 bool SameOrigin(const GeodeticPoint& a, const GeodeticPoint& b) {
@@ -44,15 +40,13 @@ Status GeoOutputOptions::Validate() const {
 }
 
 StatusOr<std::string> RunGeorefJson(const GeodeticPoint& origin, const GeoOutputOptions& options) {
-  SLAM_MMS_ASSIGN_OR_RETURN(const GeoReference geo,
-                            GeoReference::Create(ToGeoOrigin(origin), options.crs));
+  SLAM_MMS_ASSIGN_OR_RETURN(const GeoReference geo, GeoReference::Create(origin, options.crs));
   return GeoReferenceJson(geo);
 }
 
 Status WriteRunGeorefJson(const GeodeticPoint& origin, const GeoOutputOptions& options,
                           const std::filesystem::path& out_dir) {
-  SLAM_MMS_ASSIGN_OR_RETURN(const GeoReference geo,
-                            GeoReference::Create(ToGeoOrigin(origin), options.crs));
+  SLAM_MMS_ASSIGN_OR_RETURN(const GeoReference geo, GeoReference::Create(origin, options.crs));
   return WriteGeorefJson(geo, out_dir / "georef.json");
 }
 
@@ -67,7 +61,7 @@ Status WriteGeoreferencedOutputs(const std::string& method, MappingMode mode,
                            << ": world origin unknown, no WGS-84/projected CSV and no LAS written";
     return OkStatus();
   }
-  StatusOr<GeoReference> created = GeoReference::Create(ToGeoOrigin(*origin), options.crs);
+  StatusOr<GeoReference> created = GeoReference::Create(*origin, options.crs);
   if (!created.ok()) return created.status().WithContext(method);
   const GeoReference& geo = *created;
   Status first;

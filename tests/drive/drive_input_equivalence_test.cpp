@@ -14,10 +14,10 @@
 #include <string>
 #include <vector>
 
+#include "slam_mms/drive/drive_runner.hpp"
+#include "slam_mms/drive/open_drive.hpp"
 #include "slam_mms/io/drive_folder_writer.hpp"
 #include "slam_mms/io/kitti_drive_reader.hpp"
-#include "slam_mms/pipeline/drive_runner.hpp"
-#include "slam_mms/pipeline/open_drive.hpp"
 #include "testing/simulated_drive.hpp"
 #include "testing/test_data.hpp"
 #if defined(SLAM_MMS_TEST_ROSBAG)  // tests/CMakeLists.txt: where the rosbag module is built

@@ -1,4 +1,4 @@
-#include "slam_mms/pipeline/scan_results_csv.hpp"
+#include "slam_mms/drive/scan_results_csv.hpp"
 
 #include <fstream>
 

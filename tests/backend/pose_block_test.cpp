@@ -1,4 +1,4 @@
-#include "slam_mms/ins/pose_block.hpp"
+#include "backend/pose_block.hpp"
 
 #include <gtest/gtest.h>
 

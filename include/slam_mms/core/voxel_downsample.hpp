@@ -12,10 +12,10 @@
 #include "slam_mms/core/point_cloud.hpp"
 #include "slam_mms/core/status.hpp"
 
-namespace slam_mms::eval {
+namespace slam_mms {
 
 /// Fails where voxel_size_m is not finite and > 0, or where a voxel index would overflow int32.
 StatusOr<PointCloud> VoxelDownsample(const PointCloudView& cloud, double voxel_size_m);
 StatusOr<PointCloud> VoxelDownsample(const PointCloud& cloud, double voxel_size_m);
 
-}  // namespace slam_mms::eval
+}  // namespace slam_mms

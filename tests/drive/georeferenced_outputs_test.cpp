@@ -1,6 +1,6 @@
 // WriteGeoreferencedOutputs: the file set of each method and option, what the LAS carries from the
 // map's stamps, and the option checks that run before any processing.
-#include "slam_mms/pipeline/georeferenced_outputs.hpp"
+#include "slam_mms/drive/georeferenced_outputs.hpp"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -13,10 +13,10 @@
 #include <set>
 #include <sstream>
 
+#include "slam_mms/drive/drive_runner.hpp"
 #include "slam_mms/io/kitti_drive_reader.hpp"
 #include "slam_mms/io/kitti_raw_reader.hpp"
 #include "slam_mms/io/map_io.hpp"
-#include "slam_mms/pipeline/drive_runner.hpp"
 #include "testing/test_data.hpp"
 
 namespace slam_mms {

@@ -13,7 +13,7 @@
 // Sigma of the measurement in the library's convention (rotation first, right perturbation:
 // T_a_b = T~_a_b * Exp(xi), xi ~ N(0, Sigma)).
 //
-// Parameter blocks: the 7-double pose blocks of slam_mms/ins/pose_block.hpp ([t, q(xyzw)],
+// Parameter blocks: the 7-double pose blocks of backend/pose_block.hpp ([t, q(xyzw)],
 // T_world_a and T_world_b), manifold PoseManifold. Jacobians are analytic, with respect to the
 // ambient 7-vectors (Ceres chains them with the manifold).
 //

@@ -40,94 +40,9 @@
 #include "slam_mms/core/sensor_data.hpp"
 #include "slam_mms/core/status.hpp"
 #include "slam_mms/io/drive_reader.hpp"
+#include "slam_mms/pipeline/extrinsic_calibration_options.hpp"
 
 namespace slam_mms {
-
-struct ExtrinsicCalibrationOptions {
-  /// Scans used: at most max_scans, evenly spaced over the drive.
-  int max_scans = 400;
-  /// Per scan: points in [min_range_m, max_range_m] from the sensor, one per voxel of voxel_m in
-  /// the lidar frame, at most max_points_per_scan; every query_stride-th of them is a query point
-  /// (the others only fit the planes of partners).
-  double min_range_m = 3.0;
-  double max_range_m = 60.0;
-  double voxel_m = 0.2;
-  int max_points_per_scan = 8000;
-  int query_stride = 6;
-  /// Partners of a scan: the scans nearest to these time separations [s] before and after it, and
-  /// up to max_revisit_partners scans more than revisit_min_separation_s apart whose POS position
-  /// is within revisit_max_distance_m. Partners farther than max_partner_distance_m are dropped.
-  std::vector<double> partner_separations_s = {0.5, 1.0, 2.0, 4.0};
-  int max_revisit_partners = 2;
-  double revisit_min_separation_s = 15.0;
-  double revisit_max_distance_m = 15.0;
-  double max_partner_distance_m = 40.0;
-  /// Each query point is associated with this many of its scan's partners (round robin).
-  int partners_per_point = 2;
-  /// Plane of a partner: neighbours (k) all within max_neighbour_distance_m of the query point,
-  /// thickness (sqrt of the smallest eigenvalue) <= max_plane_thickness_m, second eigenvalue >=
-  /// 4 x the smallest (a plane, not a line).
-  int num_neighbours = 8;
-  double max_neighbour_distance_m = 1.0;
-  double max_plane_thickness_m = 0.04;
-  /// Residual gate [m], from initial_gate_m down to final_gate_m over the first rounds; Huber
-  /// threshold huber_m.
-  double initial_gate_m = 0.5;
-  double final_gate_m = 0.15;
-  double huber_m = 0.05;
-  int max_rounds = 12;
-  int gauss_newton_steps_per_round = 3;
-  /// Scans whose POS position sigma (largest axis) exceeds max_pos_sigma_m [m] or
-  /// max_pos_sigma_ratio x its median over the drive (GNSS outages, where the POS drifts) are not
-  /// used. The absolute sigma of a GNSS/INS is mostly a slowly varying offset that moves the
-  /// scans of a few seconds together; it is the drift in outages that breaks their consistency.
-  double max_pos_sigma_m = 0.5;
-  double max_pos_sigma_ratio = 3.0;
-  /// The attitude the boresight is relative to. The map constrains only the sum of the
-  /// boresight and the POS's own attitude error (on level roads the rotations commute), so the
-  /// POS's heading error (0.05-0.3 deg for a tactical or navigation IMU over a minute of driving)
-  /// would go into the yaw. kTravelDirection assumes the body x axis points along the direction of
-  /// travel (an IMU aligned with the vehicle, no side slip on straight stretches): the POS's mean
-  /// heading error is the mean angle of its own horizontal velocity in its own body frame over
-  /// the scans faster than travel_min_speed_mps turning slower than travel_max_yaw_rate_radps,
-  /// and the yaw is moved to the travel frame (pitch stays on the POS: its vertical velocity is
-  /// too noisy, its gravity-levelled pitch good). kPos takes the POS attitude as it is (an IMU
-  /// mounted askew to the vehicle). travel_sigma_rad: allowance for the alignment of the IMU with
-  /// the vehicle axis and for slip, added in quadrature to the reference's own sigma. kPos is the
-  /// default: it makes no assumption, and the estimate is the one that places the scans best on
-  /// this POS (on the real KITTI frames kTravelDirection was 1.6 deg off it, docs/calibration.md).
-  /// "pos" / "travel_direction" in config files (level2.extrinsic_calibration.attitude_reference).
-  enum class AttitudeReference { kPos, kTravelDirection };
-  AttitudeReference attitude_reference = AttitudeReference::kPos;
-  double travel_min_speed_mps = 3.0;
-  double travel_max_yaw_rate_radps = 0.05;
-  double travel_sigma_rad = 0.01 * 3.14159265358979 / 180.0;
-  /// Prior (1 sigma) about the initial value: roll/pitch/yaw [rad], lever arm [m], time [s].
-  Eigen::Vector3d prior_sigma_rpy_rad = Eigen::Vector3d::Constant(2.0 * 3.14159265358979 / 180.0);
-  Eigen::Vector3d prior_sigma_xyz_m = Eigen::Vector3d::Constant(0.3);
-  double prior_sigma_time_s = 0.1;
-  /// What is estimated (false: held at the initial value).
-  bool estimate_rotation = true;
-  bool estimate_translation = true;
-  bool estimate_time_offset = true;
-  /// Observable: sigma <= max_sigma_* and sigma <= prior sigma / min_prior_reduction.
-  double max_sigma_rpy_rad = 0.05 * 3.14159265358979 / 180.0;
-  double max_sigma_xyz_m = 0.03;
-  double max_sigma_time_s = 0.003;
-  double min_prior_reduction = 5.0;
-  /// The residuals' systematic error that no number of them averages away [m]: a parameter is
-  /// known at best to systematic_error_m / its sensitivity (the weighted RMS change of the
-  /// residuals per unit of it). 0.5 mm: the smallest floor that covers the bias left with the
-  /// true poses as the POS (roll 0.011 deg off on the demo drive, where this floor is 0.016 deg).
-  /// It keeps the vertical lever arm, which level roads barely move the residuals with, from being
-  /// "observed" (KITTI 0005's motion: 0.30 m off with a jackknife sigma of 0.026 m; floor 0.042 m)
-  /// (docs/calibration.md).
-  double systematic_error_m = 0.0005;
-  /// Time blocks of the jackknife (>= 2).
-  int jackknife_blocks = 8;
-  int num_threads = 2;
-  [[nodiscard]] Status Validate() const;
-};
 
 /// What CalibrateExtrinsics estimated. Parameter order everywhere: roll, pitch, yaw, x, y, z, time.
 struct ExtrinsicCalibration {
@@ -192,6 +107,5 @@ const char* ExtrinsicParameterName(int i);
     const DriveReader& reader, const std::vector<InsState>& pos,
     const Eigen::Isometry3d& T_body_lidar_initial, double time_offset_initial_s,
     const ExtrinsicCalibrationOptions& options, const std::atomic<bool>* stop = nullptr);
-
 
 }  // namespace slam_mms

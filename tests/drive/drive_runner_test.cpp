@@ -1,7 +1,7 @@
 // RunDrive (the loop every app and the Python package run) on a short simulated drive: it gives
 // exactly what a host feeding the streams by hand gets, skips and lists unreadable scans, stops
 // cleanly on request, and feeds an external POS.
-#include "slam_mms/pipeline/drive_runner.hpp"
+#include "slam_mms/drive/drive_runner.hpp"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -12,8 +12,8 @@
 #include <fstream>
 #include <set>
 
+#include "slam_mms/drive/open_drive.hpp"
 #include "slam_mms/io/kitti_drive_reader.hpp"
-#include "slam_mms/pipeline/open_drive.hpp"
 #include "testing/feed_streams.hpp"
 #include "testing/simulated_drive.hpp"
 

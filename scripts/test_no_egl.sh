@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# The build variant without the EGL renderer (SLAM_MMS_WITH_EGL=OFF; issue #19): the library, the
+# SDK consumer and the unit tests of the modules the renderer choice reaches (surfel, registration,
+# pipeline), in their own build folder. CI runs it after scripts/test.sh.
+#   scripts/test_no_egl.sh                  # BUILD_DIR=build-no-egl, JOBS=2
+#   BUILD_DIR=build-x scripts/test_no_egl.sh -R Factory   # extra arguments go to ctest
+set -euo pipefail
+cd "$(dirname "$0")/.."
+BUILD_DIR=${BUILD_DIR:-build-no-egl}
+JOBS=${JOBS:-2}
+
+scripts/install_deps.sh
+cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release -DSLAM_MMS_WITH_EGL=OFF \
+  -DSLAM_MMS_BUILD_TESTS=ON -DSLAM_MMS_BUILD_EXAMPLES=OFF -DSLAM_MMS_BUILD_BENCHMARKS=OFF \
+  -DSLAM_MMS_BUILD_PYTHON=OFF ${CMAKE_ARGS:-}
+if grep -q "^SLAM_MMS_WITH_EGL:BOOL=ON" "$BUILD_DIR/CMakeCache.txt"; then
+  echo "test_no_egl: $BUILD_DIR was configured with EGL" >&2
+  exit 1
+fi
+# Every library module, the surfel, registration and pipeline unit tests; the consumer builds
+# against the installed tree in its ctest.
+targets=(slam_mms_core slam_mms_io slam_mms_ins slam_mms_surfel slam_mms_registration
+         slam_mms_backend slam_mms_pipeline slam_mms_eval slam_mms_drive slam_mms_sim)
+if cmake --build "$BUILD_DIR" --target help | grep -q "slam_mms_rosbag$"; then
+  targets+=(slam_mms_rosbag)
+fi
+tests=$(cd tests && ls surfel/*_test.cpp registration/*_test.cpp pipeline/*_test.cpp |
+        sed -E 's#/#_#; s#\.cpp$##')
+cmake --build "$BUILD_DIR" -j"$JOBS" --target "${targets[@]}" $tests
+cd "$BUILD_DIR"
+ctest -j"$JOBS" --output-on-failure --timeout 900 -L "surfel|registration|pipeline|consumer|layering" "$@"

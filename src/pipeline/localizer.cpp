@@ -18,6 +18,7 @@
 #include "pipeline/cloud_file.hpp"
 #include "pipeline/pose_covariance.hpp"
 #include "pipeline/submap_cloud_builder.hpp"
+#include "pipeline/submap_store.hpp"
 #include "pipeline/surfel_renderer_factory.hpp"
 #include "slam_mms/core/lie.hpp"
 #include "slam_mms/core/logging.hpp"
@@ -120,7 +121,8 @@ struct Localizer::Impl {
   std::unique_ptr<SurfelRenderer> renderer;
   ProjectiveIcp icp;
   std::unique_ptr<SlidingWindowGraph> window;
-  std::vector<SubmapRecord> submaps;
+  /// The submaps: records, clouds, spill files (the one owner).
+  internal::SubmapStore store;
   /// The current submap's map and registration clouds (accumulated off the critical path).
   std::unique_ptr<internal::SubmapCloudBuilder> clouds;
   /// The scan's range image, on the Localizer's threads.
@@ -154,23 +156,7 @@ struct Localizer::Impl {
   std::vector<uint32_t> active_ids;
   std::vector<uint32_t> model_ids;
 
-  /// Private spill folder (disabled: clouds stay in memory).
-  internal::SpillFolder spill;
-
-  SubmapRecord& current() { return submaps.back(); }
-
-  /// Moves one cloud of `rec` to a file in the spill folder; on failure it stays in memory.
-  void Spill(SubmapRecord& rec, CloudKind kind) {
-    const bool map = kind == CloudKind::kMap;
-    const Status st = spill.Spill(
-        "submap_" + std::to_string(rec.id) + (map ? "_map.bin" : "_registration.bin"),
-        map ? &rec.cloud : &rec.registration_cloud,
-        map ? &rec.cloud_file : &rec.registration_cloud_file, map ? &rec.cloud_stamps : nullptr);
-    if (!st.ok()) {
-      SLAM_MMS_LOG(kWarning) << "Localizer: submap " << rec.id
-                             << " cloud kept in memory, spilling failed: " << st.ToString();
-    }
-  }
+  SubmapRecord& current() { return store.current(); }
 
   Status StartWindow(const Eigen::Vector3d& v_submap, const Vector6d& bias) {
     auto w = SlidingWindowGraph::Create(opt.window);
@@ -202,20 +188,10 @@ struct Localizer::Impl {
 
   void StartSubmap(const Eigen::Isometry3d& T_world_submap, Timestamp stamp, int64_t scan_index,
                    const Eigen::Isometry3d& T_prev_this, const Matrix6d& cov_prev_this) {
-    SubmapRecord rec;
-    rec.id = submaps.empty() ? 0 : submaps.back().id + 1;
-    rec.T_world_submap = T_world_submap;
-    rec.start = stamp;
-    rec.end = stamp;
-    rec.T_prev_this = T_prev_this;
-    rec.cov_prev_this = cov_prev_this;
-    rec.scan_indices.push_back(scan_index);
-    rec.scan_stamps.push_back(stamp);
-    rec.T_submap_scan.push_back(Eigen::Isometry3d::Identity());
-    rec.cov_submap_scan.push_back(Matrix6d::Identity() * 1e-8);
-    submaps.push_back(std::move(rec));
-    map.SetSubmapId(submaps.back().id);
-    if (opt.per_submap_surfels) RetireOldSurfels(submaps.back().id);
+    const int32_t id =
+        store.Start(T_world_submap, stamp, scan_index, T_prev_this, cov_prev_this).id;
+    map.SetSubmapId(id);
+    if (opt.per_submap_surfels) RetireOldSurfels(id);
     clouds->Clear();
   }
 
@@ -233,20 +209,13 @@ struct Localizer::Impl {
   }
 
   void CloseCurrentSubmap() {
-    if (submaps.empty() || submaps.back().finished) return;
-    SubmapRecord& rec = submaps.back();
+    if (store.empty() || store.current().finished) return;
     internal::SubmapCloudBuilder::Clouds built = clouds->Build();
-    rec.cloud = std::move(built.map);
-    rec.cloud_stamps.time_ns = std::move(built.time_ns);
-    rec.cloud_stamps.scan_index = std::move(built.scan_index);
-    rec.registration_cloud = std::move(built.registration);
-    rec.cloud_size = rec.cloud.size();
-    rec.finished = true;
+    MapPointStamps stamps;
+    stamps.time_ns = std::move(built.time_ns);
+    stamps.scan_index = std::move(built.scan_index);
+    store.FinishCurrent(std::move(built.map), std::move(stamps), std::move(built.registration));
     clouds->Clear();
-    // Level 2 reads only the final map cloud's file; it registers this submap with the previous
-    // one next, so the registration clouds of older ones leave memory.
-    Spill(rec, CloudKind::kMap);
-    if (submaps.size() >= 3) Spill(submaps[submaps.size() - 3], CloudKind::kRegistration);
 #if defined(__GLIBC__)
     // A submap's clouds, grids and sort buffers (tens of MB) were just freed; glibc keeps such
     // blocks in its heaps, where later small allocations fragment them and the process's RSS
@@ -468,11 +437,9 @@ StatusOr<std::unique_ptr<Localizer>> Localizer::Create(const Options& options,
   m.clouds = std::make_unique<internal::SubmapCloudBuilder>(
       options.map_voxel_m, options.registration_voxel_m, /*asynchronous=*/options.num_threads > 1);
   m.range_image = std::make_unique<internal::ParallelRangeImage>(options.num_threads);
-  if (!options.spill_dir.empty()) {
-    auto spill = internal::SpillFolder::Create(options.spill_dir);
-    if (!spill.ok()) return spill.status().WithContext("Localizer::Options::spill_dir");
-    m.spill = std::move(spill).value();
-  }
+  auto store = internal::SubmapStore::Create(options.spill_dir);
+  if (!store.ok()) return store.status().WithContext("Localizer::Options::spill_dir");
+  m.store = std::move(store).value();
   SLAM_MMS_LOG(kInfo) << "Localizer: mode " << MappingModeName(options.mode) << ", renderer "
                       << m.renderer->Name() << ", WT " << options.submap_duration_s << " s";
   return loc;
@@ -712,15 +679,16 @@ StatusOr<LocalizationResult> Localizer::ProcessScan(const Scan& scan,
   return res;
 }
 
-const std::vector<SubmapRecord>& Localizer::submaps() const { return impl_->submaps; }
+const std::vector<SubmapRecord>& Localizer::submaps() const { return impl_->store.submaps(); }
 
 Status Localizer::SetSubmapPose(int32_t id, const Eigen::Isometry3d& T_world_submap) {
   if (!T_world_submap.matrix().allFinite()) {
     return InvalidArgumentError("Localizer::SetSubmapPose: non-finite pose for submap " +
                                 std::to_string(id));
   }
-  for (SubmapRecord& rec : impl_->submaps) {
+  for (const SubmapRecord& rec : impl_->store.submaps()) {
     if (rec.id != id) continue;
+    // The surfels follow the submap.
     const Eigen::Isometry3d T_new_old = T_world_submap * rec.T_world_submap.inverse();
     impl_->map.TransformSubmap(id, T_new_old);
     if (auto it = impl_->archived_surfels.find(id); it != impl_->archived_surfels.end()) {
@@ -728,52 +696,25 @@ Status Localizer::SetSubmapPose(int32_t id, const Eigen::Isometry3d& T_world_sub
       const Eigen::Vector3f t = T_new_old.translation().cast<float>();
       for (Surfel& s : it->second) TransformSurfel(R, t, &s);
     }
-    rec.T_world_submap = T_world_submap;
-    return OkStatus();
+    break;
   }
-  return NotFoundError("Localizer::SetSubmapPose: no submap " + std::to_string(id));
+  return impl_->store.SetPose(id, T_world_submap);
 }
 
 void Localizer::ReleaseSubmapClouds(int32_t id, bool keep_registration_cloud) {
-  for (SubmapRecord& rec : impl_->submaps) {
-    if (rec.id != id) continue;
-    std::error_code ec;
-    rec.cloud = PointCloud();
-    rec.cloud_stamps = MapPointStamps();
-    rec.cloud_size = 0;
-    if (!rec.cloud_file.empty()) std::filesystem::remove(rec.cloud_file, ec);
-    rec.cloud_file.clear();
-    if (keep_registration_cloud) continue;
-    rec.registration_cloud = PointCloud();
-    if (!rec.registration_cloud_file.empty()) {
-      std::filesystem::remove(rec.registration_cloud_file, ec);
-    }
-    rec.registration_cloud_file.clear();
-  }
+  impl_->store.ReleaseClouds(id, keep_registration_cloud);
 }
 
 StatusOr<PointCloud> Localizer::SubmapCloud(int32_t id, CloudKind kind) const {
-  return SubmapCloud(id, kind, nullptr);
+  return impl_->store.SubmapCloud(id, kind);
 }
 
 StatusOr<PointCloud> Localizer::SubmapCloud(int32_t id, CloudKind kind,
                                             MapPointStamps* stamps) const {
-  if (stamps != nullptr) stamps->clear();
-  for (const SubmapRecord& rec : impl_->submaps) {
-    if (rec.id != id) continue;
-    const bool map = kind == CloudKind::kMap;
-    auto cloud = internal::CloudFromMemoryOrFile(map ? rec.cloud : rec.registration_cloud,
-                                                 map ? rec.cloud_file : rec.registration_cloud_file,
-                                                 map ? &rec.cloud_stamps : nullptr, stamps);
-    if (!cloud.ok()) {
-      return cloud.status().WithContext("Localizer: spilled cloud of submap " + std::to_string(id));
-    }
-    return cloud;
-  }
-  return NotFoundError("Localizer::SubmapCloud: no submap " + std::to_string(id));
+  return impl_->store.SubmapCloud(id, kind, stamps);
 }
 
-const std::filesystem::path& Localizer::spill_folder() const { return impl_->spill.path(); }
+const std::filesystem::path& Localizer::spill_folder() const { return impl_->store.spill_folder(); }
 
 void Localizer::FinishCurrentSubmap() { impl_->CloseCurrentSubmap(); }
 

@@ -1,0 +1,93 @@
+#pragma once
+// MappingSystem::Impl: the facade's state, shared by its files:
+//   mapping_system.cpp          options, Create, the input API, Finish, small getters
+//   mapping_system_input.cpp    the sensor buffer: IMU/GNSS into the POS, time order, the queue
+//   mapping_system_scans.cpp    per scan: the motion input for level 1 from the POS (F_Odom or
+//                               F_Prein), the POS-only mapper (gnss_ins), the submaps to level 2
+//   mapping_system_outputs.cpp  the final trajectory and map
+// Private to the pipeline module.
+
+#include <deque>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <utility>
+#include <vector>
+
+#include "pipeline/voxel_accumulator.hpp"
+#include "slam_mms/pipeline/mapping_system.hpp"
+#include "slam_mms/pipeline/scan_deskewer.hpp"
+
+namespace slam_mms {
+
+struct MappingSystem::Impl {
+  Options opt;
+  InsFilter ins;
+  std::unique_ptr<Localizer> loc;
+  std::unique_ptr<SubmapManager> level2;
+  ScanDeskewer deskewer;
+
+  bool external_pos = false;
+  bool have_first_scan = false;
+  bool finished = false;
+  std::vector<ImuSample> pending_imu;  // before the first scan (outage reference unknown)
+  std::vector<GnssFix> pending_gnss;
+  std::deque<ImuSample> imu_history;  // for preintegration
+  std::deque<Scan> queue;
+  Timestamp last_imu;
+  Timestamp last_gnss;
+  Timestamp last_pos_input;
+  bool have_pos_input = false;
+  Timestamp last_scan_start;
+  bool have_scan = false;
+
+  std::vector<LocalizationResult> results;
+  std::function<void(const LocalizationResult&)> callback;
+  int skipped = 0;
+  int pos_jumps = 0;
+  std::optional<InsState> prev_pos;  // the POS state at the previous scan's start
+  bool in_outage = false;
+  Timestamp outage_start;
+  bool gnss_returned_pending = false;
+  bool have_gnss_fed = false;  // GNSS fixes reached the GnssPrior (also with an external POS)
+  size_t submaps_reported = 0;
+
+  // gnss_ins mode.
+  Trajectory pos_trajectory;
+  internal::VoxelAccumulator pos_map;
+  PointCloud deskewed;
+
+  bool have_imu = false;
+  bool have_gnss = false;
+
+  // ---- the sensor buffer (mapping_system_input.cpp) --------------------------------------------
+  Status FeedImu(const ImuSample& s);
+  Status FeedGnss(const GnssFix& fix);
+  /// With an external POS the fixes are not fused: each is decided (GnssPrior: outage windows,
+  /// type, innovation against the POS antenna position at the fix time) for level 2 only.
+  StatusOr<GnssDecisionResult> DecideAgainstExternalPos(const GnssFix& fix);
+  void MarkPosInput(Timestamp t);
+  /// Replays the data buffered before the first scan, merged in time order.
+  Status FlushPending();
+  bool Ready(const Scan& scan) const;
+  std::vector<ImuSample> ImuBetween(Timestamp from, Timestamp to) const;
+  Status AcceptTime(const char* stream, Timestamp t, Timestamp* last, bool have_last);
+
+  // ---- per scan and level 2 (mapping_system_scans.cpp) -----------------------------------------
+  /// How far the POS moved from `a` to `b` beyond what its IMU measured between them (position
+  /// [m], rotation [rad]); empty where the IMU does not cover [a, b].
+  std::optional<std::pair<double, double>> PosJump(const InsState& a, const InsState& b) const;
+  /// Whether the POS jumped from the previous scan to this one or within this scan (then its
+  /// relative motion is no odometry measurement).
+  bool PosJumped(const Scan& scan, const InsState& s0, const InsState& s1);
+  Status ProcessQueued();
+  Status ProcessScan(const Scan& scan);
+  void UpdateOutageState(bool gnss_valid, Timestamp t);
+  /// Hands the submaps level 1 has finished to level 2, in order.
+  Status ReportFinishedSubmaps();
+  /// The one way level 2 reaches level 1: its estimates, applied to the submaps (and their
+  /// surfels) in order.
+  Status ApplyLevel2(const std::vector<SubmapPoseUpdate>& updates);
+};
+
+}  // namespace slam_mms

@@ -1,0 +1,149 @@
+// The outputs of MappingSystem: the final trajectory (the submaps' poses from the SubmapStore
+// composed with their scans') and the final map (the submaps' clouds at their final poses,
+// voxel-downsampled, with the first time and scan of each voxel).
+#include <algorithm>
+#include <cstdint>
+#include <thread>
+#include <utility>
+
+#include "pipeline/mapping_system_impl.hpp"
+#include "slam_mms/core/logging.hpp"
+#include "slam_mms/core/voxel_downsample.hpp"
+
+namespace slam_mms {
+
+Trajectory MappingSystem::FinalTrajectory() const {
+  const Impl& m = *impl_;
+  if (!m.loc) return m.pos_trajectory;
+  std::vector<StampedPose> poses;
+  for (const SubmapRecord& rec : m.loc->submaps()) {
+    for (size_t j = 0; j < rec.T_submap_scan.size(); ++j) {
+      StampedPose p;
+      p.stamp = rec.scan_stamps[j];
+      p.T_world_body = rec.T_world_submap * rec.T_submap_scan[j];
+      // Rotate the submap-relative covariance (right perturbation: unchanged by left composition).
+      p.cov_T_world_body = rec.cov_submap_scan[j];
+      poses.push_back(p);
+    }
+  }
+  std::sort(poses.begin(), poses.end(),
+            [](const StampedPose& a, const StampedPose& b) { return a.stamp < b.stamp; });
+  Trajectory traj;
+  for (const StampedPose& p : poses) {
+    if (!traj.Add(p).ok()) continue;  // duplicates cannot happen; guard anyway
+  }
+  return traj;
+}
+
+PointCloud MappingSystem::FinalMap() const { return FinalMap(nullptr); }
+
+namespace {
+
+// Per voxel of VoxelDownsample(cloud, voxel_m), in its output order (voxels sorted by
+// integer key, the same floor(p / voxel) of the float point): the stamps of the voxel's earliest
+// point. Empty when `in` does not match `cloud`.
+MapPointStamps EarliestPerVoxel(const PointCloud& cloud, const MapPointStamps& in, double voxel_m) {
+  MapPointStamps out;
+  if (in.size() != cloud.size() || in.scan_index.size() != cloud.size()) return out;
+  struct Key {
+    int32_t ix, iy, iz;
+    uint32_t index;
+  };
+  const double inv = 1.0 / voxel_m;
+  std::vector<Key> keys;
+  keys.reserve(cloud.size());
+  for (size_t i = 0; i < cloud.size(); ++i) {
+    const Eigen::Vector3f& p = cloud.points()[i];
+    if (!p.allFinite()) continue;
+    keys.push_back({static_cast<int32_t>(std::floor(p.x() * inv)),
+                    static_cast<int32_t>(std::floor(p.y() * inv)),
+                    static_cast<int32_t>(std::floor(p.z() * inv)), static_cast<uint32_t>(i)});
+  }
+  std::sort(keys.begin(), keys.end(), [](const Key& a, const Key& b) {
+    if (a.ix != b.ix) return a.ix < b.ix;
+    if (a.iy != b.iy) return a.iy < b.iy;
+    if (a.iz != b.iz) return a.iz < b.iz;
+    return a.index < b.index;
+  });
+  for (size_t begin = 0; begin < keys.size();) {
+    size_t end = begin + 1;
+    size_t best = keys[begin].index;
+    while (end < keys.size() && keys[end].ix == keys[begin].ix && keys[end].iy == keys[begin].iy &&
+           keys[end].iz == keys[begin].iz) {
+      if (in.time_ns[keys[end].index] < in.time_ns[best]) best = keys[end].index;
+      ++end;
+    }
+    out.time_ns.push_back(in.time_ns[best]);
+    out.scan_index.push_back(in.scan_index[best]);
+    begin = end;
+  }
+  return out;
+}
+
+}  // namespace
+
+PointCloud MappingSystem::FinalMap(MapPointStamps* stamps) const {
+  const Impl& m = *impl_;
+  if (stamps != nullptr) stamps->clear();
+  if (!m.loc) {
+    return stamps != nullptr ? m.pos_map.Cloud(&stamps->time_ns, &stamps->scan_index)
+                             : m.pos_map.Cloud();
+  }
+  PointCloud merged;
+  MapPointStamps merged_stamps;
+  bool all_stamped = stamps != nullptr;
+  size_t total = 0;
+  for (const SubmapRecord& rec : m.loc->submaps()) total += rec.cloud_size;
+  merged.reserve(total);
+  MapPointStamps submap_stamps;
+  for (const SubmapRecord& rec : m.loc->submaps()) {
+    // From memory, or read back from the spill folder (Localizer::Options::spill_dir).
+    auto cloud = m.loc->SubmapCloud(rec.id, Localizer::CloudKind::kMap,
+                                    stamps != nullptr ? &submap_stamps : nullptr);
+    if (!cloud.ok()) {
+      SLAM_MMS_LOG(kError) << "MappingSystem::FinalMap: submap " << rec.id
+                           << " left out: " << cloud.status().ToString();
+      continue;
+    }
+    const Eigen::Matrix3f R = rec.T_world_submap.linear().cast<float>();
+    const Eigen::Vector3f t = rec.T_world_submap.translation().cast<float>();
+    for (size_t i = 0; i < cloud->size(); ++i) {
+      merged.Add(R * cloud->points()[i] + t, cloud->intensities()[i]);
+    }
+    if (all_stamped && submap_stamps.size() == cloud->size()) {
+      merged_stamps.time_ns.insert(merged_stamps.time_ns.end(), submap_stamps.time_ns.begin(),
+                                   submap_stamps.time_ns.end());
+      merged_stamps.scan_index.insert(merged_stamps.scan_index.end(),
+                                      submap_stamps.scan_index.begin(),
+                                      submap_stamps.scan_index.end());
+    } else {
+      all_stamped = false;
+    }
+  }
+  // The centroids and the stamps are two independent sorts of the merged cloud: the stamps on a
+  // second thread where asked for.
+  MapPointStamps earliest;
+  std::thread stamp_thread;
+  if (all_stamped && m.opt.num_threads > 1) {
+    stamp_thread =
+        std::thread([&] { earliest = EarliestPerVoxel(merged, merged_stamps, m.opt.map_voxel_m); });
+  } else if (all_stamped) {
+    earliest = EarliestPerVoxel(merged, merged_stamps, m.opt.map_voxel_m);
+  }
+  auto down = VoxelDownsample(merged, m.opt.map_voxel_m);
+  if (stamp_thread.joinable()) stamp_thread.join();
+  if (!down.ok()) {
+    if (all_stamped) *stamps = std::move(merged_stamps);
+    return merged;
+  }
+  if (all_stamped) {
+    if (earliest.size() == down->size()) {
+      *stamps = std::move(earliest);
+    } else {
+      SLAM_MMS_LOG(kWarning) << "MappingSystem::FinalMap: point stamps do not match the map ("
+                             << earliest.size() << " vs " << down->size() << "), left out";
+    }
+  }
+  return std::move(down).value();
+}
+}  // namespace slam_mms

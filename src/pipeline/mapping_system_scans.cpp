@@ -1,0 +1,235 @@
+// Per scan, in MappingSystem (Impl): the motion input level 1 gets from the POS (F_Odom, or
+// F_Prein where the POS jumped or GNSS is out), the POS-only mapper of gnss_ins mode, the outage
+// state, and each finished submap to level 2 with its estimates applied back (one way).
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "pipeline/mapping_system_impl.hpp"
+#include "slam_mms/core/lie.hpp"
+#include "slam_mms/core/logging.hpp"
+#include "slam_mms/ins/imu_preintegration.hpp"
+
+namespace slam_mms {
+
+std::optional<std::pair<double, double>> MappingSystem::Impl::PosJump(const InsState& a,
+                                                                      const InsState& b) const {
+  if (!(a.stamp < b.stamp)) return std::nullopt;
+  const std::vector<ImuSample> imu = ImuBetween(a.stamp, b.stamp);
+  ImuPreintegration pre(ImuPreintegration::Options(), a.accel_bias_mps2, a.gyro_bias_radps);
+  if (imu.empty() || !pre.IntegrateWindow(imu, a.stamp, b.stamp).ok()) return std::nullopt;
+  NavState s;
+  s.q_world_body = Eigen::Quaterniond(a.T_world_body.linear());
+  s.p_world = a.T_world_body.translation();
+  s.v_world = a.v_world_mps;
+  const NavState e = pre.Predict(s, ins.gravity_world());
+  const double dp = (e.p_world - b.T_world_body.translation()).norm();
+  const double dr =
+      Eigen::AngleAxisd(e.q_world_body.toRotationMatrix().transpose() * b.T_world_body.linear())
+          .angle();
+  return std::make_pair(dp, dr);
+}
+
+bool MappingSystem::Impl::PosJumped(const Scan& scan, const InsState& s0, const InsState& s1) {
+  for (const auto& [a, b] :
+       {std::make_pair(prev_pos, std::optional<InsState>(s0)),
+        std::make_pair(std::optional<InsState>(s0), std::optional<InsState>(s1))}) {
+    if (!a) continue;
+    const auto jump = PosJump(*a, *b);
+    if (!jump || (jump->first <= opt.max_pos_jump_m && jump->second <= opt.max_pos_jump_rad)) {
+      continue;
+    }
+    ++pos_jumps;
+    SLAM_MMS_LOG(kInfo) << "POS jumped by " << jump->first << " m, " << jump->second
+                        << " rad beyond its IMU before scan '" << scan.source
+                        << "': level 1 uses F_Prein for it, not F_Odom";
+    return true;
+  }
+  return false;
+}
+
+Status MappingSystem::Impl::ProcessQueued() {
+  while (!queue.empty() && Ready(queue.front())) {
+    Scan scan = std::move(queue.front());
+    queue.pop_front();
+    SLAM_MMS_RETURN_IF_ERROR(ProcessScan(scan));
+  }
+  // Keep ~5 s of IMU behind the oldest scan still to come.
+  const Timestamp keep_from = (queue.empty() ? last_scan_start : queue.front().stamp_start);
+  while (!imu_history.empty() && keep_from.SecondsSince(imu_history.front().stamp) > 5.0) {
+    imu_history.pop_front();
+  }
+  return OkStatus();
+}
+
+Status MappingSystem::Impl::ProcessScan(const Scan& scan) {
+  const bool pos_ok = ins.initialized() || external_pos;
+  StatusOr<InsState> s0 = pos_ok
+                              ? ins.StateAt(scan.stamp_start)
+                              : StatusOr<InsState>(FailedPreconditionError("POS not initialized"));
+  StatusOr<InsState> s1 = pos_ok
+                              ? ins.StateAt(scan.stamp_end)
+                              : StatusOr<InsState>(FailedPreconditionError("POS not initialized"));
+  if (!s0.ok() && s1.ok() && scan.DurationSeconds() <= 0.25) {
+    // The POS starts inside this scan (KITTI: the first OXTS record is stamped mid-scan): take
+    // the scan-end state back to the scan start at constant velocity and, as the vehicle may be
+    // turning (13 deg/s at the start of KITTI sequence 07: 1.3 deg in a scan), at the mean gyro
+    // rate. Level 1 keeps the first scan's attitude as its reference.
+    const double dt = s1->stamp.SecondsSince(scan.stamp_start);
+    InsState back = *s1;
+    back.stamp = scan.stamp_start;
+    back.T_world_body.translation() -= s1->v_world_mps * dt;
+    Eigen::Vector3d w = Eigen::Vector3d::Zero();
+    int n = 0;
+    for (const ImuSample& imu : imu_history) {
+      if (imu.stamp < scan.stamp_start || s1->stamp < imu.stamp) continue;
+      w += imu.gyro_radps;
+      ++n;
+    }
+    if (n > 0) {
+      w = w / n - s1->gyro_bias_radps;
+      back.T_world_body.linear() = s1->T_world_body.linear() * so3::Exp(-w * dt);
+    }
+    s0 = back;
+  }
+  LocalizationResult res;
+  if (opt.mode == MappingMode::kGnssIns) {
+    if (!s0.ok() || !s1.ok()) {
+      ++skipped;
+      SLAM_MMS_LOG(kWarning) << "gnss_ins: scan '" << scan.source << "' skipped: no POS state ("
+                             << (!s0.ok() ? s0.status() : s1.status()).message() << ")";
+      return OkStatus();
+    }
+    const Eigen::Isometry3d T_bstart_bend = s0->T_world_body.inverse() * s1->T_world_body;
+    SLAM_MMS_RETURN_IF_ERROR(deskewer.Deskew(scan, T_bstart_bend, opt.T_body_lidar, &deskewed));
+    const internal::ScanStamp stamp{scan.stamp_start.nanoseconds(), &scan.cloud.time_offsets_s(),
+                                    scan.index};
+    pos_map.Add(deskewed, s0->T_world_body * opt.T_body_lidar, opt.map_max_range_m, &stamp);
+    StampedPose pose;
+    pose.stamp = scan.stamp_start;
+    pose.T_world_body = s0->T_world_body;
+    pose.cov_T_world_body = s0->cov_T_world_body;
+    SLAM_MMS_RETURN_IF_ERROR(pos_trajectory.Add(pose));
+    res.scan_index = scan.index;
+    res.stamp = scan.stamp_start;
+    res.T_world_body = s0->T_world_body;
+    res.cov_T_world_body = s0->cov_T_world_body;
+    res.motion_factor = MotionFactorType::kPos;
+  } else {
+    ScanMotionInput motion;
+    motion.g_world = ins.initialized() ? ins.gravity_world() : Eigen::Vector3d(0, 0, -9.80665);
+    const bool lidar_only = opt.mode == MappingMode::kLidarOnly;
+    if (lidar_only) {
+      motion.type = MotionFactorType::kConstantVelocity;
+      if (results.empty() && s0.ok()) {
+        loc->SetInitialPose(s0->T_world_body);  // the anchor, as SuMa is started at a known pose
+      }
+    } else {
+      // An external POS is a solution over GNSS outages too (e.g. a smoothed one): F_Odom from it
+      // throughout; the GNSS availability (where fixes are fed) only triggers level 2.
+      const bool gnss_available =
+          ins.gnss_prior().AvailabilityAt(scan.stamp_start) != GnssAvailability::kOutage;
+      const bool gnss_valid = external_pos || gnss_available;
+      if (!external_pos || have_gnss_fed) UpdateOutageState(gnss_available, scan.stamp_start);
+      if (gnss_valid && s0.ok() && s1.ok() && !PosJumped(scan, *s0, *s1)) {
+        motion.type = MotionFactorType::kOdometry;
+        motion.T_world_body_pos_start = s0->T_world_body;
+        motion.T_world_body_pos_end = s1->T_world_body;
+        motion.v_world_pos = s0->v_world_mps;
+        motion.pos_bias << s0->accel_bias_mps2, s0->gyro_bias_radps;
+      } else {
+        motion.type = MotionFactorType::kPreintegration;
+        if (s0.ok()) {
+          motion.v_world_pos = s0->v_world_mps;
+          motion.pos_bias << s0->accel_bias_mps2, s0->gyro_bias_radps;
+          if (results.empty()) loc->SetInitialPose(s0->T_world_body);
+        }
+        const Timestamp from = have_scan ? last_scan_start : scan.stamp_start;
+        motion.imu = ImuBetween(from, scan.stamp_end);
+        if (motion.imu.empty()) motion.type = MotionFactorType::kConstantVelocity;
+      }
+    }
+    auto r = loc->ProcessScan(scan, motion);
+    if (!r.ok()) {
+      if (r.status().code() == StatusCode::kInvalidArgument) {
+        ++skipped;
+        SLAM_MMS_LOG(kWarning) << "scan '" << scan.source << "' skipped: " << r.status().message();
+        return OkStatus();
+      }
+      return r.status();
+    }
+    res = std::move(r).value();
+    SLAM_MMS_RETURN_IF_ERROR(ReportFinishedSubmaps());
+  }
+  last_scan_start = scan.stamp_start;
+  have_scan = true;
+  prev_pos = s0.ok() ? std::optional<InsState>(*s0) : std::nullopt;
+  results.push_back(res);
+  if (callback) callback(results.back());
+  return OkStatus();
+}
+
+void MappingSystem::Impl::UpdateOutageState(bool gnss_valid, Timestamp t) {
+  if (!gnss_valid && !in_outage) {
+    in_outage = true;
+    outage_start = t;
+    SLAM_MMS_LOG(kInfo) << "GNSS lost at " << t.ToKittiString()
+                        << (external_pos ? ": level 1 keeps F_Odom from the external POS"
+                                         : ": level 1 switches from F_Odom to F_Prein (IMU "
+                                           "preintegration)");
+  } else if (gnss_valid && in_outage) {
+    in_outage = false;
+    const double duration = t.SecondsSince(outage_start);
+    SLAM_MMS_LOG(kInfo) << "GNSS back after " << duration << " s"
+                        << (external_pos ? "" : ": level 1 switches from F_Prein back to F_Odom");
+    if (level2 && duration >= opt.level2.long_outage_s) gnss_returned_pending = true;
+  }
+}
+
+Status MappingSystem::Impl::ReportFinishedSubmaps() {
+  if (!level2) return OkStatus();
+  const auto& submaps = loc->submaps();
+  while (submaps_reported < submaps.size() && submaps[submaps_reported].finished) {
+    const int32_t id = submaps[submaps_reported].id;
+    // The POS attitude for level 2's attitude prior, at the submap's first scan where GNSS
+    // holds the POS, down-weighted fixes included (in an outage its attitude error outgrows its
+    // covariance: on the demo drive with a 30 s outage, using it there raised full's ATE from
+    // 0.30 to 0.33 m). Under single-point or no-fix GNSS the POS's attitude covariance is no
+    // longer overconfident, its GNSS errors being Gauss-Markov states (InsFilter; attitude NEES
+    // 2.2 on the 190 s drive, docs/results.md); without the prior level 2's yaw was
+    // free there and followed the metre-level noise (1-6 deg on moving single-point drives of
+    // the sweep, docs/sweep.md). It is taken to the
+    // submap frame through level 1's relative pose: R_world_submap = R_world_body *
+    // R_submap_body^T, and a right perturbation d of the body is R_submap_body * d of the
+    // submap. The first scan may precede the POS (the POS can start inside it) and its first
+    // fix. Without one, level 2 keeps level 1's roll/pitch, loosely, and a free yaw.
+    const SubmapRecord& rec = submaps[submaps_reported];
+    const GnssPrior& gp = ins.gnss_prior();
+    std::optional<SubmapManager::PosAttitude> attitude;
+    const bool pos_ready = external_pos || ins.initialized();
+    for (size_t j = 0; pos_ready && j < rec.scan_stamps.size() && !attitude; ++j) {
+      const Timestamp t = rec.scan_stamps[j];
+      if (!external_pos && gp.AvailabilityAt(t) == GnssAvailability::kOutage) continue;
+      StatusOr<InsState> s = ins.StateAt(t);
+      if (!s.ok()) continue;
+      const Eigen::Matrix3d R_sb = rec.T_submap_scan[j].linear();
+      attitude = SubmapManager::PosAttitude{
+          s->T_world_body.linear() * R_sb.transpose(),
+          R_sb * s->cov_T_world_body.topLeftCorner<3, 3>() * R_sb.transpose()};
+    }
+    SLAM_MMS_ASSIGN_OR_RETURN(const std::vector<SubmapPoseUpdate> updates,
+                              level2->OnSubmapFinished(*loc, id, gnss_returned_pending, attitude));
+    SLAM_MMS_RETURN_IF_ERROR(ApplyLevel2(updates));
+    gnss_returned_pending = false;
+    ++submaps_reported;
+  }
+  return OkStatus();
+}
+
+Status MappingSystem::Impl::ApplyLevel2(const std::vector<SubmapPoseUpdate>& updates) {
+  for (const SubmapPoseUpdate& u : updates) {
+    SLAM_MMS_RETURN_IF_ERROR(loc->SetSubmapPose(u.id, u.T_world_submap));
+  }
+  return OkStatus();
+}
+}  // namespace slam_mms

@@ -81,7 +81,22 @@ struct MappingSystem::Impl {
   /// relative motion is no odometry measurement).
   bool PosJumped(const Scan& scan, const InsState& s0, const InsState& s1);
   Status ProcessQueued();
+  /// One scan, once the POS covers it: POS-only mapping (gnss_ins) or level 1 and 2.
   Status ProcessScan(const Scan& scan);
+  /// The POS at the scan's start and end (the start taken back from the end where the POS starts
+  /// inside the scan).
+  std::pair<StatusOr<InsState>, StatusOr<InsState>> PosOverScan(const Scan& scan) const;
+  /// gnss_ins: the scan de-skewed and placed with the POS; false when skipped (no POS state).
+  StatusOr<bool> MapWithPos(const Scan& scan, const StatusOr<InsState>& s0,
+                            const StatusOr<InsState>& s1, LocalizationResult* res);
+  /// Level 1's motion input: F_Odom from the POS while GNSS is valid and the POS did not jump,
+  /// else IMU preintegration (constant velocity without IMU); constant velocity in lidar_only.
+  /// Updates the outage state (level 2's GNSS-return trigger).
+  ScanMotionInput MotionInput(const Scan& scan, const StatusOr<InsState>& s0,
+                              const StatusOr<InsState>& s1);
+  /// Level 1 on the scan, then the submaps it finished to level 2; false when the scan was
+  /// skipped as bad input.
+  StatusOr<bool> Localize(const Scan& scan, const ScanMotionInput& motion, LocalizationResult* res);
   void UpdateOutageState(bool gnss_valid, Timestamp t);
   /// Hands the submaps level 1 has finished to level 2, in order.
   Status ReportFinishedSubmaps();

@@ -63,6 +63,26 @@ Status MappingSystem::Impl::ProcessQueued() {
 }
 
 Status MappingSystem::Impl::ProcessScan(const Scan& scan) {
+  auto [s0, s1] = PosOverScan(scan);
+  LocalizationResult res;
+  if (opt.mode == MappingMode::kGnssIns) {
+    SLAM_MMS_ASSIGN_OR_RETURN(const bool mapped, MapWithPos(scan, s0, s1, &res));
+    if (!mapped) return OkStatus();
+  } else {
+    const ScanMotionInput motion = MotionInput(scan, s0, s1);
+    SLAM_MMS_ASSIGN_OR_RETURN(const bool localized, Localize(scan, motion, &res));
+    if (!localized) return OkStatus();
+  }
+  last_scan_start = scan.stamp_start;
+  have_scan = true;
+  prev_pos = s0.ok() ? std::optional<InsState>(*s0) : std::nullopt;
+  results.push_back(res);
+  if (callback) callback(results.back());
+  return OkStatus();
+}
+
+std::pair<StatusOr<InsState>, StatusOr<InsState>> MappingSystem::Impl::PosOverScan(
+    const Scan& scan) const {
   const bool pos_ok = ins.initialized() || external_pos;
   StatusOr<InsState> s0 = pos_ok
                               ? ins.StateAt(scan.stamp_start)
@@ -92,81 +112,89 @@ Status MappingSystem::Impl::ProcessScan(const Scan& scan) {
     }
     s0 = back;
   }
-  LocalizationResult res;
-  if (opt.mode == MappingMode::kGnssIns) {
-    if (!s0.ok() || !s1.ok()) {
-      ++skipped;
-      SLAM_MMS_LOG(kWarning) << "gnss_ins: scan '" << scan.source << "' skipped: no POS state ("
-                             << (!s0.ok() ? s0.status() : s1.status()).message() << ")";
-      return OkStatus();
+  return {std::move(s0), std::move(s1)};
+}
+
+StatusOr<bool> MappingSystem::Impl::MapWithPos(const Scan& scan, const StatusOr<InsState>& s0,
+                                               const StatusOr<InsState>& s1,
+                                               LocalizationResult* out) {
+  LocalizationResult& res = *out;
+  if (!s0.ok() || !s1.ok()) {
+    ++skipped;
+    SLAM_MMS_LOG(kWarning) << "gnss_ins: scan '" << scan.source << "' skipped: no POS state ("
+                           << (!s0.ok() ? s0.status() : s1.status()).message() << ")";
+    return false;
+  }
+  const Eigen::Isometry3d T_bstart_bend = s0->T_world_body.inverse() * s1->T_world_body;
+  SLAM_MMS_RETURN_IF_ERROR(deskewer.Deskew(scan, T_bstart_bend, opt.T_body_lidar, &deskewed));
+  const internal::ScanStamp stamp{scan.stamp_start.nanoseconds(), &scan.cloud.time_offsets_s(),
+                                  scan.index};
+  pos_map.Add(deskewed, s0->T_world_body * opt.T_body_lidar, opt.map_max_range_m, &stamp);
+  StampedPose pose;
+  pose.stamp = scan.stamp_start;
+  pose.T_world_body = s0->T_world_body;
+  pose.cov_T_world_body = s0->cov_T_world_body;
+  SLAM_MMS_RETURN_IF_ERROR(pos_trajectory.Add(pose));
+  res.scan_index = scan.index;
+  res.stamp = scan.stamp_start;
+  res.T_world_body = s0->T_world_body;
+  res.cov_T_world_body = s0->cov_T_world_body;
+  res.motion_factor = MotionFactorType::kPos;
+  return true;
+}
+
+ScanMotionInput MappingSystem::Impl::MotionInput(const Scan& scan, const StatusOr<InsState>& s0,
+                                                 const StatusOr<InsState>& s1) {
+  ScanMotionInput motion;
+  motion.g_world = ins.initialized() ? ins.gravity_world() : Eigen::Vector3d(0, 0, -9.80665);
+  const bool lidar_only = opt.mode == MappingMode::kLidarOnly;
+  if (lidar_only) {
+    motion.type = MotionFactorType::kConstantVelocity;
+    if (results.empty() && s0.ok()) {
+      loc->SetInitialPose(s0->T_world_body);  // the anchor, as SuMa is started at a known pose
     }
-    const Eigen::Isometry3d T_bstart_bend = s0->T_world_body.inverse() * s1->T_world_body;
-    SLAM_MMS_RETURN_IF_ERROR(deskewer.Deskew(scan, T_bstart_bend, opt.T_body_lidar, &deskewed));
-    const internal::ScanStamp stamp{scan.stamp_start.nanoseconds(), &scan.cloud.time_offsets_s(),
-                                    scan.index};
-    pos_map.Add(deskewed, s0->T_world_body * opt.T_body_lidar, opt.map_max_range_m, &stamp);
-    StampedPose pose;
-    pose.stamp = scan.stamp_start;
-    pose.T_world_body = s0->T_world_body;
-    pose.cov_T_world_body = s0->cov_T_world_body;
-    SLAM_MMS_RETURN_IF_ERROR(pos_trajectory.Add(pose));
-    res.scan_index = scan.index;
-    res.stamp = scan.stamp_start;
-    res.T_world_body = s0->T_world_body;
-    res.cov_T_world_body = s0->cov_T_world_body;
-    res.motion_factor = MotionFactorType::kPos;
   } else {
-    ScanMotionInput motion;
-    motion.g_world = ins.initialized() ? ins.gravity_world() : Eigen::Vector3d(0, 0, -9.80665);
-    const bool lidar_only = opt.mode == MappingMode::kLidarOnly;
-    if (lidar_only) {
-      motion.type = MotionFactorType::kConstantVelocity;
-      if (results.empty() && s0.ok()) {
-        loc->SetInitialPose(s0->T_world_body);  // the anchor, as SuMa is started at a known pose
-      }
+    // An external POS is a solution over GNSS outages too (e.g. a smoothed one): F_Odom from it
+    // throughout; the GNSS availability (where fixes are fed) only triggers level 2.
+    const bool gnss_available =
+        ins.gnss_prior().AvailabilityAt(scan.stamp_start) != GnssAvailability::kOutage;
+    const bool gnss_valid = external_pos || gnss_available;
+    if (!external_pos || have_gnss_fed) UpdateOutageState(gnss_available, scan.stamp_start);
+    if (gnss_valid && s0.ok() && s1.ok() && !PosJumped(scan, *s0, *s1)) {
+      motion.type = MotionFactorType::kOdometry;
+      motion.T_world_body_pos_start = s0->T_world_body;
+      motion.T_world_body_pos_end = s1->T_world_body;
+      motion.v_world_pos = s0->v_world_mps;
+      motion.pos_bias << s0->accel_bias_mps2, s0->gyro_bias_radps;
     } else {
-      // An external POS is a solution over GNSS outages too (e.g. a smoothed one): F_Odom from it
-      // throughout; the GNSS availability (where fixes are fed) only triggers level 2.
-      const bool gnss_available =
-          ins.gnss_prior().AvailabilityAt(scan.stamp_start) != GnssAvailability::kOutage;
-      const bool gnss_valid = external_pos || gnss_available;
-      if (!external_pos || have_gnss_fed) UpdateOutageState(gnss_available, scan.stamp_start);
-      if (gnss_valid && s0.ok() && s1.ok() && !PosJumped(scan, *s0, *s1)) {
-        motion.type = MotionFactorType::kOdometry;
-        motion.T_world_body_pos_start = s0->T_world_body;
-        motion.T_world_body_pos_end = s1->T_world_body;
+      motion.type = MotionFactorType::kPreintegration;
+      if (s0.ok()) {
         motion.v_world_pos = s0->v_world_mps;
         motion.pos_bias << s0->accel_bias_mps2, s0->gyro_bias_radps;
-      } else {
-        motion.type = MotionFactorType::kPreintegration;
-        if (s0.ok()) {
-          motion.v_world_pos = s0->v_world_mps;
-          motion.pos_bias << s0->accel_bias_mps2, s0->gyro_bias_radps;
-          if (results.empty()) loc->SetInitialPose(s0->T_world_body);
-        }
-        const Timestamp from = have_scan ? last_scan_start : scan.stamp_start;
-        motion.imu = ImuBetween(from, scan.stamp_end);
-        if (motion.imu.empty()) motion.type = MotionFactorType::kConstantVelocity;
+        if (results.empty()) loc->SetInitialPose(s0->T_world_body);
       }
+      const Timestamp from = have_scan ? last_scan_start : scan.stamp_start;
+      motion.imu = ImuBetween(from, scan.stamp_end);
+      if (motion.imu.empty()) motion.type = MotionFactorType::kConstantVelocity;
     }
-    auto r = loc->ProcessScan(scan, motion);
-    if (!r.ok()) {
-      if (r.status().code() == StatusCode::kInvalidArgument) {
-        ++skipped;
-        SLAM_MMS_LOG(kWarning) << "scan '" << scan.source << "' skipped: " << r.status().message();
-        return OkStatus();
-      }
-      return r.status();
-    }
-    res = std::move(r).value();
-    SLAM_MMS_RETURN_IF_ERROR(ReportFinishedSubmaps());
   }
-  last_scan_start = scan.stamp_start;
-  have_scan = true;
-  prev_pos = s0.ok() ? std::optional<InsState>(*s0) : std::nullopt;
-  results.push_back(res);
-  if (callback) callback(results.back());
-  return OkStatus();
+  return motion;
+}
+
+StatusOr<bool> MappingSystem::Impl::Localize(const Scan& scan, const ScanMotionInput& motion,
+                                             LocalizationResult* res) {
+  auto r = loc->ProcessScan(scan, motion);
+  if (!r.ok()) {
+    if (r.status().code() == StatusCode::kInvalidArgument) {
+      ++skipped;
+      SLAM_MMS_LOG(kWarning) << "scan '" << scan.source << "' skipped: " << r.status().message();
+      return OkStatus();
+    }
+    return r.status();
+  }
+  *res = std::move(r).value();
+  SLAM_MMS_RETURN_IF_ERROR(ReportFinishedSubmaps());
+  return true;
 }
 
 void MappingSystem::Impl::UpdateOutageState(bool gnss_valid, Timestamp t) {

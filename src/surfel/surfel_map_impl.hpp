@@ -18,6 +18,16 @@ struct SurfelMap::Impl {
   uint32_t AddSlot(const Surfel& s);
   void RemoveSlot(uint32_t id);
 
+  // Integrate's stages after the model render (surfel_map_integrate.cpp).
+  /// 3. Per pixel: explained by the rendered surfel, or a conflict (the ray passed through it).
+  void ClassifyPixels(const VertexNormalMap& scan, SurfelIntegrationStats* stats);
+  /// 4-5. Per active surfel: confirm and refine, or penalise a conflict; remove unstable ones.
+  void UpdateActiveSurfels(const VertexNormalMap& scan, const Eigen::Isometry3d& T_world_sensor,
+                           Timestamp stamp, SurfelIntegrationStats* stats);
+  /// 6. New surfels for the unexplained pixels with a normal facing the sensor.
+  void CreateSurfels(const VertexNormalMap& scan, const Eigen::Isometry3d& T_world_sensor,
+                     Timestamp stamp, SurfelIntegrationStats* stats);
+
   SurfelMapOptions options;
   std::vector<Surfel> surfels;
   std::vector<uint8_t> alive;
@@ -33,13 +43,14 @@ struct SurfelMap::Impl {
   std::vector<uint32_t> active;
   std::vector<uint32_t> candidates;
   VertexNormalMap model;
-  std::vector<uint8_t> pixel_state;  // 0 none, 1 explained, 2 conflict
+  enum PixelState : uint8_t { kNone = 0, kExplained = 1, kConflict = 2 };
+  std::vector<uint8_t> pixel_state;  // PixelState per pixel
   std::vector<uint8_t> conflict;     // by surfel id
   std::vector<std::vector<uint32_t>> removed_per_thread;
   std::vector<std::vector<uint32_t>> moved_per_thread;
   std::vector<std::vector<int>> integrated_per_thread;  // pixels confirmed by a surfel centre
   std::vector<int> confirmed_per_thread;
-  std::vector<size_t> kept_per_thread;  // SelectActive
+  std::vector<size_t> kept_per_thread;                             // SelectActive
   std::vector<internal::SurfelProjectionBlock> projection_blocks;  // per thread, Integrate
 };
 

@@ -10,6 +10,40 @@
 
 namespace slam_mms {
 
+namespace {
+
+// What stages 4-5 and 6 share: the sensor pose in float, the frame number, and the radius of a
+// surfel seen at `range` under incidence cosine `cos_incidence` (SuMa: the pixel's footprint).
+struct SensorFrame {
+  SensorFrame(const SurfelMapOptions& options, const RangeProjection& proj,
+              const Eigen::Isometry3d& T_world_sensor, int32_t frame_count)
+      : o(options),
+        R_ws(T_world_sensor.linear().cast<float>()),
+        t_ws(T_world_sensor.translation().cast<float>()),
+        frame(frame_count) {
+    const RangeProjectionOptions& po = proj.options();
+    const int rows = proj.rows();
+    const int cols = proj.cols();
+    pixel_size = static_cast<float>(
+        std::max(std::tan(0.5 * (po.fov_up_deg - po.fov_down_deg) * M_PI / 180.0 / rows),
+                 std::tan(M_PI / cols)));
+    min_radius_cos = static_cast<float>(o.min_radius_cos);
+  }
+  float NewRadius(float range, float cos_incidence) const {
+    const float c = std::clamp(cos_incidence, min_radius_cos, 1.0f);
+    return std::clamp(static_cast<float>(o.radius_factor) * range * pixel_size / c,
+                      static_cast<float>(o.min_radius_m), static_cast<float>(o.max_radius_m));
+  }
+  const SurfelMapOptions& o;
+  Eigen::Matrix3f R_ws;
+  Eigen::Vector3f t_ws;
+  int32_t frame;
+  float pixel_size = 0.0f;
+  float min_radius_cos = 0.0f;
+};
+
+}  // namespace
+
 void SurfelMap::Impl::ClassifyPixels(const VertexNormalMap& scan, SurfelIntegrationStats* out) {
   Impl& m = *this;
   const SurfelMapOptions& o = options;
@@ -63,19 +97,11 @@ void SurfelMap::Impl::UpdateActiveSurfels(const VertexNormalMap& scan,
   const RangeProjection& proj = renderer->projection();
   const int rows = proj.rows();
   const int cols = proj.cols();
-  const int32_t frame = frame_count;
+  const SensorFrame f(o, proj, T_world_sensor, frame_count);
+  const int32_t frame = f.frame;
+  const Eigen::Matrix3f& R_ws = f.R_ws;
+  const Eigen::Vector3f& t_ws = f.t_ws;
   const RangeProjectionOptions& po = proj.options();
-  const float pixel_size = static_cast<float>(
-      std::max(std::tan(0.5 * (po.fov_up_deg - po.fov_down_deg) * M_PI / 180.0 / rows),
-               std::tan(M_PI / cols)));
-  const float min_radius_cos = static_cast<float>(o.min_radius_cos);
-  auto new_radius = [&](float range, float cos_incidence) {
-    const float c = std::clamp(cos_incidence, min_radius_cos, 1.0f);
-    return std::clamp(static_cast<float>(o.radius_factor) * range * pixel_size / c,
-                      static_cast<float>(o.min_radius_m), static_cast<float>(o.max_radius_m));
-  };
-  const Eigen::Matrix3f R_ws = T_world_sensor.linear().cast<float>();
-  const Eigen::Vector3f t_ws = T_world_sensor.translation().cast<float>();
   const float max_d = static_cast<float>(o.max_distance_m);
   const float max_sin = static_cast<float>(std::sin(o.max_angle_deg * M_PI / 180.0));
   const int num_threads = pool.num_threads();
@@ -139,7 +165,7 @@ void SurfelMap::Impl::UpdateActiveSurfels(const VertexNormalMap& scan,
                 prob = std::clamp(prob, 1.0f - p_stable, 0.999f);
                 s.confidence = std::min(s.confidence + std::log(prob / (1.0f - prob)), max_conf);
                 const float range = scan.range[i];
-                s.radius = std::min(s.radius, new_radius(range, -nm.dot(vm) / range));
+                s.radius = std::min(s.radius, f.NewRadius(range, -nm.dot(vm) / range));
                 if (frame - s.created_frame < o.max_update_age_frames) {
                   const float w = static_cast<float>(std::min(s.num_updates + 1, o.max_weight));
                   const Eigen::Vector3f v_world = R_ws * vm + t_ws;
@@ -193,19 +219,10 @@ void SurfelMap::Impl::CreateSurfels(const VertexNormalMap& scan,
   const RangeProjection& proj = renderer->projection();
   const int rows = proj.rows();
   const int cols = proj.cols();
-  const int32_t frame = frame_count;
-  const RangeProjectionOptions& po = proj.options();
-  const float pixel_size = static_cast<float>(
-      std::max(std::tan(0.5 * (po.fov_up_deg - po.fov_down_deg) * M_PI / 180.0 / rows),
-               std::tan(M_PI / cols)));
-  const float min_radius_cos = static_cast<float>(o.min_radius_cos);
-  auto new_radius = [&](float range, float cos_incidence) {
-    const float c = std::clamp(cos_incidence, min_radius_cos, 1.0f);
-    return std::clamp(static_cast<float>(o.radius_factor) * range * pixel_size / c,
-                      static_cast<float>(o.min_radius_m), static_cast<float>(o.max_radius_m));
-  };
-  const Eigen::Matrix3f R_ws = T_world_sensor.linear().cast<float>();
-  const Eigen::Vector3f t_ws = T_world_sensor.translation().cast<float>();
+  const SensorFrame f(o, proj, T_world_sensor, frame_count);
+  const int32_t frame = f.frame;
+  const Eigen::Matrix3f& R_ws = f.R_ws;
+  const Eigen::Vector3f& t_ws = f.t_ws;
   const int num_pixels = rows * cols;
   const float min_cos = static_cast<float>(o.min_creation_cos);
   for (int i = 0; i < num_pixels; ++i) {
@@ -218,7 +235,7 @@ void SurfelMap::Impl::CreateSurfels(const VertexNormalMap& scan,
     Surfel s;
     s.position = R_ws * v + t_ws;
     s.normal = (R_ws * nv).normalized();
-    s.radius = new_radius(range, cos_inc);
+    s.radius = f.NewRadius(range, cos_inc);
     s.confidence = 0.0f;  // log-odds of the prior p = 0.5
     s.created_ns = s.updated_ns = stamp.nanoseconds();
     s.created_frame = s.updated_frame = frame;

@@ -25,6 +25,7 @@
 #include <ctime>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <optional>
 #include <string>
@@ -52,6 +53,7 @@
 #include "slam_mms_run/plot_outputs.hpp"
 #include "slam_mms_run/progress.hpp"
 #include "slam_mms_run/run_mode.hpp"
+#include "slam_mms_run/run_report.hpp"
 
 namespace slam_mms::app {
 
@@ -165,29 +167,6 @@ Status CheckOutputDir(const fs::path& dir) {
   return OkStatus();
 }
 
-// Bytes and files under `dir` (the disk use printed at the end).
-// Calls fn(path, size) for every regular file under `dir` (unreadable entries are passed over).
-template <typename Fn>
-void ForEachFile(const fs::path& dir, Fn fn) {
-  std::error_code ec;
-  for (fs::recursive_directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
-    std::error_code e2;
-    if (!it->is_regular_file(e2)) continue;
-    const uintmax_t n = it->file_size(e2);
-    fn(it->path(), e2 ? uintmax_t{0} : n);
-  }
-}
-
-std::pair<uintmax_t, size_t> DiskUse(const fs::path& dir) {
-  uintmax_t bytes = 0;
-  size_t files = 0;
-  ForEachFile(dir, [&](const fs::path&, uintmax_t n) {
-    bytes += n;
-    ++files;
-  });
-  return {bytes, files};
-}
-
 int Fail(const Status& status, int code) {
   ProgressReporter::BreakLine();
   std::fprintf(stderr, "slam_mms_run: error: %s\n", status.message().c_str());
@@ -218,17 +197,6 @@ StatusOr<fs::path> SimulateDefaultDrive(const RunArgs& args, bool tty, bool* sto
                 summary.simulated_seconds);
   progress.Finish(static_cast<size_t>(summary.num_scans), note);
   return summary.drive_dir;
-}
-
-// Regular files under `dir`, relative to it (report.json's "outputs").
-std::vector<std::string> OutputFiles(const fs::path& dir) {
-  std::vector<std::string> files;
-  ForEachFile(dir, [&](const fs::path& file, uintmax_t) {
-    std::error_code ec;
-    files.push_back(fs::relative(file, dir, ec).string());
-  });
-  std::sort(files.begin(), files.end());
-  return files;
 }
 
 // The drive a killed run simulated into `sim_dir` (its ground_truth/scenario.json, the
@@ -283,19 +251,99 @@ RunFingerprint MakeFingerprint(const RunArgs& args, const fs::path& input,
   return f;
 }
 
-// DriveRun::skipped_scans entries are "<source>: <reason>".
-eval::SkippedScan SplitSkippedScan(const std::string& entry) {
-  const size_t colon = entry.find(": ");
-  if (colon == std::string::npos) return {entry, ""};
-  eval::SkippedScan s{entry.substr(0, colon), entry.substr(colon + 2)};
-  // Reader messages often start with the file again.
-  if (s.reason.rfind(s.source + ": ", 0) == 0) s.reason = s.reason.substr(s.source.size() + 2);
-  return s;
+// The input line and the warnings about outage windows outside the drive.
+void AnnounceInput(const DriveReader& reader, const RunArgs& args, const std::string& gt_kind,
+                   double duration_s, const std::function<void(const std::string&)>& warn) {
+  const DriveStreams& streams = reader.streams();
+  std::printf(
+      "[input] %s: %zu scans, %.1f s, IMU %zu samples, GNSS %zu fixes%s, ground truth: %s\n",
+      reader.Describe().c_str(), reader.NumScans(), duration_s, streams.imu.size(),
+      streams.gnss.size(),
+      streams.pos.empty()
+          ? ""
+          : (", external POS " + std::to_string(streams.pos.size()) + " records").c_str(),
+      gt_kind.c_str());
+  for (const auto& [start, duration] : args.gnss_outages) {
+    std::printf("[input] GNSS outage %.1f s .. %.1f s after the first scan\n", start,
+                start + duration);
+    char text[256];
+    if (start >= duration_s) {
+      std::snprintf(text, sizeof(text),
+                    "--gnss-outage %g:%g starts after the drive's last scan (%.1f s): it removes "
+                    "no GNSS fix",
+                    start, duration, duration_s);
+      warn(text);
+    } else if (start + duration > duration_s) {
+      std::snprintf(text, sizeof(text),
+                    "--gnss-outage %g:%g ends after the drive's last scan (%.1f s): the outage is "
+                    "%.1f s long, not %g s",
+                    start, duration, duration_s, duration_s - start, duration);
+      warn(text);
+    }
+  }
 }
 
-bool SameOrigin(const GeodeticPoint& a, const GeodeticPoint& b) {
-  return a.latitude_deg == b.latitude_deg && a.longitude_deg == b.longitude_deg &&
-         a.height_m == b.height_m;
+// Every method in turn (those a --resume finds finished are read back); each method's files are
+// written as soon as it ends, its map entropy computed beside the writing. A method's or a
+// file's error goes to *fatal and stops the loop; the returned error (a finished method that cannot
+// be read back) ends the run at once.
+Status RunMethods(const RunArgs& args, const MappingSystem::Options& options,
+                  const DriveReader& reader, bool tty, Checkpoint* checkpoint,
+                  GeoOutputOptions* geo, const std::function<void(const std::string&)>& warn,
+                  std::vector<ModeRun>* runs, Status* fatal) {
+  for (const MappingMode mode : args.modes) {
+    if (g_stop.load()) break;
+    const std::string name = MappingModeName(mode);
+    if (args.resume && checkpoint->HasFinished(name)) {
+      // Finished before the run was killed: its files are in --out; read it back for the report.
+      StatusOr<ModeRun> loaded = checkpoint->LoadFinished(name);
+      if (!loaded.ok()) return loaded.status();
+      std::printf("[%s] finished in the checkpointed run: %zu poses read back\n", name.c_str(),
+                  loaded->trajectory.size());
+      if (loaded->origin && !geo->run_origin) geo->run_origin = loaded->origin;
+      runs->push_back(std::move(loaded).value());
+      continue;
+    }
+    // Every --checkpoint-every finished submaps: the trajectory so far and the progress.
+    auto on_submap = [&](const MappingSystem& system, int submaps) {
+      if (args.checkpoint_every_submaps <= 0 || submaps % args.checkpoint_every_submaps != 0) {
+        return;
+      }
+      Status s = WriteTrajectoryTum(system.FinalTrajectory(), args.out_dir / (name + ".tum"));
+      if (s.ok()) s = checkpoint->SaveProgress(name, system.results().size(), submaps);
+      if (!s.ok()) {
+        SLAM_MMS_LOG(kWarning) << "checkpoint: " << s.ToString();
+      }
+    };
+    ModeRun run = RunMode(mode, options, reader, args.pos, tty, &g_stop, on_submap);
+    // The map entropy (CPU) beside the writing of the files (mostly one thread formatting and
+    // writing): both only read the run.
+    std::optional<StatusOr<eval::MapEntropyResult>> entropy;
+    std::thread entropy_thread;
+    if (!run.map.empty()) {
+      entropy_thread = std::thread([&] { entropy = MapEntropyOf(run.map, options.num_threads); });
+    }
+    Status written = WriteMethodFiles(run, args.out_dir);
+    if (run.origin && !geo->run_origin) {
+      // georef.json: the world frame of the first method that has an origin.
+      geo->run_origin = run.origin;
+      const Status g = WriteRunGeoref(*run.origin, *geo, args.out_dir);
+      if (written.ok() && !g.ok()) written = g;
+    }
+    const Status geo_written = WriteGeoOutputs(run, *geo, args.out_dir, run.map_stamps);
+    if (written.ok() && !geo_written.ok()) written = geo_written;
+    if (entropy_thread.joinable()) entropy_thread.join();
+    run.map_entropy = std::move(entropy);
+    if (!run.status.ok()) *fatal = run.status;
+    if (fatal->ok() && !written.ok()) *fatal = written;
+    if (run.complete && written.ok()) {
+      const Status c = checkpoint->SaveFinished(run);
+      if (!c.ok()) warn("checkpoint: " + c.message() + " (--resume would run " + name + " again)");
+    }
+    runs->push_back(std::move(run));
+    if (!fatal->ok()) break;  // stop the run; evaluate and report what exists
+  }
+  return OkStatus();
 }
 
 }  // namespace
@@ -442,89 +490,16 @@ int RunMain(int argc, const char* const* argv) {
   const std::string gt_kind = sim_gt ? "simulator" : kitti_input ? "oxts" : "none";
   const Timestamp first_scan = reader.ScanStart(0);
   const double duration_s = reader.ScanEnd(reader.NumScans() - 1).SecondsSince(first_scan);
-  const DriveStreams& streams = reader.streams();
-  std::printf(
-      "[input] %s: %zu scans, %.1f s, IMU %zu samples, GNSS %zu fixes%s, ground truth: %s\n",
-      reader.Describe().c_str(), reader.NumScans(), duration_s, streams.imu.size(),
-      streams.gnss.size(),
-      streams.pos.empty()
-          ? ""
-          : (", external POS " + std::to_string(streams.pos.size()) + " records").c_str(),
-      gt_kind.c_str());
-  for (const auto& [start, duration] : args.gnss_outages) {
-    std::printf("[input] GNSS outage %.1f s .. %.1f s after the first scan\n", start,
-                start + duration);
-    char text[256];
-    if (start >= duration_s) {
-      std::snprintf(text, sizeof(text),
-                    "--gnss-outage %g:%g starts after the drive's last scan (%.1f s): it removes "
-                    "no GNSS fix",
-                    start, duration, duration_s);
-      warn(text);
-    } else if (start + duration > duration_s) {
-      std::snprintf(text, sizeof(text),
-                    "--gnss-outage %g:%g ends after the drive's last scan (%.1f s): the outage is "
-                    "%.1f s long, not %g s",
-                    start, duration, duration_s, duration_s - start, duration);
-      warn(text);
-    }
-  }
+  AnnounceInput(reader, args, gt_kind, duration_s, warn);
   std::fflush(stdout);
 
   // The methods, each with its own MappingSystem; files written as soon as a method ends.
   std::vector<ModeRun> runs;
   Status fatal;
-  for (const MappingMode mode : args.modes) {
-    if (g_stop.load()) break;
-    const std::string name = MappingModeName(mode);
-    if (args.resume && checkpoint->HasFinished(name)) {
-      // Finished before the run was killed: its files are in --out; read it back for the report.
-      StatusOr<ModeRun> loaded = checkpoint->LoadFinished(name);
-      if (!loaded.ok()) return Fail(loaded.status(), kExitError);
-      std::printf("[%s] finished in the checkpointed run: %zu poses read back\n", name.c_str(),
-                  loaded->trajectory.size());
-      if (loaded->origin && !geo.run_origin) geo.run_origin = loaded->origin;
-      runs.push_back(std::move(loaded).value());
-      continue;
-    }
-    // Every --checkpoint-every finished submaps: the trajectory so far and the progress.
-    auto on_submap = [&](const MappingSystem& system, int submaps) {
-      if (args.checkpoint_every_submaps <= 0 || submaps % args.checkpoint_every_submaps != 0) {
-        return;
-      }
-      Status s = WriteTrajectoryTum(system.FinalTrajectory(), args.out_dir / (name + ".tum"));
-      if (s.ok()) s = checkpoint->SaveProgress(name, system.results().size(), submaps);
-      if (!s.ok()) {
-        SLAM_MMS_LOG(kWarning) << "checkpoint: " << s.ToString();
-      }
-    };
-    ModeRun run = RunMode(mode, options, reader, args.pos, tty, &g_stop, on_submap);
-    // The map entropy (CPU) beside the writing of the files (mostly one thread formatting and
-    // writing): both only read the run.
-    std::optional<StatusOr<eval::MapEntropyResult>> entropy;
-    std::thread entropy_thread;
-    if (!run.map.empty()) {
-      entropy_thread = std::thread([&] { entropy = MapEntropyOf(run.map, options.num_threads); });
-    }
-    Status written = WriteMethodFiles(run, args.out_dir);
-    if (run.origin && !geo.run_origin) {
-      // georef.json: the world frame of the first method that has an origin.
-      geo.run_origin = run.origin;
-      const Status g = WriteRunGeoref(*run.origin, geo, args.out_dir);
-      if (written.ok() && !g.ok()) written = g;
-    }
-    const Status geo_written = WriteGeoOutputs(run, geo, args.out_dir, run.map_stamps);
-    if (written.ok() && !geo_written.ok()) written = geo_written;
-    if (entropy_thread.joinable()) entropy_thread.join();
-    run.map_entropy = std::move(entropy);
-    if (!run.status.ok()) fatal = run.status;
-    if (fatal.ok() && !written.ok()) fatal = written;
-    if (run.complete && written.ok()) {
-      const Status c = checkpoint->SaveFinished(run);
-      if (!c.ok()) warn("checkpoint: " + c.message() + " (--resume would run " + name + " again)");
-    }
-    runs.push_back(std::move(run));
-    if (!fatal.ok()) break;  // stop the run; evaluate and report what exists
+  {
+    const Status s =
+        RunMethods(args, options, reader, tty, &*checkpoint, &geo, warn, &runs, &fatal);
+    if (!s.ok()) return Fail(s, kExitError);
   }
   const bool stopped = g_stop.load();
   if (stopped) {
@@ -535,149 +510,11 @@ int RunMain(int argc, const char* const* argv) {
          "; the outputs hold what was computed so far (report.json \"complete\": false)");
   }
 
-  // Ground truth in each run's world frame (one load per distinct origin).
-  std::optional<GeodeticPoint> any_origin;
-  for (const ModeRun& r : runs) {
-    if (r.origin && !any_origin) any_origin = r.origin;
-  }
-  std::vector<std::pair<GeodeticPoint, eval::GroundTruth>> gts;
-  std::vector<const eval::GroundTruth*> gt_of_run(runs.size(), nullptr);
-  for (size_t i = 0; i < runs.size(); ++i) {
-    std::optional<GeodeticPoint> origin = runs[i].origin ? runs[i].origin : any_origin;
-    if (!origin) {
-      SLAM_MMS_LOG(kWarning) << runs[i].name << ": world origin unknown, no metrics";
-      continue;
-    }
-    bool found = false;
-    for (const auto& [o, gt] : gts) found = found || SameOrigin(o, *origin);
-    if (!found) {
-      StatusOr<eval::GroundTruth> gt = eval::LoadGroundTruth(gt_dir, reader, *origin);
-      if (!gt.ok()) {
-        if (gt.status().code() == StatusCode::kNotFound && gt_kind == "none") break;
-        SLAM_MMS_LOG(kError) << "ground truth: " << gt.status().ToString();
-        if (fatal.ok()) fatal = gt.status();
-        continue;
-      }
-      gts.emplace_back(*origin, std::move(gt).value());
-      // The ground truth in the run's world frame, so that slam_mms_eval can compare any output
-      // (e.g. <method>_level1.tum) with it.
-      const std::string name = gts.size() == 1
-                                   ? "ground_truth.tum"
-                                   : "ground_truth_" + std::to_string(gts.size()) + ".tum";
-      const Status written =
-          WriteTrajectoryTum(gts.back().second.T_world_body, args.out_dir / name);
-      if (!written.ok()) {
-        SLAM_MMS_LOG(kWarning) << written.ToString();
-      }
-    }
-  }
-  for (size_t i = 0; i < runs.size(); ++i) {
-    const std::optional<GeodeticPoint> origin = runs[i].origin ? runs[i].origin : any_origin;
-    for (const auto& [o, gt] : gts) {
-      if (origin && SameOrigin(o, *origin)) gt_of_run[i] = &gt;
-    }
-  }
-
-  // Outage windows are relative to the first scan the systems were given (scan 0 unless it was
-  // unreadable).
-  Timestamp reference = first_scan;
-  for (const ModeRun& r : runs) {
-    if (r.first_scan_start) {
-      reference = *r.first_scan_start;
-      break;
-    }
-  }
-  std::printf("[eval] metrics and map entropy ...\n");
-  std::fflush(stdout);
-  std::vector<eval::OutageWindow> windows;
-  for (const auto& [start, duration] : args.gnss_outages) windows.push_back({start, duration});
-  std::vector<MethodEvaluation> evals;
-  for (size_t i = 0; i < runs.size(); ++i) {
-    evals.push_back(EvaluateMethod(runs[i], gt_of_run[i], windows, reference, options.num_threads));
-  }
-  std::optional<double> gt_map_mme;
-  if (!gts.empty() && !gts.front().second.scene_map.empty()) {
-    StatusOr<MapCloud> scene = ReadPly(gts.front().second.scene_map);
-    if (scene.ok()) {
-      eval::MapEntropyOptions mo;
-      mo.num_threads = options.num_threads;
-      StatusOr<eval::MapEntropyResult> e = eval::ComputeMapEntropy(scene->cloud, mo);
-      if (e.ok() && std::isfinite(e->mean_map_entropy)) gt_map_mme = e->mean_map_entropy;
-    } else {
-      SLAM_MMS_LOG(kWarning) << "ground-truth map: " << scene.status().ToString();
-    }
-  }
-
-  // report.json (exact schema), plots, summary.
-  eval::EvalReport report;
-  report.input.drive = drive_dir.string();
-  for (const ModeRun& r : runs) {
-    report.input.scans =
-        std::max<int64_t>(report.input.scans, static_cast<int64_t>(r.scans_processed));
-  }
-  report.input.duration_s = duration_s;
-  report.input.ground_truth = gts.empty() ? gt_kind : gts.front().second.kind;
-  report.input.kind = simulated_input        ? "simulated"
-                      : !args.folder.empty() ? "folder"
-                      : !args.rosbag.empty() ? "rosbag"
-                                             : "kitti_raw";
-  report.input.scans_total = static_cast<int64_t>(reader.NumScans());
-  // The skipped scans are the reader's, the same for every method: the first run's list.
-  if (!runs.empty()) {
-    for (const std::string& entry : runs.front().skipped_scans) {
-      report.input.skipped_scans.push_back(SplitSkippedScan(entry));
-    }
-  }
-  report.command_line = args.command_line;
-  report.extrinsics_json = extrinsics_json;
-  report.options_json = options_json;
-  if (geo.run_origin) {
-    StatusOr<std::string> georef = RunGeorefJson(*geo.run_origin, geo);
-    if (georef.ok()) {
-      report.georef_json = *georef;
-    } else {
-      SLAM_MMS_LOG(kWarning) << "georef: " << georef.status().ToString();
-    }
-  }
-  report.complete =
-      !stopped && fatal.ok() && !runs.empty() && runs.size() == args.modes.size() &&
-      std::all_of(runs.begin(), runs.end(), [](const ModeRun& r) { return r.complete; });
-  report.warnings = warnings;
-  report.gnss_outages = windows;
-  for (const MethodEvaluation& e : evals) report.methods.emplace_back(e.name, e.report);
-  report.ground_truth_map_mme = gt_map_mme;
-  WritePlots(runs, evals, gts.empty() ? nullptr : &gts.front().second, windows, reference,
-             args.out_dir);
-  const std::string table = SummaryTable(evals, gt_map_mme, report.input.ground_truth);
-  std::ofstream(args.out_dir / "summary.txt") << table;
-  ProgressReporter::BreakLine();
-  std::printf("\n%s", table.c_str());
-  remove_sim();
-  // report.json lists every file of the run (itself and report.html included), then report.html
-  // is written last: it embeds the plots and describes the files.
-  if (report.complete) {
-    checkpoint->Remove();  // nothing to resume
-  } else {
-    std::printf("[checkpoint] %s: `--resume` with the same command line continues this run\n",
-                checkpoint->dir().c_str());
-  }
-  report.outputs = OutputFiles(args.out_dir);
-  for (const char* name : {"report.json", "report.html"}) {
-    if (std::find(report.outputs.begin(), report.outputs.end(), name) == report.outputs.end()) {
-      report.outputs.push_back(name);
-    }
-  }
-  std::sort(report.outputs.begin(), report.outputs.end());
-  const Status report_written = eval::WriteReportJson(report, args.out_dir / "report.json");
-  if (!report_written.ok()) {
-    SLAM_MMS_LOG(kError) << report_written.ToString();
-    if (fatal.ok()) fatal = report_written;
-  }
-  const Status html_written = WriteReportHtml(report, runs, evals, warnings, args.out_dir);
-  if (!html_written.ok()) {
-    SLAM_MMS_LOG(kError) << html_written.ToString();
-    if (fatal.ok()) fatal = html_written;
-  }
+  ReportInput rin{args,         reader,          drive_dir,  simulated_input,
+                  gt_dir,       gt_kind,         first_scan, duration_s,
+                  options_json, extrinsics_json, geo,        options.num_threads,
+                  stopped,      warnings};
+  EvaluateAndReport(rin, &runs, &*checkpoint, remove_sim, &fatal);
   const auto [out_bytes, out_files] = DiskUse(args.out_dir);
   std::printf("outputs in %s (%zu files, %.0f MB)\n", args.out_dir.c_str(), out_files,
               static_cast<double>(out_bytes) / 1e6);

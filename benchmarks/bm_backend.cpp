@@ -5,7 +5,7 @@
 #include <random>
 #include <vector>
 
-#include "slam_mms/backend/sliding_window_graph.hpp"
+#include "backend/sliding_window_graph.hpp"
 #include "slam_mms/backend/submap_graph.hpp"
 #include "slam_mms/core/lie.hpp"
 

@@ -17,9 +17,9 @@
 
 #include "../tests/registration/kitti_frames.hpp"
 #include "../tests/registration/synthetic_scene.hpp"
+#include "registration/point_icp.hpp"
+#include "registration/projective_icp.hpp"
 #include "slam_mms/core/lie.hpp"
-#include "slam_mms/registration/point_icp.hpp"
-#include "slam_mms/registration/projective_icp.hpp"
 
 namespace {
 

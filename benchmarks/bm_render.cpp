@@ -15,11 +15,11 @@
 #include <vector>
 
 #if SLAM_MMS_HAVE_EGL
-#include "slam_mms/render_egl/egl_surfel_renderer.hpp"
+#include "render_egl/egl_surfel_renderer.hpp"
 #endif
-#include "slam_mms/surfel/cpu_surfel_renderer.hpp"
 #include "slam_mms/surfel/range_projection.hpp"
 #include "slam_mms/surfel/surfel_map.hpp"
+#include "surfel/cpu_surfel_renderer.hpp"
 #include "surfel/synthetic_surfels.hpp"
 
 namespace {

@@ -6,7 +6,9 @@ modules its sources and headers include (include/slam_mms/NAME/*, src/NAME/*: bo
 `#include "slam_mms/<module>/..."` and the private `#include "<module>/..."`) must be exactly its
 DEPS. Every DEPS entry must lie in a lower layer, the SDK modules (what slam_mms::slam_mms links)
 may depend only on SDK modules, and an installed header (include/slam_mms) may not include a
-private one (src/), which an installed tree does not have.
+private one (src/), which an installed tree does not have. The SDK is thin: where the umbrella
+header include/slam_mms/slam_mms.hpp exists, every installed header of an SDK module must be
+reachable from it through includes (anything else belongs in src/ or in a component).
 
 Usage: check_layers.py [SOURCE_DIR]      check the tree (default: this script's project)
        check_layers.py --self-test       check that each rule catches its violation
@@ -111,6 +113,32 @@ def check(root):
                               "a component")
             if d not in used:
                 errors.append(f"module {m}: DEPS lists {d}, which none of its files includes")
+    errors += unreachable_sdk_headers(root)
+    return errors
+
+
+def unreachable_sdk_headers(root):
+    """Installed headers of SDK modules that the umbrella header does not reach."""
+    inc = root / "include"
+    umbrella = inc / "slam_mms" / "slam_mms.hpp"
+    if not umbrella.is_file():
+        return []
+    seen, stack = set(), ["slam_mms/slam_mms.hpp"]
+    while stack:
+        h = stack.pop()
+        if h in seen or not (inc / h).is_file():
+            continue
+        seen.add(h)
+        for line in (inc / h).read_text(errors="replace").splitlines():
+            m = INCLUDE_RE.match(line)
+            if m and m.group(1).startswith("slam_mms/"):
+                stack.append(m.group(1))
+    errors = []
+    for f in sorted((inc / "slam_mms").rglob("*.hpp")):
+        rel = f.relative_to(inc)
+        if len(rel.parts) == 3 and rel.parts[1] in SDK and str(rel) not in seen:
+            errors.append(f"include/{rel}: installed SDK header that slam_mms/slam_mms.hpp does not "
+                          "reach: move it to src/ (internal) or include it from the SDK")
     return errors
 
 
@@ -145,6 +173,11 @@ def self_test():
         "public includes private": (clean_cmake,
                                     {"include/slam_mms/core/b.hpp": '#include "core/p.hpp"\n'},
                                     "includes the private header"),
+        "unreachable sdk header": (clean_cmake,
+                                   {"include/slam_mms/slam_mms.hpp":
+                                        '#include "slam_mms/surfel/s.hpp"\n',
+                                    "include/slam_mms/core/internal.hpp": "#pragma once\n"},
+                                   "does not reach"),
         "sdk on component": (clean_cmake.replace("(surfel DEPS core)", "(surfel DEPS core io)")
                              + "slam_mms_add_module(io DEPS core)\n",
                              {"src/surfel/z.cpp": '#include "slam_mms/io/r.hpp"\n',

@@ -261,7 +261,7 @@ struct Report {
   double scans_per_s = 0.0, scans_per_s_no_io = 0.0;
   std::vector<std::pair<std::string, Percentiles>> stages;  // level-1 stages, then derived rows
   double level1_sum_s = 0.0, outside_level1_s = 0.0;
-  slam_mms::SubmapManager::Stats level2;
+  slam_mms::Level2Stats level2;
   double peak_rss_mb = -1.0;
   double peak_rss_before_finish_mb = -1.0;  // VmHWM just before Finish()
   bool peak_reset = false;                  // VmHWM was reset after the simulation

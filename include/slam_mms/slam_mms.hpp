@@ -1,10 +1,12 @@
 #pragma once
 // The slam_mms SDK in one include (what slam_mms::slam_mms links): the MappingSystem facade and the
-// four classes it is built from, with their Options and Result types, and the core types.
+// four classes it is built from, with their Options and Result types, the sensor presets and the
+// core types. Every installed header of the SDK's modules is reachable from this one
+// (scripts/check_layers.py checks it); the rest of the implementation is private (src/).
 //
-//   MappingSystem  pipeline/mapping_system.hpp  the whole system (levels 1 and 2) on a sensor
-//   stream Localizer      pipeline/localizer.hpp       level 1: scan-to-surfel-map registration per
-//   submap SurfelMap      surfel/surfel_map.hpp        the surfel map a Localizer registers against
+//   MappingSystem  pipeline/mapping_system.hpp  levels 1 and 2 on a sensor stream
+//   Localizer      pipeline/localizer.hpp       level 1: scan-to-surfel-map registration
+//   SurfelMap      surfel/surfel_map.hpp        the surfel map a Localizer registers against
 //   SubmapGraph    backend/submap_graph.hpp     level 2: the global graph of submaps
 //   GnssPrior      ins/gnss_prior.hpp           GNSS fix screening, outages and availability
 //
@@ -25,5 +27,6 @@
 #include "slam_mms/ins/gnss_prior.hpp"
 #include "slam_mms/pipeline/localizer.hpp"
 #include "slam_mms/pipeline/mapping_system.hpp"
+#include "slam_mms/pipeline/sensor_presets.hpp"
 #include "slam_mms/surfel/surfel_map.hpp"
 #include "slam_mms/version.hpp"

@@ -105,7 +105,7 @@ class AteResult:
         ...
 
 class DeskewOptions:
-    """ScanDeskewer::Options."""
+    """How level 1 de-skews a scan."""
     _fields: typing.ClassVar[tuple]
     def to_dict(self) -> dict: ...
     def __init__(self: DeskewOptions) -> None:
@@ -114,11 +114,6 @@ class DeskewOptions:
         ...
     def copy(self: DeskewOptions) -> DeskewOptions:
         """A deep copy."""
-    @property
-    def num_threads(self) -> int:
-        """>= 1"""
-    @num_threads.setter
-    def num_threads(self, value: int) -> None: ...
     @property
     def num_knots(self) -> int:
         """0 = exact per point"""
@@ -898,7 +893,7 @@ class KittiRawReaderOptions:
         """The fields as a dict (nested options as dicts, arrays as lists)."""
 
 class Level2Options:
-    """SubmapManager::Options: level 2 and loop closure."""
+    """Level2Options: level 2 and loop closure."""
     _fields: typing.ClassVar[tuple]
     def to_dict(self) -> dict: ...
     def __init__(self: Level2Options) -> None:
@@ -988,11 +983,6 @@ class Level2Options:
     @max_iterations.setter
     def max_iterations(self, value: int) -> None: ...
     @property
-    def num_threads(self) -> int:
-        ...
-    @num_threads.setter
-    def num_threads(self, value: int) -> None: ...
-    @property
     def estimate_extrinsics(self) -> bool:
         """boresight self-calibration before the run (slam_mms_run --calibrate-extrinsics)"""
     @estimate_extrinsics.setter
@@ -1076,7 +1066,7 @@ class LocalizationResult:
         ...
 
 class LocalizerOptions:
-    """Localizer::Options: level 1."""
+    """Level1Options: level 1 (the mode, map and threads are MappingSystem's)."""
     _fields: typing.ClassVar[tuple]
     def to_dict(self) -> dict: ...
     def __init__(self: LocalizerOptions) -> None:
@@ -1085,11 +1075,6 @@ class LocalizerOptions:
         ...
     def copy(self: LocalizerOptions) -> LocalizerOptions:
         """A deep copy."""
-    @property
-    def mode(self) -> MappingMode:
-        """Overridden by MappingSystem's mode."""
-    @mode.setter
-    def mode(self, value: MappingMode) -> None: ...
     @property
     def submap_duration_s(self) -> float:
         """WT [s]"""
@@ -1181,16 +1166,6 @@ class LocalizerOptions:
     @min_inlier_ratio.setter
     def min_inlier_ratio(self, value: float) -> None: ...
     @property
-    def map_voxel_m(self) -> float:
-        """[m]"""
-    @map_voxel_m.setter
-    def map_voxel_m(self, value: float) -> None: ...
-    @property
-    def map_max_range_m(self) -> float:
-        """[m]"""
-    @map_max_range_m.setter
-    def map_max_range_m(self, value: float) -> None: ...
-    @property
     def registration_voxel_m(self) -> float:
         """[m]"""
     @registration_voxel_m.setter
@@ -1210,11 +1185,6 @@ class LocalizerOptions:
         """Finished submaps' clouds go here; '' = memory."""
     @spill_dir.setter
     def spill_dir(self, value: os.PathLike[str]) -> None: ...
-    @property
-    def num_threads(self) -> int:
-        ...
-    @num_threads.setter
-    def num_threads(self, value: int) -> None: ...
     def validate(self: LocalizerOptions) -> None:
         """Raises ValueError naming the first bad field and its rule."""
     def to_dict(*args, **kwargs) -> typing.Any:
@@ -1544,7 +1514,7 @@ class Options:
     def max_pos_jump_rad(self, value: float) -> None: ...
     @property
     def num_threads(self) -> int:
-        ...
+        """The one thread count, in [1, 64]."""
     @num_threads.setter
     def num_threads(self, value: int) -> None: ...
     def validate(self: Options) -> None:
@@ -1640,11 +1610,6 @@ class PointIcpOptions:
         """[m]; 0 keeps all"""
     @source_voxel_size.setter
     def source_voxel_size(self, value: float) -> None: ...
-    @property
-    def num_threads(self) -> int:
-        ...
-    @num_threads.setter
-    def num_threads(self, value: int) -> None: ...
     def validate(self: PointIcpOptions) -> None:
         """Raises ValueError naming the first bad field and its rule."""
     def to_dict(*args, **kwargs) -> typing.Any:
@@ -1727,11 +1692,6 @@ class ProjectiveIcpOptions:
         ...
     @pixel_stride.setter
     def pixel_stride(self, value: int) -> None: ...
-    @property
-    def num_threads(self) -> int:
-        ...
-    @num_threads.setter
-    def num_threads(self, value: int) -> None: ...
     def validate(self: ProjectiveIcpOptions) -> None:
         """Raises ValueError naming the first bad field and its rule."""
     def to_dict(*args, **kwargs) -> typing.Any:
@@ -1902,11 +1862,6 @@ class SlidingWindowOptions:
         """[s]"""
     @max_solve_time_s.setter
     def max_solve_time_s(self, value: float) -> None: ...
-    @property
-    def num_threads(self) -> int:
-        ...
-    @num_threads.setter
-    def num_threads(self, value: int) -> None: ...
     @property
     def function_tolerance(self) -> float:
         ...
@@ -2095,11 +2050,6 @@ class SurfelRendererOptions:
         ...
     @min_facing_cos.setter
     def min_facing_cos(self, value: float) -> None: ...
-    @property
-    def num_threads(self) -> int:
-        """CPU renderer threads"""
-    @num_threads.setter
-    def num_threads(self, value: int) -> None: ...
     def validate(self: SurfelRendererOptions) -> None:
         """Raises ValueError naming the first bad field and its rule."""
     def to_dict(*args, **kwargs) -> typing.Any:

@@ -75,7 +75,7 @@ py::list AvailabilityList(const std::vector<GnssAvailabilityInterval>& intervals
   return out;
 }
 
-py::dict StatsDict(const SubmapManager::Stats& s) {
+py::dict StatsDict(const Level2Stats& s) {
   py::dict d;
   d["solves"] = s.solves;
   d["loops_tested"] = s.loops_tested;

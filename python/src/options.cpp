@@ -6,17 +6,16 @@
 // used by the Python package for repr() and to_dict()).
 
 #include "common.hpp"
-#include "slam_mms/backend/sliding_window_graph.hpp"
+#include "slam_mms/backend/sliding_window_options.hpp"
 #include "slam_mms/drive/drive_runner.hpp"
 #include "slam_mms/ins/gnss_prior.hpp"
 #include "slam_mms/ins/imu_preintegration.hpp"
 #include "slam_mms/ins/ins_filter.hpp"
+#include "slam_mms/pipeline/deskew_options.hpp"
+#include "slam_mms/pipeline/level2_options.hpp"
 #include "slam_mms/pipeline/localizer.hpp"
 #include "slam_mms/pipeline/mapping_system.hpp"
-#include "slam_mms/pipeline/scan_deskewer.hpp"
-#include "slam_mms/pipeline/submap_manager.hpp"
-#include "slam_mms/registration/point_icp.hpp"
-#include "slam_mms/registration/projective_icp.hpp"
+#include "slam_mms/registration/registration_options.hpp"
 #include "slam_mms/surfel/range_projection.hpp"
 #include "slam_mms/surfel/surfel_map.hpp"
 #include "slam_mms/surfel/surfel_renderer.hpp"
@@ -98,12 +97,12 @@ void RegisterOptions(py::module_& m) {
       .value("AUTO", SurfelRendererBackend::kAuto)
       .value("CPU", SurfelRendererBackend::kCpu)
       .value("EGL", SurfelRendererBackend::kEgl);
-  py::enum_<SlidingWindowGraph::ExitMode>(m, "WindowExitMode")
-      .value("MARGINALIZE", SlidingWindowGraph::ExitMode::kMarginalize)
-      .value("FIX", SlidingWindowGraph::ExitMode::kFix);
-  py::enum_<SlidingWindowGraph::InconsistencyAction>(m, "InconsistencyAction")
-      .value("REJECT", SlidingWindowGraph::InconsistencyAction::kReject)
-      .value("DOWN_WEIGHT", SlidingWindowGraph::InconsistencyAction::kDownWeight);
+  py::enum_<WindowExitMode>(m, "WindowExitMode")
+      .value("MARGINALIZE", WindowExitMode::kMarginalize)
+      .value("FIX", WindowExitMode::kFix);
+  py::enum_<WindowInconsistencyAction>(m, "InconsistencyAction")
+      .value("REJECT", WindowInconsistencyAction::kReject)
+      .value("DOWN_WEIGHT", WindowInconsistencyAction::kDownWeight);
 
   using GP = GnssPrior::Options;
   OptionsClass<GP>(m, "GnssPriorOptions", "GnssPrior::Options: GNSS decisions and lever arm.")
@@ -185,7 +184,6 @@ void RegisterOptions(py::module_& m) {
   OptionsClass<RO>(m, "SurfelRendererOptions", "Model image size and surfel facing test.")
       .Field("projection", &RO::projection, "RangeProjectionOptions")
       .Field("min_facing_cos", &RO::min_facing_cos, "")
-      .Field("num_threads", &RO::num_threads, "CPU renderer threads")
       .Validated()
       .Done();
 
@@ -213,7 +211,7 @@ void RegisterOptions(py::module_& m) {
       .Validated()
       .Done();
 
-  using PI = ProjectiveIcp::Options;
+  using PI = ProjectiveIcpOptions;
   OptionsClass<PI>(m, "ProjectiveIcpOptions", "Frame-to-model projective ICP (level 1).")
       .Field("max_distance", &PI::max_distance, "[m]")
       .Field("max_angle_deg", &PI::max_angle_deg, "[deg]")
@@ -225,11 +223,10 @@ void RegisterOptions(py::module_& m) {
       .Field("degeneracy_threshold", &PI::degeneracy_threshold, "")
       .Field("freeze_degenerate_directions", &PI::freeze_degenerate_directions, "")
       .Field("pixel_stride", &PI::pixel_stride, "")
-      .Field("num_threads", &PI::num_threads, "")
       .Validated()
       .Done();
 
-  using PT = PointIcp::Options;
+  using PT = PointIcpOptions;
   OptionsClass<PT>(m, "PointIcpOptions", "KD-tree point-to-plane ICP (map-to-map, loops).")
       .Field("max_correspondence_distance", &PT::max_correspondence_distance, "[m]")
       .Field("num_normal_neighbors", &PT::num_normal_neighbors, ">= 3")
@@ -242,17 +239,15 @@ void RegisterOptions(py::module_& m) {
       .Field("degeneracy_threshold", &PT::degeneracy_threshold, "")
       .Field("freeze_degenerate_directions", &PT::freeze_degenerate_directions, "")
       .Field("source_voxel_size", &PT::source_voxel_size, "[m]; 0 keeps all")
-      .Field("num_threads", &PT::num_threads, "")
       .Validated()
       .Done();
 
-  using SW = SlidingWindowGraph::Options;
+  using SW = SlidingWindowOptions;
   OptionsClass<SW>(m, "SlidingWindowOptions", "Level-1 sliding-window graph.")
       .Field("window_size", &SW::window_size, "> 0")
       .Field("exit_mode", &SW::exit_mode, "WindowExitMode")
       .Field("max_iterations", &SW::max_iterations, "")
       .Field("max_solve_time_s", &SW::max_solve_time_s, "[s]")
-      .Field("num_threads", &SW::num_threads, "")
       .Field("function_tolerance", &SW::function_tolerance, "")
       .Field("consistency_gate_chi2", &SW::consistency_gate_chi2, "6 dof")
       .Field("inconsistency_action", &SW::inconsistency_action, "InconsistencyAction")
@@ -260,9 +255,8 @@ void RegisterOptions(py::module_& m) {
       .Validated()
       .Done();
 
-  using DS = ScanDeskewer::Options;
-  OptionsClass<DS>(m, "DeskewOptions", "ScanDeskewer::Options.")
-      .Field("num_threads", &DS::num_threads, ">= 1")
+  using DS = DeskewOptions;
+  OptionsClass<DS>(m, "DeskewOptions", "How level 1 de-skews a scan.")
       .Field("num_knots", &DS::num_knots, "0 = exact per point")
       .Validated()
       .Done();
@@ -277,9 +271,9 @@ void RegisterOptions(py::module_& m) {
       .Validated()
       .Done();
 
-  using LO = Localizer::Options;
-  OptionsClass<LO>(m, "LocalizerOptions", "Localizer::Options: level 1.")
-      .Field("mode", &LO::mode, "Overridden by MappingSystem's mode.")
+  using LO = Level1Options;
+  OptionsClass<LO>(m, "LocalizerOptions",
+                   "Level1Options: level 1 (the mode, map and threads are MappingSystem's).")
       .Field("submap_duration_s", &LO::submap_duration_s, "WT [s]")
       .Field("surfels", &LO::surfels, "SurfelMapOptions")
       .Field("icp", &LO::icp, "ProjectiveIcpOptions")
@@ -298,18 +292,15 @@ void RegisterOptions(py::module_& m) {
       .Field("reg_sigma_floor_rot_rad", &LO::reg_sigma_floor_rot_rad, "[rad]")
       .Field("reg_sigma_floor_trans_m", &LO::reg_sigma_floor_trans_m, "[m]")
       .Field("min_inlier_ratio", &LO::min_inlier_ratio, "")
-      .Field("map_voxel_m", &LO::map_voxel_m, "[m]")
-      .Field("map_max_range_m", &LO::map_max_range_m, "[m]")
       .Field("registration_voxel_m", &LO::registration_voxel_m, "[m]")
       .Field("per_submap_surfels", &LO::per_submap_surfels, "")
       .Field("archive_surfels", &LO::archive_surfels, "")
       .Field("spill_dir", &LO::spill_dir, "Finished submaps' clouds go here; '' = memory.")
-      .Field("num_threads", &LO::num_threads, "")
       .Validated()
       .Done();
 
-  using SO = SubmapManager::Options;
-  OptionsClass<SO>(m, "Level2Options", "SubmapManager::Options: level 2 and loop closure.")
+  using SO = Level2Options;
+  OptionsClass<SO>(m, "Level2Options", "Level2Options: level 2 and loop closure.")
       .Field("enabled", &SO::enabled, "")
       .Field("use_map_to_map", &SO::use_map_to_map, "")
       .Field("use_gnss", &SO::use_gnss, "")
@@ -326,7 +317,6 @@ void RegisterOptions(py::module_& m) {
       .Field("gnss_correlation_s", &SO::gnss_correlation_s, "[s]")
       .Field("attitude_prior_sigma_rad", &SO::attitude_prior_sigma_rad, "[rad]")
       .Field("max_iterations", &SO::max_iterations, "")
-      .Field("num_threads", &SO::num_threads, "")
       .Field("estimate_extrinsics", &SO::estimate_extrinsics,
              "boresight self-calibration before the run (slam_mms_run --calibrate-extrinsics)")
       .Field("icp", &SO::icp, "PointIcpOptions")
@@ -352,7 +342,7 @@ void RegisterOptions(py::module_& m) {
       .Field("map_voxel_m", &MO::map_voxel_m, "[m]")
       .Field("max_pos_jump_m", &MO::max_pos_jump_m, "[m]")
       .Field("max_pos_jump_rad", &MO::max_pos_jump_rad, "[rad]")
-      .Field("num_threads", &MO::num_threads, "")
+      .Field("num_threads", &MO::num_threads, "The one thread count, in [1, 64].")
       .Validated()
       .Done();
 }

@@ -1,4 +1,4 @@
-#include "slam_mms/backend/sliding_window_graph.hpp"
+#include "backend/sliding_window_graph.hpp"
 
 #include <ceres/covariance.h>
 #include <ceres/problem.h>
@@ -53,7 +53,7 @@ std::string Id(StateId id) { return std::to_string(id); }
 
 }  // namespace
 
-Status SlidingWindowGraph::Options::Validate() const {
+Status SlidingWindowOptions::Validate() const {
   if (window_size <= 0) {
     return internal::OptionError("SlidingWindowGraph::Options", "window_size", window_size,
                                  "must be > 0");
@@ -66,10 +66,6 @@ Status SlidingWindowGraph::Options::Validate() const {
     return internal::OptionError("SlidingWindowGraph::Options", "max_solve_time_s",
                                  max_solve_time_s, "must be > 0");
   }
-  if (num_threads <= 0) {
-    return internal::OptionError("SlidingWindowGraph::Options", "num_threads", num_threads,
-                                 "must be > 0");
-  }
   if (!(function_tolerance > 0.0)) {
     return internal::OptionError("SlidingWindowGraph::Options", "function_tolerance",
                                  function_tolerance, "must be > 0");
@@ -81,6 +77,15 @@ Status SlidingWindowGraph::Options::Validate() const {
   if (!(marginalization_eigen_threshold >= 0.0)) {
     return internal::OptionError("SlidingWindowGraph::Options", "marginalization_eigen_threshold",
                                  marginalization_eigen_threshold, "must be >= 0");
+  }
+  return OkStatus();
+}
+
+Status SlidingWindowGraph::Options::Validate() const {
+  SLAM_MMS_RETURN_IF_ERROR(SlidingWindowOptions::Validate());
+  if (num_threads <= 0) {
+    return internal::OptionError("SlidingWindowGraph::Options", "num_threads", num_threads,
+                                 "must be > 0");
   }
   return OkStatus();
 }

@@ -7,9 +7,9 @@
 #include <limits>
 #include <memory>
 
+#include "ins/pos_smoother.hpp"
 #include "slam_mms/core/geodesy.hpp"
 #include "slam_mms/core/logging.hpp"
-#include "slam_mms/ins/pos_smoother.hpp"
 
 namespace slam_mms {
 namespace {

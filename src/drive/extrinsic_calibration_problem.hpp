@@ -120,8 +120,8 @@ void Apply(const Vector7d& d, Params* p);
 class CalibrationProblem {
  public:
   CalibrationProblem(std::vector<CalScan> scans, const PosTrack& pos,
-                     const ExtrinsicCalibrationOptions& o)
-      : scans_(std::move(scans)), pos_(pos), o_(o), pool_(std::max(1, o.num_threads)) {}
+                     const ExtrinsicCalibrationOptions& o, int num_threads)
+      : scans_(std::move(scans)), pos_(pos), o_(o), pool_(std::max(1, num_threads)) {}
 
   std::vector<CalScan>& scans() { return scans_; }
   const std::vector<CalScan>& scans() const { return scans_; }

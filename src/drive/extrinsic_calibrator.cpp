@@ -311,9 +311,13 @@ StatusOr<ExtrinsicCalibration> CalibrateExtrinsics(const DriveReader& reader,
                                                    const Eigen::Isometry3d& T_body_lidar_initial,
                                                    double time_offset_initial_s,
                                                    const ExtrinsicCalibrationOptions& o,
-                                                   const std::atomic<bool>* stop) {
+                                                   const std::atomic<bool>* stop, int num_threads) {
   const auto t_wall = std::chrono::steady_clock::now();
   SLAM_MMS_RETURN_IF_ERROR(o.Validate());
+  if (num_threads < 1) {
+    return InvalidArgumentError(
+        "CalibrateExtrinsics: num_threads = " + std::to_string(num_threads) + "; must be >= 1");
+  }
   const Eigen::Matrix3d R0 = T_body_lidar_initial.linear();
   if (!T_body_lidar_initial.matrix().allFinite() ||
       (R0.transpose() * R0 - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() > 1e-6 ||
@@ -337,7 +341,7 @@ StatusOr<ExtrinsicCalibration> CalibrateExtrinsics(const DriveReader& reader,
                             SelectScans(reader, track, t0, time_offset_initial_s, o, &result));
   AssignPartners(track, time_offset_initial_s, o, &scans, &result);
 
-  CalibrationProblem cal(std::move(scans), track, o);
+  CalibrationProblem cal(std::move(scans), track, o, num_threads);
   result.scans_used = static_cast<int>(cal.scans().size());
   Params initial;
   initial.R = R0;

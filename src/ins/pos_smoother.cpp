@@ -1,4 +1,4 @@
-#include "slam_mms/ins/pos_smoother.hpp"
+#include "ins/pos_smoother.hpp"
 
 #include <Eigen/Cholesky>
 #include <cmath>

@@ -56,7 +56,6 @@ Status ExtrinsicCalibrationOptions::Validate() const {
   if (!(min_prior_reduction >= 1.0))
     return FieldError("min_prior_reduction", min_prior_reduction, "must be >= 1");
   if (jackknife_blocks < 2) return FieldError("jackknife_blocks", jackknife_blocks, "must be >= 2");
-  if (num_threads < 1) return FieldError("num_threads", num_threads, "must be >= 1");
   return OkStatus();
 }
 

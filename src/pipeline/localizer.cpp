@@ -11,13 +11,15 @@
 
 namespace slam_mms {
 
-SurfelMapOptions Localizer::DefaultSurfelOptions() {
+SurfelMapOptions DefaultLevel1SurfelOptions() {
   SurfelMapOptions o;
   o.renderer.projection.cols = 1024;
   return o;
 }
 
-Status Localizer::Options::Validate() const {
+SurfelMapOptions Localizer::DefaultSurfelOptions() { return DefaultLevel1SurfelOptions(); }
+
+Status Level1Options::Validate() const {
   auto bad = [](const char* field, double v, const char* rule) {
     return internal::OptionError("Localizer::Options", field, v, rule);
   };
@@ -45,15 +47,8 @@ Status Localizer::Options::Validate() const {
   if (!(min_inlier_ratio >= 0.0 && min_inlier_ratio <= 1.0)) {
     return bad("min_inlier_ratio", min_inlier_ratio, "must be in [0, 1]");
   }
-  if (!(map_voxel_m > 0.0)) return bad("map_voxel_m", map_voxel_m, "must be > 0");
-  if (!(map_max_range_m > 0.0)) return bad("map_max_range_m", map_max_range_m, "must be > 0");
   if (!(registration_voxel_m > 0.0)) {
     return bad("registration_voxel_m", registration_voxel_m, "must be > 0");
-  }
-  if (num_threads < 1) return bad("num_threads", num_threads, "must be >= 1");
-  if (mode == MappingMode::kGnssIns || mode == MappingMode::kGnssInsSmoothed) {
-    return InvalidArgumentError(std::string("Localizer::Options::mode = ") + MappingModeName(mode) +
-                                "; the Localizer runs only in full or lidar_only mode");
   }
   SLAM_MMS_RETURN_IF_ERROR(surfels.Validate());
   SLAM_MMS_RETURN_IF_ERROR(icp.Validate());
@@ -61,6 +56,21 @@ Status Localizer::Options::Validate() const {
   SLAM_MMS_RETURN_IF_ERROR(deskew.Validate());
   SLAM_MMS_RETURN_IF_ERROR(imu.Validate());
   return OkStatus();
+}
+
+Status Localizer::Options::Validate() const {
+  auto bad = [](const char* field, double v, const char* rule) {
+    return internal::OptionError("Localizer::Options", field, v, rule);
+  };
+  if (!(map_voxel_m > 0.0)) return bad("map_voxel_m", map_voxel_m, "must be > 0");
+  if (!(map_max_range_m > 0.0)) return bad("map_max_range_m", map_max_range_m, "must be > 0");
+  if (num_threads < 1 || num_threads > 64)
+    return bad("num_threads", num_threads, "must be in [1, 64]");
+  if (mode == MappingMode::kGnssIns || mode == MappingMode::kGnssInsSmoothed) {
+    return InvalidArgumentError(std::string("Localizer::Options::mode = ") + MappingModeName(mode) +
+                                "; the Localizer runs only in full or lidar_only mode");
+  }
+  return Level1Options::Validate();
 }
 
 Localizer::Localizer() : impl_(std::make_unique<Impl>()) {}
@@ -80,15 +90,22 @@ StatusOr<std::unique_ptr<Localizer>> Localizer::Create(const Options& options,
   m.use_imu_states = options.mode == MappingMode::kFull;
   SLAM_MMS_ASSIGN_OR_RETURN(m.projection,
                             RangeProjection::Create(options.surfels.renderer.projection));
-  SLAM_MMS_ASSIGN_OR_RETURN(m.deskewer, ScanDeskewer::Create(options.deskew));
+  const int threads = options.num_threads;
+  ScanDeskewer::Options deskew;
+  static_cast<DeskewOptions&>(deskew) = options.deskew;
+  deskew.num_threads = threads;
+  SLAM_MMS_ASSIGN_OR_RETURN(m.deskewer, ScanDeskewer::Create(deskew));
   SurfelMapOptions surfel_options = options.surfels;
   if (options.per_submap_surfels) surfel_options.integrate_current_submap_only = true;
-  SLAM_MMS_ASSIGN_OR_RETURN(m.map, SurfelMap::Create(surfel_options));
-  auto renderer = MakeSurfelRenderer(options.surfels.renderer, options.renderer);
+  SLAM_MMS_ASSIGN_OR_RETURN(m.map, SurfelMap::Create(surfel_options, threads));
+  auto renderer = MakeSurfelRenderer(options.surfels.renderer, options.renderer, threads);
   if (!renderer.ok()) return renderer.status().WithContext("Localizer renderer");
   m.renderer = std::move(renderer).value();
   SLAM_MMS_RETURN_IF_ERROR(m.map.SetRenderer(m.renderer.get()));
-  SLAM_MMS_ASSIGN_OR_RETURN(m.icp, ProjectiveIcp::Create(m.projection, options.icp));
+  ProjectiveIcp::Options icp;
+  static_cast<ProjectiveIcpOptions&>(icp) = options.icp;
+  icp.num_threads = threads;
+  SLAM_MMS_ASSIGN_OR_RETURN(m.icp, ProjectiveIcp::Create(m.projection, icp));
   m.clouds = std::make_unique<internal::SubmapCloudBuilder>(
       options.map_voxel_m, options.registration_voxel_m, /*asynchronous=*/options.num_threads > 1);
   m.range_image = std::make_unique<internal::ParallelRangeImage>(options.num_threads);
@@ -112,7 +129,11 @@ StatusOr<LocalizationResult> Localizer::ProcessScan(const Scan& scan,
   LocalizationResult res;
   res.scan_index = scan.index;
   res.stamp = scan.stamp_start;
-  if (!m.started) SLAM_MMS_RETURN_IF_ERROR(m.StartFirstSubmap(scan, motion));
+  if (!m.started) {
+    // The first scan starts submap 0: it must not fail after that (nothing would be undone).
+    SLAM_MMS_RETURN_IF_ERROR(ScanDeskewer::CheckTimeOffsets(scan));
+    SLAM_MMS_RETURN_IF_ERROR(m.StartFirstSubmap(scan, motion));
+  }
   ScanStep step = m.BeginScan(scan, motion);
   // 2. predict first: the preintegration de-skew starts from the prediction.
   m.PredictStage(scan, motion, &step, &res);

@@ -16,8 +16,11 @@
 #include <utility>
 #include <vector>
 
+#include "backend/sliding_window_graph.hpp"
+#include "pipeline/scan_deskewer.hpp"
 #include "pipeline/submap_cloud_builder.hpp"
 #include "pipeline/submap_store.hpp"
+#include "registration/projective_icp.hpp"
 #include "slam_mms/pipeline/localizer.hpp"
 #include "surfel/parallel_range_image.hpp"
 

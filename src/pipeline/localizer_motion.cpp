@@ -8,11 +8,14 @@
 
 #include "backend/imu_preintegration_factor.hpp"
 #include "pipeline/localizer_impl.hpp"
+#include "pipeline/noise_model.hpp"
 #include "pipeline/pose_covariance.hpp"
 #include "slam_mms/core/lie.hpp"
 #include "slam_mms/core/logging.hpp"
 
 namespace slam_mms {
+
+namespace noise = internal::noise;
 namespace {
 
 /// Pose T scaled along its twist: Exp(s * Log(T)).
@@ -98,11 +101,13 @@ StatusOr<Matrix6d> Localizer::Impl::AddMotionFactor(StateId cur_state,
       const Eigen::Vector3d v_submap = T_world_submap.linear().transpose() * motion.v_world_pos;
       SLAM_MMS_RETURN_IF_ERROR(
           window
-              ->AddCostFunction(MakeNormalPrior(v_submap, Eigen::Vector3d::Constant(0.05)),
+              ->AddCostFunction(MakeNormalPrior(v_submap, Eigen::Vector3d::Constant(
+                                                              noise::kPosVelocityPriorSigmaMps)),
                                 {{cur_state, StateBlock::kVelocity}})
               .status());
       Eigen::VectorXd b_sigma(6);
-      b_sigma << Eigen::Vector3d::Constant(0.05), Eigen::Vector3d::Constant(1e-3);
+      b_sigma << Eigen::Vector3d::Constant(noise::kBiasPriorSigmaAccelMps2),
+          Eigen::Vector3d::Constant(noise::kBiasPriorSigmaGyroRadps);
       SLAM_MMS_RETURN_IF_ERROR(window
                                    ->AddCostFunction(MakeNormalPrior(motion.pos_bias, b_sigma),
                                                      {{cur_state, StateBlock::kBias}})
@@ -121,14 +126,17 @@ StatusOr<Matrix6d> Localizer::Impl::AddMotionFactor(StateId cur_state,
                                                           {cur_state, StateBlock::kVelocity},
                                                           {cur_state, StateBlock::kBias}})
             .status());
-    cov_motion = internal::DiagonalPoseCovariance(0.002 + 0.001 * dt, 0.02 + 0.05 * dt);
+    cov_motion = internal::DiagonalPoseCovariance(
+        noise::kPreintegrationSigmaRotRad + noise::kPreintegrationSigmaRotRadPerS * dt,
+        noise::kPreintegrationSigmaTransM + noise::kPreintegrationSigmaTransMPerS * dt);
   } else {
     // LiDAR only: a weak constant-velocity factor keeps degenerate directions bounded.
     cov_motion = internal::DiagonalPoseCovariance(opt.cv_sigma_rot_rad, opt.cv_sigma_trans_m);
     SLAM_MMS_RETURN_IF_ERROR(
         window
             ->AddRelativePoseFactor(prev_id, cur_state, T_submap_prev.inverse() * pred.T_submap,
-                                    cov_motion, FactorKind::kMotion, RobustLoss::Huber(3.0))
+                                    cov_motion, FactorKind::kMotion,
+                                    RobustLoss::Huber(noise::kMotionHuberSigmas))
             .status());
   }
   return cov_motion;

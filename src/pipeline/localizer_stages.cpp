@@ -5,11 +5,14 @@
 #include <string>
 
 #include "pipeline/localizer_impl.hpp"
+#include "pipeline/noise_model.hpp"
 #include "pipeline/pose_covariance.hpp"
 #include "slam_mms/core/lie.hpp"
 #include "slam_mms/core/logging.hpp"
 
 namespace slam_mms {
+
+namespace noise = internal::noise;
 
 Status Localizer::Impl::CheckScan(const Scan& scan, const ScanMotionInput& motion) const {
   if (scan.cloud.empty()) {
@@ -33,7 +36,7 @@ Status Localizer::Impl::StartFirstSubmap(const Scan& scan, const ScanMotionInput
   Eigen::Isometry3d T_world_body0 = initial_T_world_body;
   if (motion.type == MotionFactorType::kOdometry) T_world_body0 = motion.T_world_body_pos_start;
   StartSubmap(T_world_body0, scan.stamp_start, scan.index, Eigen::Isometry3d::Identity(),
-              Matrix6d::Identity() * 1e-8);
+              Matrix6d::Identity() * noise::kAnchorPoseVariance);
   const Eigen::Vector3d v_submap0 = T_world_body0.linear().transpose() * motion.v_world_pos;
   bias_prev = motion.pos_bias;
   SLAM_MMS_RETURN_IF_ERROR(StartWindow(v_submap0, bias_prev));
@@ -160,10 +163,12 @@ Status Localizer::Impl::FactorStage(const Scan& scan, const ScanMotionInput& mot
       // F_Reg (eq 16): reference -> scan, checked against the motion prediction.
       MotionPrediction prediction;
       prediction.T_a_b = step->pred.T_submap;
-      prediction.covariance = 4.0 * cov_motion + internal::DiagonalPoseCovariance(0.003, 0.05);
-      auto outcome = window->AddRelativePoseFactor(ref_id, cur_state, *step->T_submap_reg,
-                                                   step->cov_reg, FactorKind::kRegistration,
-                                                   RobustLoss::Huber(3.0), prediction);
+      prediction.covariance = noise::kPredictionCovarianceInflation * cov_motion +
+                              internal::DiagonalPoseCovariance(noise::kPredictionSigmaFloorRotRad,
+                                                               noise::kPredictionSigmaFloorTransM);
+      auto outcome = window->AddRelativePoseFactor(
+          ref_id, cur_state, *step->T_submap_reg, step->cov_reg, FactorKind::kRegistration,
+          RobustLoss::Huber(noise::kRegistrationHuberSigmas), prediction);
       if (!outcome.ok()) return outcome.status().WithContext("Localizer: F_Reg");
       res->registration_used = outcome->id.has_value();
       res->registration_downweighted = outcome->covariance_scale > 1.0;
@@ -199,9 +204,11 @@ Status Localizer::Impl::OptimizeStage(const Scan& scan, ScanStep* step, Localiza
     }
     auto cov = window->PoseCovariance(step->cur_state);
     res->cov_T_world_body =
-        cov.ok() ? *cov : (step->T_submap_reg ? step->cov_reg : 4.0 * Matrix6d::Identity());
+        cov.ok() ? *cov
+                 : (step->T_submap_reg ? step->cov_reg
+                                       : noise::kUnknownPoseVariance * Matrix6d::Identity());
   } else {
-    res->cov_T_world_body = Matrix6d::Identity() * 1e-8;
+    res->cov_T_world_body = Matrix6d::Identity() * noise::kAnchorPoseVariance;
   }
   res->timings.optimize_ms = MsSince(t0);
   return OkStatus();

@@ -10,14 +10,20 @@
 #include <utility>
 
 #include "pipeline/localizer_impl.hpp"
+#include "pipeline/noise_model.hpp"
 #include "slam_mms/core/logging.hpp"
 
 namespace slam_mms {
 
+namespace noise = internal::noise;
+
 using internal::MakeNormalPrior;
 
 Status Localizer::Impl::StartWindow(const Eigen::Vector3d& v_submap, const Vector6d& bias) {
-  auto w = SlidingWindowGraph::Create(opt.window);
+  SlidingWindowGraph::Options window_options;
+  static_cast<SlidingWindowOptions&>(window_options) = opt.window;
+  window_options.num_threads = opt.num_threads;
+  auto w = SlidingWindowGraph::Create(window_options);
   if (!w.ok()) return w.status();
   window = std::make_unique<SlidingWindowGraph>(std::move(w).value());
   ref_id = next_id++;
@@ -31,9 +37,11 @@ Status Localizer::Impl::StartWindow(const Eigen::Vector3d& v_submap, const Vecto
   SLAM_MMS_RETURN_IF_ERROR(window->SetBlockConstant({ref_id, StateBlock::kPose}, true));
   if (use_imu_states) {
     // The reference's velocity and biases carry over from the previous window (or the POS).
-    auto v_prior = MakeNormalPrior(v_submap, Eigen::Vector3d::Constant(0.1));
+    auto v_prior = MakeNormalPrior(
+        v_submap, Eigen::Vector3d::Constant(noise::kReferenceVelocityPriorSigmaMps));
     Eigen::VectorXd b_sigma(6);
-    b_sigma << Eigen::Vector3d::Constant(0.05), Eigen::Vector3d::Constant(1e-3);
+    b_sigma << Eigen::Vector3d::Constant(noise::kBiasPriorSigmaAccelMps2),
+        Eigen::Vector3d::Constant(noise::kBiasPriorSigmaGyroRadps);
     auto b_prior = MakeNormalPrior(bias, b_sigma);
     SLAM_MMS_RETURN_IF_ERROR(
         window->AddCostFunction(std::move(v_prior), {{ref_id, StateBlock::kVelocity}}).status());

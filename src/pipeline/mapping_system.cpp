@@ -9,11 +9,11 @@
 
 #include "core/option_error.hpp"
 #include "pipeline/mapping_system_impl.hpp"
+#include "pipeline/scan_deskewer.hpp"
 #include "slam_mms/core/lie.hpp"
 #include "slam_mms/core/logging.hpp"
 #include "slam_mms/core/voxel_downsample.hpp"
 #include "slam_mms/ins/imu_preintegration.hpp"
-#include "slam_mms/pipeline/scan_deskewer.hpp"
 
 namespace slam_mms {
 
@@ -51,9 +51,9 @@ Status MappingSystem::Options::Validate() const {
     return internal::OptionError("MappingSystem::Options", "max_pos_jump_rad", max_pos_jump_rad,
                                  "must be > 0");
   }
-  if (num_threads < 1) {
+  if (num_threads < 1 || num_threads > 64) {
     return internal::OptionError("MappingSystem::Options", "num_threads", num_threads,
-                                 "must be >= 1");
+                                 "must be in [1, 64]");
   }
   if (mode == MappingMode::kGnssInsSmoothed) {
     return InvalidArgumentError(
@@ -63,9 +63,7 @@ Status MappingSystem::Options::Validate() const {
   }
   SLAM_MMS_RETURN_IF_ERROR(ins.Validate());
   if (mode != MappingMode::kGnssIns) {
-    Localizer::Options loc = localizer;
-    loc.mode = mode;
-    SLAM_MMS_RETURN_IF_ERROR(loc.Validate());
+    SLAM_MMS_RETURN_IF_ERROR(localizer.Validate());
     SLAM_MMS_RETURN_IF_ERROR(level2.Validate());
   }
   return OkStatus();
@@ -85,19 +83,23 @@ StatusOr<std::unique_ptr<MappingSystem>> MappingSystem::Create(const Options& op
     SLAM_MMS_RETURN_IF_ERROR(m.ins.mutable_gnss_prior().SetOrigin(*options.origin));
   }
   ScanDeskewer::Options dopt;
+  static_cast<DeskewOptions&>(dopt) = options.localizer.deskew;
   dopt.num_threads = options.num_threads;
-  SLAM_MMS_ASSIGN_OR_RETURN(m.deskewer, ScanDeskewer::Create(dopt));
-  m.pos_map = internal::VoxelAccumulator(options.map_voxel_m, /*track_first_observation=*/true);
+  SLAM_MMS_ASSIGN_OR_RETURN(ScanDeskewer deskewer, ScanDeskewer::Create(dopt));
+  m.pos_mapper = internal::PosMapper(std::move(deskewer), options.T_body_lidar, options.map_voxel_m,
+                                     options.map_max_range_m);
   if (options.mode != MappingMode::kGnssIns) {
-    Localizer::Options lopt = options.localizer;
+    Localizer::Options lopt;
+    static_cast<Level1Options&>(lopt) = options.localizer;
     lopt.mode = options.mode;
     lopt.map_voxel_m = options.map_voxel_m;
     lopt.map_max_range_m = options.map_max_range_m;
+    lopt.num_threads = options.num_threads;
     SLAM_MMS_ASSIGN_OR_RETURN(m.loc, Localizer::Create(lopt, options.T_body_lidar));
     SubmapManager::Options l2 = options.level2;
     if (options.mode == MappingMode::kLidarOnly) l2.use_gnss = false;
     if (l2.enabled) {
-      SLAM_MMS_ASSIGN_OR_RETURN(m.level2, SubmapManager::Create(l2));
+      SLAM_MMS_ASSIGN_OR_RETURN(m.level2, SubmapManager::Create(l2, options.num_threads));
     }
   }
   return sys;
@@ -110,10 +112,9 @@ Status MappingSystem::AddImu(const ImuSample& sample) {
     return InvalidArgumentError("MappingSystem::AddImu: non-finite sample at " +
                                 sample.stamp.ToKittiString());
   }
-  SLAM_MMS_RETURN_IF_ERROR(m.AcceptTime("IMU sample", sample.stamp, &m.last_imu, m.have_imu));
-  m.have_imu = true;
+  SLAM_MMS_RETURN_IF_ERROR(m.input.AcceptImuTime(sample.stamp));
   if (!m.have_first_scan) {
-    m.pending_imu.push_back(sample);
+    m.input.HoldImu(sample);
     return OkStatus();
   }
   SLAM_MMS_RETURN_IF_ERROR(m.FeedImu(sample));
@@ -123,10 +124,9 @@ Status MappingSystem::AddImu(const ImuSample& sample) {
 Status MappingSystem::AddGnss(const GnssFix& fix) {
   Impl& m = *impl_;
   if (m.finished) return FailedPreconditionError("MappingSystem::AddGnss after Finish()");
-  SLAM_MMS_RETURN_IF_ERROR(m.AcceptTime("GNSS fix", fix.stamp, &m.last_gnss, m.have_gnss));
-  m.have_gnss = true;
+  SLAM_MMS_RETURN_IF_ERROR(m.input.AcceptGnssTime(fix.stamp));
   if (!m.have_first_scan) {
-    m.pending_gnss.push_back(fix);
+    m.input.HoldGnss(fix);
     return OkStatus();
   }
   SLAM_MMS_RETURN_IF_ERROR(m.FeedGnss(fix));
@@ -147,7 +147,7 @@ Status MappingSystem::AddInsPose(const InsState& state) {
   Impl& m = *impl_;
   m.external_pos = true;
   SLAM_MMS_RETURN_IF_ERROR(m.ins.AddExternalPose(state));
-  m.MarkPosInput(state.stamp);
+  m.input.MarkPosInput(state.stamp);
   if (!m.have_first_scan) return OkStatus();
   return m.ProcessQueued();
 }
@@ -155,32 +155,10 @@ Status MappingSystem::AddInsPose(const InsState& state) {
 Status MappingSystem::AddScan(const Scan& scan) {
   Impl& m = *impl_;
   if (m.finished) return FailedPreconditionError("MappingSystem::AddScan after Finish()");
-  if (scan.cloud.empty()) {
+  if (const auto why = m.input.ScanRejection(scan, m.have_scan, m.last_scan_start)) {
     ++m.skipped;
     SLAM_MMS_LOG(kWarning) << "scan '" << scan.source << "' (index " << scan.index
-                           << ") skipped: no points";
-    return OkStatus();
-  }
-  const auto& points = scan.cloud.points();
-  if (std::none_of(points.begin(), points.end(),
-                   [](const Eigen::Vector3f& p) { return p.allFinite(); })) {
-    ++m.skipped;
-    SLAM_MMS_LOG(kWarning) << "scan '" << scan.source << "' (index " << scan.index
-                           << ") skipped: no finite point";
-    return OkStatus();
-  }
-  if (!(scan.stamp_start <= scan.stamp_end)) {
-    ++m.skipped;
-    SLAM_MMS_LOG(kWarning) << "scan '" << scan.source << "' skipped: stamp_end before stamp_start";
-    return OkStatus();
-  }
-  const Timestamp newest = m.queue.empty() ? (m.have_scan ? m.last_scan_start : Timestamp())
-                                           : m.queue.back().stamp_start;
-  if ((m.have_scan || !m.queue.empty()) && !(newest < scan.stamp_start)) {
-    ++m.skipped;
-    SLAM_MMS_LOG(kWarning) << "scan '" << scan.source << "' skipped: it starts at "
-                           << scan.stamp_start.ToKittiString()
-                           << ", not after the previous scan at " << newest.ToKittiString();
+                           << ") skipped: " << *why;
     return OkStatus();
   }
   if (!m.have_first_scan) {
@@ -191,7 +169,7 @@ Status MappingSystem::AddScan(const Scan& scan) {
     }
     SLAM_MMS_RETURN_IF_ERROR(m.FlushPending());
   }
-  m.queue.push_back(scan);
+  m.input.scans().push_back(scan);
   return m.ProcessQueued();
 }
 
@@ -240,8 +218,8 @@ std::vector<GnssAvailabilityInterval> MappingSystem::GnssAvailability() const {
 int MappingSystem::num_pos_jumps() const { return impl_->pos_jumps; }
 int MappingSystem::num_skipped_scans() const { return impl_->skipped; }
 
-SubmapManager::Stats MappingSystem::level2_stats() const {
-  return impl_->level2 ? impl_->level2->stats() : SubmapManager::Stats{};
+Level2Stats MappingSystem::level2_stats() const {
+  return impl_->level2 ? impl_->level2->stats() : Level2Stats{};
 }
 
 const MappingSystem::Options& MappingSystem::options() const { return impl_->opt; }

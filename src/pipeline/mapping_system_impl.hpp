@@ -14,9 +14,11 @@
 #include <utility>
 #include <vector>
 
-#include "pipeline/voxel_accumulator.hpp"
+#include "pipeline/pos_mapper.hpp"
+#include "pipeline/scan_deskewer.hpp"
+#include "pipeline/sensor_buffer.hpp"
+#include "pipeline/submap_manager.hpp"
 #include "slam_mms/pipeline/mapping_system.hpp"
-#include "slam_mms/pipeline/scan_deskewer.hpp"
 
 namespace slam_mms {
 
@@ -25,20 +27,13 @@ struct MappingSystem::Impl {
   InsFilter ins;
   std::unique_ptr<Localizer> loc;
   std::unique_ptr<SubmapManager> level2;
-  ScanDeskewer deskewer;
 
   bool external_pos = false;
   bool have_first_scan = false;
   bool finished = false;
-  std::vector<ImuSample> pending_imu;  // before the first scan (outage reference unknown)
-  std::vector<GnssFix> pending_gnss;
-  std::deque<ImuSample> imu_history;  // for preintegration
-  std::deque<Scan> queue;
-  Timestamp last_imu;
-  Timestamp last_gnss;
-  Timestamp last_pos_input;
-  bool have_pos_input = false;
-  Timestamp last_scan_start;
+  /// Time order, the records held before the first scan, the IMU history and the scan queue.
+  internal::SensorBuffer input;
+  Timestamp last_scan_start;  // of the last processed scan
   bool have_scan = false;
 
   std::vector<LocalizationResult> results;
@@ -53,12 +48,7 @@ struct MappingSystem::Impl {
   size_t submaps_reported = 0;
 
   // gnss_ins mode.
-  Trajectory pos_trajectory;
-  internal::VoxelAccumulator pos_map;
-  PointCloud deskewed;
-
-  bool have_imu = false;
-  bool have_gnss = false;
+  internal::PosMapper pos_mapper;
 
   // ---- the sensor buffer (mapping_system_input.cpp) --------------------------------------------
   Status FeedImu(const ImuSample& s);
@@ -66,12 +56,9 @@ struct MappingSystem::Impl {
   /// With an external POS the fixes are not fused: each is decided (GnssPrior: outage windows,
   /// type, innovation against the POS antenna position at the fix time) for level 2 only.
   StatusOr<GnssDecisionResult> DecideAgainstExternalPos(const GnssFix& fix);
-  void MarkPosInput(Timestamp t);
   /// Replays the data buffered before the first scan, merged in time order.
   Status FlushPending();
   bool Ready(const Scan& scan) const;
-  std::vector<ImuSample> ImuBetween(Timestamp from, Timestamp to) const;
-  Status AcceptTime(const char* stream, Timestamp t, Timestamp* last, bool have_last);
 
   // ---- per scan and level 2 (mapping_system_scans.cpp) -----------------------------------------
   /// How far the POS moved from `a` to `b` beyond what its IMU measured between them (position

@@ -12,10 +12,10 @@
 namespace slam_mms {
 
 Status MappingSystem::Impl::FeedImu(const ImuSample& s) {
-  imu_history.push_back(s);
+  input.RecordImu(s);
   if (external_pos) return OkStatus();
   Status st = ins.AddImu(s);
-  if (st.ok()) MarkPosInput(s.stamp);
+  if (st.ok()) input.MarkPosInput(s.stamp);
   return st;
 }
 
@@ -23,7 +23,7 @@ Status MappingSystem::Impl::FeedGnss(const GnssFix& fix) {
   have_gnss_fed = true;
   auto decision = external_pos ? DecideAgainstExternalPos(fix) : ins.AddGnss(fix);
   if (!decision.ok()) return decision.status();
-  MarkPosInput(fix.stamp);
+  input.MarkPosInput(fix.stamp);
   if (decision->usable() && level2) {
     level2->AddGnssMeasurement(decision->measurement, opt.ins.gnss.t_body_antenna);
   }
@@ -48,49 +48,15 @@ StatusOr<GnssDecisionResult> MappingSystem::Impl::DecideAgainstExternalPos(const
   return ins.mutable_gnss_prior().Process(fix, &pred);
 }
 
-void MappingSystem::Impl::MarkPosInput(Timestamp t) {
-  if (!have_pos_input || last_pos_input < t) last_pos_input = t;
-  have_pos_input = true;
-}
-
 Status MappingSystem::Impl::FlushPending() {
-  size_t i = 0, j = 0;
-  while (i < pending_imu.size() || j < pending_gnss.size()) {
-    const bool take_imu = j >= pending_gnss.size() ||
-                          (i < pending_imu.size() && pending_imu[i].stamp <= pending_gnss[j].stamp);
-    if (take_imu) {
-      SLAM_MMS_RETURN_IF_ERROR(FeedImu(pending_imu[i++]));
-    } else {
-      SLAM_MMS_RETURN_IF_ERROR(FeedGnss(pending_gnss[j++]));
-    }
-  }
-  pending_imu.clear();
-  pending_gnss.clear();
-  return OkStatus();
+  return input.ReleaseHeld([this](const ImuSample& s) { return FeedImu(s); },
+                           [this](const GnssFix& fix) { return FeedGnss(fix); });
 }
 
 bool MappingSystem::Impl::Ready(const Scan& scan) const {
   if (finished) return true;
   if (opt.mode == MappingMode::kLidarOnly && !results.empty()) return true;
-  return have_pos_input && scan.stamp_end <= last_pos_input;
+  return input.PosCovers(scan);
 }
 
-std::vector<ImuSample> MappingSystem::Impl::ImuBetween(Timestamp from, Timestamp to) const {
-  std::vector<ImuSample> out;
-  for (const ImuSample& s : imu_history) {
-    if (s.stamp.SecondsSince(from) >= -0.2 && to.SecondsSince(s.stamp) >= -0.2) out.push_back(s);
-  }
-  return out;
-}
-
-Status MappingSystem::Impl::AcceptTime(const char* stream, Timestamp t, Timestamp* last,
-                                       bool have_last) {
-  if (have_last && t < *last) {
-    return InvalidArgumentError(std::string("MappingSystem: ") + stream + " at " +
-                                t.ToKittiString() + " is older than the previous one at " +
-                                last->ToKittiString() + " (data must come in time order)");
-  }
-  *last = t;
-  return OkStatus();
-}
 }  // namespace slam_mms

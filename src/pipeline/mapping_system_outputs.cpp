@@ -14,7 +14,7 @@ namespace slam_mms {
 
 Trajectory MappingSystem::FinalTrajectory() const {
   const Impl& m = *impl_;
-  if (!m.loc) return m.pos_trajectory;
+  if (!m.loc) return m.pos_mapper.trajectory();
   std::vector<StampedPose> poses;
   for (const SubmapRecord& rec : m.loc->submaps()) {
     for (size_t j = 0; j < rec.T_submap_scan.size(); ++j) {
@@ -86,8 +86,7 @@ PointCloud MappingSystem::FinalMap(MapPointStamps* stamps) const {
   const Impl& m = *impl_;
   if (stamps != nullptr) stamps->clear();
   if (!m.loc) {
-    return stamps != nullptr ? m.pos_map.Cloud(&stamps->time_ns, &stamps->scan_index)
-                             : m.pos_map.Cloud();
+    return m.pos_mapper.Cloud(stamps);
   }
   PointCloud merged;
   MapPointStamps merged_stamps;

@@ -15,7 +15,7 @@ namespace slam_mms {
 std::optional<std::pair<double, double>> MappingSystem::Impl::PosJump(const InsState& a,
                                                                       const InsState& b) const {
   if (!(a.stamp < b.stamp)) return std::nullopt;
-  const std::vector<ImuSample> imu = ImuBetween(a.stamp, b.stamp);
+  const std::vector<ImuSample> imu = input.ImuBetween(a.stamp, b.stamp);
   ImuPreintegration pre(ImuPreintegration::Options(), a.accel_bias_mps2, a.gyro_bias_radps);
   if (imu.empty() || !pre.IntegrateWindow(imu, a.stamp, b.stamp).ok()) return std::nullopt;
   NavState s;
@@ -49,16 +49,13 @@ bool MappingSystem::Impl::PosJumped(const Scan& scan, const InsState& s0, const 
 }
 
 Status MappingSystem::Impl::ProcessQueued() {
+  std::deque<Scan>& queue = input.scans();
   while (!queue.empty() && Ready(queue.front())) {
     Scan scan = std::move(queue.front());
     queue.pop_front();
     SLAM_MMS_RETURN_IF_ERROR(ProcessScan(scan));
   }
-  // Keep ~5 s of IMU behind the oldest scan still to come.
-  const Timestamp keep_from = (queue.empty() ? last_scan_start : queue.front().stamp_start);
-  while (!imu_history.empty() && keep_from.SecondsSince(imu_history.front().stamp) > 5.0) {
-    imu_history.pop_front();
-  }
+  input.TrimImuHistory(last_scan_start);
   return OkStatus();
 }
 
@@ -101,7 +98,7 @@ std::pair<StatusOr<InsState>, StatusOr<InsState>> MappingSystem::Impl::PosOverSc
     back.T_world_body.translation() -= s1->v_world_mps * dt;
     Eigen::Vector3d w = Eigen::Vector3d::Zero();
     int n = 0;
-    for (const ImuSample& imu : imu_history) {
+    for (const ImuSample& imu : input.imu_history()) {
       if (imu.stamp < scan.stamp_start || s1->stamp < imu.stamp) continue;
       w += imu.gyro_radps;
       ++n;
@@ -125,21 +122,7 @@ StatusOr<bool> MappingSystem::Impl::MapWithPos(const Scan& scan, const StatusOr<
                            << (!s0.ok() ? s0.status() : s1.status()).message() << ")";
     return false;
   }
-  const Eigen::Isometry3d T_bstart_bend = s0->T_world_body.inverse() * s1->T_world_body;
-  SLAM_MMS_RETURN_IF_ERROR(deskewer.Deskew(scan, T_bstart_bend, opt.T_body_lidar, &deskewed));
-  const internal::ScanStamp stamp{scan.stamp_start.nanoseconds(), &scan.cloud.time_offsets_s(),
-                                  scan.index};
-  pos_map.Add(deskewed, s0->T_world_body * opt.T_body_lidar, opt.map_max_range_m, &stamp);
-  StampedPose pose;
-  pose.stamp = scan.stamp_start;
-  pose.T_world_body = s0->T_world_body;
-  pose.cov_T_world_body = s0->cov_T_world_body;
-  SLAM_MMS_RETURN_IF_ERROR(pos_trajectory.Add(pose));
-  res.scan_index = scan.index;
-  res.stamp = scan.stamp_start;
-  res.T_world_body = s0->T_world_body;
-  res.cov_T_world_body = s0->cov_T_world_body;
-  res.motion_factor = MotionFactorType::kPos;
+  SLAM_MMS_ASSIGN_OR_RETURN(res, pos_mapper.Map(scan, *s0, *s1));
   return true;
 }
 
@@ -174,7 +157,7 @@ ScanMotionInput MappingSystem::Impl::MotionInput(const Scan& scan, const StatusO
         if (results.empty()) loc->SetInitialPose(s0->T_world_body);
       }
       const Timestamp from = have_scan ? last_scan_start : scan.stamp_start;
-      motion.imu = ImuBetween(from, scan.stamp_end);
+      motion.imu = input.ImuBetween(from, scan.stamp_end);
       if (motion.imu.empty()) motion.type = MotionFactorType::kConstantVelocity;
     }
   }

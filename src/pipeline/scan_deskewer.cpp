@@ -1,4 +1,4 @@
-#include "slam_mms/pipeline/scan_deskewer.hpp"
+#include "pipeline/scan_deskewer.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -11,11 +11,7 @@
 
 namespace slam_mms {
 
-Status ScanDeskewer::Options::Validate() const {
-  if (num_threads < 1) {
-    return internal::OptionError("ScanDeskewer::Options", "num_threads", num_threads,
-                                 "must be >= 1");
-  }
+Status DeskewOptions::Validate() const {
   if (num_knots < 0 || num_knots == 1) {
     return internal::OptionError("ScanDeskewer::Options", "num_knots", num_knots,
                                  "must be 0 (exact) or >= 2");
@@ -23,7 +19,42 @@ Status ScanDeskewer::Options::Validate() const {
   return OkStatus();
 }
 
+Status ScanDeskewer::Options::Validate() const {
+  if (num_threads < 1) {
+    return internal::OptionError("ScanDeskewer::Options", "num_threads", num_threads,
+                                 "must be >= 1");
+  }
+  return DeskewOptions::Validate();
+}
+
+namespace {
+
+// A point's time offset is within the scan (1 ms of slack for the stamps' rounding).
+constexpr float kTimeTolerance = 1e-3f;
+bool InScanTime(float dt, double duration) {
+  return dt >= -kTimeTolerance && dt <= static_cast<float>(duration) + kTimeTolerance;
+}
+
+Status TimeOffsetError(const Scan& scan, size_t i) {
+  return InvalidArgumentError(
+      "ScanDeskewer: scan '" + scan.source + "' point " + std::to_string(i) + " has time offset " +
+      std::to_string(scan.cloud.time_offsets_s()[i]) + " s outside the scan duration [0, " +
+      std::to_string(scan.DurationSeconds()) + "] s");
+}
+
+}  // namespace
+
 ScanDeskewer::ScanDeskewer() = default;
+
+Status ScanDeskewer::CheckTimeOffsets(const Scan& scan) {
+  const double duration = scan.DurationSeconds();
+  if (!(duration > 0.0)) return OkStatus();  // Deskew copies such a scan unchanged
+  const auto& offsets = scan.cloud.time_offsets_s();
+  for (size_t i = 0; i < offsets.size(); ++i) {
+    if (!InScanTime(offsets[i], duration)) return TimeOffsetError(scan, i);
+  }
+  return OkStatus();
+}
 
 StatusOr<ScanDeskewer> ScanDeskewer::Create(const Options& options) {
   SLAM_MMS_RETURN_IF_ERROR(options.Validate());
@@ -64,13 +95,12 @@ Status ScanDeskewer::Deskew(const Scan& scan, const Eigen::Isometry3d& T_bstart_
     }
   }
 
-  const float tolerance = 1e-3f;
   const auto& offsets = in.time_offsets_s();
   std::vector<long> bad(static_cast<size_t>(options_.num_threads), -1);
   auto work = [&](int thread, size_t begin, size_t end) {
     for (size_t i = begin; i < end; ++i) {
       const float dt = offsets[i];
-      if (!(dt >= -tolerance && dt <= static_cast<float>(duration) + tolerance)) {
+      if (!InScanTime(dt, duration)) {
         if (bad[static_cast<size_t>(thread)] < 0)
           bad[static_cast<size_t>(thread)] = static_cast<long>(i);
         out->points()[i] = in.points()[i];
@@ -102,12 +132,7 @@ Status ScanDeskewer::Deskew(const Scan& scan, const Eigen::Isometry3d& T_bstart_
   out->intensities() = in.intensities();
   std::fill(out->time_offsets_s().begin(), out->time_offsets_s().end(), 0.0f);
   for (long b : bad) {
-    if (b >= 0) {
-      return InvalidArgumentError(
-          "ScanDeskewer: scan '" + scan.source + "' point " + std::to_string(b) +
-          " has time offset " + std::to_string(offsets[static_cast<size_t>(b)]) +
-          " s outside the scan duration [0, " + std::to_string(duration) + "] s");
-    }
+    if (b >= 0) return TimeOffsetError(scan, static_cast<size_t>(b));
   }
   return OkStatus();
 }

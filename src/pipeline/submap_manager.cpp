@@ -1,4 +1,4 @@
-#include "slam_mms/pipeline/submap_manager.hpp"
+#include "pipeline/submap_manager.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -8,12 +8,15 @@
 #include <string>
 
 #include "core/option_error.hpp"
+#include "pipeline/noise_model.hpp"
 #include "pipeline/pose_covariance.hpp"
 #include "slam_mms/backend/submap_graph.hpp"
 #include "slam_mms/core/lie.hpp"
 #include "slam_mms/core/logging.hpp"
 
 namespace slam_mms {
+
+namespace noise = internal::noise;
 namespace {
 
 const SubmapRecord* FindSubmap(const SubmapSource& loc, int32_t id) {
@@ -36,7 +39,7 @@ Eigen::Isometry3d BodyPoseAt(const SubmapRecord& rec, Timestamp t) {
 
 }  // namespace
 
-Status SubmapManager::Options::Validate() const {
+Status Level2Options::Validate() const {
   auto bad = [](const char* f, double v, const char* rule) {
     return internal::OptionError("SubmapManager::Options", f, v, rule);
   };
@@ -63,7 +66,6 @@ Status SubmapManager::Options::Validate() const {
     return bad("attitude_prior_sigma_rad", attitude_prior_sigma_rad, "must be >= 0");
   }
   if (max_iterations < 1) return bad("max_iterations", max_iterations, "must be >= 1");
-  if (num_threads < 1) return bad("num_threads", num_threads, "must be >= 1");
   SLAM_MMS_RETURN_IF_ERROR(extrinsic_calibration.Validate());
   return icp.Validate();
 }
@@ -84,7 +86,10 @@ struct SubmapManager::Impl {
   /// Registers source (frame b) against target (frame a) from T_a_b_init; empty when it fails.
   std::optional<RegistrationResult> Register(const PointCloud& target, const PointCloud& source,
                                              const Eigen::Isometry3d& T_a_b_init) {
-    if (target.size() < 100 || source.size() < 100) return std::nullopt;
+    if (target.size() < noise::kMinRegistrationPoints ||
+        source.size() < noise::kMinRegistrationPoints) {
+      return std::nullopt;
+    }
     if (!icp->SetTarget(target.View()).ok()) return std::nullopt;
     auto r = icp->Align(source.View(), T_a_b_init);
     if (!r.ok() || !r->IsUsable()) return std::nullopt;
@@ -92,8 +97,10 @@ struct SubmapManager::Impl {
   }
 
   Matrix6d RegistrationCovariance(const RegistrationResult& r) const {
-    Matrix6d cov = 100.0 * r.covariance;
-    cov.diagonal() += internal::DiagonalPoseCovariance(0.001, 0.02).diagonal();
+    Matrix6d cov = noise::kMapToMapCovarianceScale * r.covariance;
+    cov.diagonal() += internal::DiagonalPoseCovariance(noise::kMapToMapSigmaFloorRotRad,
+                                                       noise::kMapToMapSigmaFloorTransM)
+                          .diagonal();
     return 0.5 * (cov + cov.transpose());
   }
 
@@ -101,7 +108,7 @@ struct SubmapManager::Impl {
     while (!pending_gnss.empty() && pending_gnss.front().m.stamp < next_start) {
       const PendingGnss g = pending_gnss.front();
       pending_gnss.pop_front();
-      if (g.m.stamp.SecondsSince(rec.start) < -0.15) continue;  // before the first submap
+      if (g.m.stamp.SecondsSince(rec.start) < -noise::kGnssBeforeSubmapS) continue;
       double correlated = 1.0;  // how many fixes share one error (Options::gnss_correlation_s)
       if (opt.gnss_correlation_s > 0.0 && last_gnss_stamp) {
         const double dt =
@@ -156,20 +163,26 @@ struct SubmapManager::Impl {
 SubmapManager::SubmapManager() : impl_(std::make_unique<Impl>()) {}
 SubmapManager::~SubmapManager() = default;
 
-StatusOr<std::unique_ptr<SubmapManager>> SubmapManager::Create(const Options& options) {
+StatusOr<std::unique_ptr<SubmapManager>> SubmapManager::Create(const Options& options,
+                                                               int num_threads) {
   SLAM_MMS_RETURN_IF_ERROR(options.Validate());
+  if (num_threads < 1) {
+    return internal::OptionError("SubmapManager::Create", "num_threads", num_threads,
+                                 "must be >= 1");
+  }
   std::unique_ptr<SubmapManager> mgr(new SubmapManager());
   Impl& m = *mgr->impl_;
   m.opt = options;
   SubmapGraph::Options gopt;
   gopt.max_iterations = options.max_iterations;
-  gopt.num_threads = options.num_threads;
+  gopt.num_threads = num_threads;
   gopt.loop_candidate_distance_m = options.loop_distance_m;
   gopt.loop_min_submap_gap = options.loop_min_submap_gap;
   SLAM_MMS_ASSIGN_OR_RETURN(SubmapGraph graph, SubmapGraph::Create(gopt));
   m.graph = std::make_unique<SubmapGraph>(std::move(graph));
-  PointIcp::Options iopt = options.icp;
-  iopt.num_threads = options.num_threads;
+  PointIcp::Options iopt;
+  static_cast<PointIcpOptions&>(iopt) = options.icp;
+  iopt.num_threads = num_threads;
   SLAM_MMS_ASSIGN_OR_RETURN(PointIcp icp, PointIcp::Create(iopt));
   m.icp = std::make_unique<PointIcp>(std::move(icp));
   return mgr;
@@ -200,7 +213,8 @@ StatusOr<std::vector<SubmapPoseUpdate>> SubmapManager::OnSubmapFinished(
     // yaw free. GNSS positions cannot observe a rotation about the direction of travel.
     const double s_rp = m.opt.attitude_prior_sigma_rad;
     Matrix6d cov = Matrix6d::Zero();
-    cov.diagonal() << s_rp * s_rp, s_rp * s_rp, 1.0, 1e4, 1e4, 1e4;
+    cov.diagonal() << s_rp * s_rp, s_rp * s_rp, noise::kFreeYawVariance,
+        noise::kFreePositionVariance, noise::kFreePositionVariance, noise::kFreePositionVariance;
     Eigen::Isometry3d T_prior = rec->T_world_submap;
     if (pos_attitude && pos_attitude->cov_rotation.allFinite() &&
         pos_attitude->R_world_submap.allFinite()) {
@@ -235,9 +249,10 @@ StatusOr<std::vector<SubmapPoseUpdate>> SubmapManager::OnSubmapFinished(
       auto reg = prev_cloud.ok()
                      ? m.Register(*prev_cloud, rec->registration_cloud, rec->T_prev_this)
                      : std::nullopt;
-      if (reg && reg->inlier_ratio >= 0.3) {
+      if (reg && reg->inlier_ratio >= noise::kMapToMapMinInlierRatio) {
         const Vector6d correction = se3::Log(rec->T_prev_this.inverse() * reg->T_target_source);
-        if (correction.head<3>().norm() < 0.05 && correction.tail<3>().norm() < 1.0) {
+        if (correction.head<3>().norm() < noise::kMapToMapMaxCorrectionRotRad &&
+            correction.tail<3>().norm() < noise::kMapToMapMaxCorrectionTransM) {
           SLAM_MMS_RETURN_IF_ERROR(m.graph->AddRegistrationFactor(
               m.last_id, submap_id, reg->T_target_source, m.RegistrationCovariance(*reg)));
           ++m.stats.map_to_map_accepted;
@@ -247,7 +262,7 @@ StatusOr<std::vector<SubmapPoseUpdate>> SubmapManager::OnSubmapFinished(
   }
   // F_GNSS (eq 24): the fixes the POS used while this submap was mapped.
   const auto& all = submaps.submaps();
-  Timestamp next_start = rec->end.PlusSeconds(0.2);
+  Timestamp next_start = rec->end.PlusSeconds(noise::kGnssAfterLastScanS);
   for (size_t i = 0; i + 1 < all.size(); ++i) {
     if (all[i].id == submap_id) next_start = all[i + 1].start;
   }

@@ -6,9 +6,9 @@
 #include <utility>
 
 #include "slam_mms/core/logging.hpp"
-#include "slam_mms/surfel/cpu_surfel_renderer.hpp"
+#include "surfel/cpu_surfel_renderer.hpp"
 #if SLAM_MMS_HAVE_EGL
-#include "slam_mms/render_egl/egl_surfel_renderer.hpp"
+#include "render_egl/egl_surfel_renderer.hpp"
 #endif
 
 namespace slam_mms {
@@ -46,13 +46,14 @@ bool NoGpuDeviceNode(std::string* reason) {
 #endif  // SLAM_MMS_HAVE_EGL
 
 StatusOr<std::unique_ptr<SurfelRenderer>> MakeSurfelRenderer(const SurfelRendererOptions& options,
-                                                             SurfelRendererBackend backend) {
+                                                             SurfelRendererBackend backend,
+                                                             int num_threads) {
   SLAM_MMS_RETURN_IF_ERROR(options.Validate());
 #if !SLAM_MMS_HAVE_EGL
   if (backend == SurfelRendererBackend::kEgl) {
     return UnavailableError("MakeSurfelRenderer: EGL was not built (SLAM_MMS_WITH_EGL=OFF)");
   }
-  SLAM_MMS_ASSIGN_OR_RETURN(auto cpu_only, CpuSurfelRenderer::Create(options));
+  SLAM_MMS_ASSIGN_OR_RETURN(auto cpu_only, CpuSurfelRenderer::Create(options, num_threads));
   return std::unique_ptr<SurfelRenderer>(std::move(cpu_only));
 #else
   if (backend == SurfelRendererBackend::kAuto) {
@@ -60,7 +61,7 @@ StatusOr<std::unique_ptr<SurfelRenderer>> MakeSurfelRenderer(const SurfelRendere
     if (!g_auto_is_cpu && NoGpuDeviceNode(&g_auto_reason)) g_auto_is_cpu = true;
     if (g_auto_is_cpu) {
       SLAM_MMS_LOG(kInfo) << "surfel renderer: cpu (" << g_auto_reason << ")";
-      SLAM_MMS_ASSIGN_OR_RETURN(auto cpu, CpuSurfelRenderer::Create(options));
+      SLAM_MMS_ASSIGN_OR_RETURN(auto cpu, CpuSurfelRenderer::Create(options, num_threads));
       return std::unique_ptr<SurfelRenderer>(std::move(cpu));
     }
   }
@@ -83,7 +84,7 @@ StatusOr<std::unique_ptr<SurfelRenderer>> MakeSurfelRenderer(const SurfelRendere
     g_auto_is_cpu = true;
     g_auto_reason = std::move(reason);
   }
-  SLAM_MMS_ASSIGN_OR_RETURN(auto cpu, CpuSurfelRenderer::Create(options));
+  SLAM_MMS_ASSIGN_OR_RETURN(auto cpu, CpuSurfelRenderer::Create(options, num_threads));
   return std::unique_ptr<SurfelRenderer>(std::move(cpu));
 #endif
 }

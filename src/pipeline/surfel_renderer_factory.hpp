@@ -11,6 +11,7 @@
 //   Unavailable in a build without the render_egl module, SLAM_MMS_WITH_EGL=OFF, where kAuto is
 //   always the CPU renderer).
 //
+// num_threads: the CPU renderer's threads (the calling thread included); EGL ignores it.
 // Thread safety: the function is thread-safe; the renderer it returns is not (see each class).
 
 #include <memory>
@@ -22,6 +23,6 @@ namespace slam_mms {
 
 StatusOr<std::unique_ptr<SurfelRenderer>> MakeSurfelRenderer(
     const SurfelRendererOptions& options,
-    SurfelRendererBackend backend = SurfelRendererBackend::kAuto);
+    SurfelRendererBackend backend = SurfelRendererBackend::kAuto, int num_threads = 2);
 
 }  // namespace slam_mms

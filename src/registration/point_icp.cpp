@@ -1,4 +1,4 @@
-#include "slam_mms/registration/point_icp.hpp"
+#include "registration/point_icp.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <cmath>
@@ -30,7 +30,7 @@ Status FieldError(const std::string& field, double value, const std::string& rul
 
 }  // namespace
 
-Status PointIcp::Options::Validate() const {
+Status PointIcpOptions::Validate() const {
   if (!(max_correspondence_distance > 0.0))
     return FieldError("max_correspondence_distance", max_correspondence_distance, "must be > 0");
   if (num_normal_neighbors < 3)
@@ -48,6 +48,11 @@ Status PointIcp::Options::Validate() const {
     return FieldError("degeneracy_threshold", degeneracy_threshold, "must be in (0, 1)");
   if (!(source_voxel_size >= 0.0))
     return FieldError("source_voxel_size", source_voxel_size, "must be >= 0");
+  return OkStatus();
+}
+
+Status PointIcp::Options::Validate() const {
+  SLAM_MMS_RETURN_IF_ERROR(PointIcpOptions::Validate());
   if (num_threads < 1 || num_threads > 256)
     return FieldError("num_threads", num_threads, "must be in [1, 256]");
   return OkStatus();

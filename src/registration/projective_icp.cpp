@@ -1,4 +1,4 @@
-#include "slam_mms/registration/projective_icp.hpp"
+#include "registration/projective_icp.hpp"
 
 #include <cmath>
 #include <string>
@@ -155,7 +155,7 @@ Status CheckMap(const VertexNormalMap& m, const char* what) {
 
 }  // namespace
 
-Status ProjectiveIcp::Options::Validate() const {
+Status ProjectiveIcpOptions::Validate() const {
   if (!(max_distance > 0.0)) return FieldError("max_distance", max_distance, "must be > 0");
   if (!(max_angle_deg > 0.0 && max_angle_deg <= 180.0))
     return FieldError("max_angle_deg", max_angle_deg, "must be in (0, 180]");
@@ -169,6 +169,11 @@ Status ProjectiveIcp::Options::Validate() const {
   if (!(degeneracy_threshold > 0.0 && degeneracy_threshold < 1.0))
     return FieldError("degeneracy_threshold", degeneracy_threshold, "must be in (0, 1)");
   if (pixel_stride < 1) return FieldError("pixel_stride", pixel_stride, "must be >= 1");
+  return OkStatus();
+}
+
+Status ProjectiveIcp::Options::Validate() const {
+  SLAM_MMS_RETURN_IF_ERROR(ProjectiveIcpOptions::Validate());
   if (num_threads < 1 || num_threads > 256)
     return FieldError("num_threads", num_threads, "must be in [1, 256]");
   return OkStatus();

@@ -1,4 +1,4 @@
-#include "slam_mms/render_egl/egl_surfel_renderer.hpp"
+#include "render_egl/egl_surfel_renderer.hpp"
 
 #define GL_GLEXT_PROTOTYPES 1
 #include <GL/glcorearb.h>

@@ -1,4 +1,4 @@
-#include "slam_mms/surfel/cpu_surfel_renderer.hpp"
+#include "surfel/cpu_surfel_renderer.hpp"
 
 #include <algorithm>
 #include <atomic>
@@ -6,6 +6,7 @@
 #include <limits>
 #include <utility>
 
+#include "core/option_error.hpp"
 #include "core/worker_pool.hpp"
 #include "surfel/fast_math.hpp"
 
@@ -48,12 +49,12 @@ constexpr int kBinCols = 128;
 }  // namespace
 
 struct CpuSurfelRenderer::Impl {
-  explicit Impl(const SurfelRendererOptions& o)
+  Impl(const SurfelRendererOptions& o, int num_threads)
       : options(o),
         projection(*RangeProjection::Create(o.projection)),
-        pool(o.num_threads),
+        pool(num_threads),
         num_bins((o.projection.cols + kBinCols - 1) / kBinCols),
-        records(static_cast<size_t>(o.num_threads) * static_cast<size_t>(num_bins)) {
+        records(static_cast<size_t>(num_threads) * static_cast<size_t>(num_bins)) {
     depth.resize(static_cast<size_t>(o.projection.rows) * static_cast<size_t>(o.projection.cols));
   }
 
@@ -335,16 +336,22 @@ void CpuSurfelRenderer::Impl::Raster(int b) {
   }
 }
 
-CpuSurfelRenderer::CpuSurfelRenderer() : impl_(std::make_unique<Impl>(SurfelRendererOptions())) {}
+CpuSurfelRenderer::CpuSurfelRenderer()
+    : impl_(std::make_unique<Impl>(SurfelRendererOptions(), 2)) {}
 CpuSurfelRenderer::CpuSurfelRenderer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 CpuSurfelRenderer::~CpuSurfelRenderer() = default;
 CpuSurfelRenderer::CpuSurfelRenderer(CpuSurfelRenderer&&) noexcept = default;
 CpuSurfelRenderer& CpuSurfelRenderer::operator=(CpuSurfelRenderer&&) noexcept = default;
 
 StatusOr<std::unique_ptr<CpuSurfelRenderer>> CpuSurfelRenderer::Create(
-    const SurfelRendererOptions& options) {
+    const SurfelRendererOptions& options, int num_threads) {
   SLAM_MMS_RETURN_IF_ERROR(options.Validate());
-  return std::unique_ptr<CpuSurfelRenderer>(new CpuSurfelRenderer(std::make_unique<Impl>(options)));
+  if (num_threads < 1 || num_threads > 64) {
+    return internal::OptionError("CpuSurfelRenderer::Create", "num_threads", num_threads,
+                                 "must be in [1, 64]");
+  }
+  return std::unique_ptr<CpuSurfelRenderer>(
+      new CpuSurfelRenderer(std::make_unique<Impl>(options, num_threads)));
 }
 
 const RangeProjection& CpuSurfelRenderer::projection() const { return impl_->projection; }

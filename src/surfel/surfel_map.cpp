@@ -60,16 +60,16 @@ Status SurfelMapOptions::Validate() const {
   return OkStatus();
 }
 
-SurfelMap::Impl::Impl(const SurfelMapOptions& o)
+SurfelMap::Impl::Impl(const SurfelMapOptions& o, int num_threads)
     : options(o),
       index(static_cast<float>(o.index_cell_size_m)),
-      own_renderer(std::move(CpuSurfelRenderer::Create(o.renderer).value())),
-      pool(o.renderer.num_threads),
-      removed_per_thread(static_cast<size_t>(o.renderer.num_threads)),
-      moved_per_thread(static_cast<size_t>(o.renderer.num_threads)),
-      integrated_per_thread(static_cast<size_t>(o.renderer.num_threads)),
-      confirmed_per_thread(static_cast<size_t>(o.renderer.num_threads)),
-      projection_blocks(static_cast<size_t>(o.renderer.num_threads)) {
+      own_renderer(std::move(CpuSurfelRenderer::Create(o.renderer, num_threads).value())),
+      pool(num_threads),
+      removed_per_thread(static_cast<size_t>(num_threads)),
+      moved_per_thread(static_cast<size_t>(num_threads)),
+      integrated_per_thread(static_cast<size_t>(num_threads)),
+      confirmed_per_thread(static_cast<size_t>(num_threads)),
+      projection_blocks(static_cast<size_t>(num_threads)) {
   renderer = own_renderer.get();
 }
 
@@ -105,15 +105,19 @@ void SurfelMap::Impl::RemoveSlot(uint32_t id) {
   --num_alive;
 }
 
-SurfelMap::SurfelMap() : impl_(std::make_unique<Impl>(SurfelMapOptions())) {}
+SurfelMap::SurfelMap() : impl_(std::make_unique<Impl>(SurfelMapOptions(), 2)) {}
 SurfelMap::SurfelMap(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 SurfelMap::~SurfelMap() = default;
 SurfelMap::SurfelMap(SurfelMap&&) noexcept = default;
 SurfelMap& SurfelMap::operator=(SurfelMap&&) noexcept = default;
 
-StatusOr<SurfelMap> SurfelMap::Create(const SurfelMapOptions& options) {
+StatusOr<SurfelMap> SurfelMap::Create(const SurfelMapOptions& options, int num_threads) {
   SLAM_MMS_RETURN_IF_ERROR(options.Validate());
-  return SurfelMap(std::make_unique<Impl>(options));
+  if (num_threads < 1 || num_threads > 64) {
+    return internal::OptionError("SurfelMap::Create", "num_threads", num_threads,
+                                 "must be in [1, 64]");
+  }
+  return SurfelMap(std::make_unique<Impl>(options, num_threads));
 }
 
 const SurfelMapOptions& SurfelMap::options() const { return impl_->options; }

@@ -4,15 +4,15 @@
 #include <vector>
 
 #include "core/worker_pool.hpp"
-#include "slam_mms/surfel/cpu_surfel_renderer.hpp"
 #include "slam_mms/surfel/surfel_map.hpp"
+#include "surfel/cpu_surfel_renderer.hpp"
 #include "surfel/surfel_projection_block.hpp"
 #include "surfel/voxel_index.hpp"
 
 namespace slam_mms {
 
 struct SurfelMap::Impl {
-  explicit Impl(const SurfelMapOptions& o);
+  Impl(const SurfelMapOptions& o, int num_threads);
 
   /// Appends or reuses a slot; returns the id.
   uint32_t AddSlot(const Surfel& s);

@@ -11,11 +11,6 @@ Status SurfelRendererOptions::Validate() const {
     os << "SurfelRendererOptions::min_facing_cos = " << min_facing_cos << "; must be in [-1, 1)";
     return InvalidArgumentError(os.str());
   }
-  if (num_threads < 1 || num_threads > 64) {
-    std::ostringstream os;
-    os << "SurfelRendererOptions::num_threads = " << num_threads << "; must be in [1, 64]";
-    return InvalidArgumentError(os.str());
-  }
   return OkStatus();
 }
 

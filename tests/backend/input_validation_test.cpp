@@ -11,7 +11,7 @@
 #include "backend/backend_test_util.hpp"
 #include "backend/pose_prior_factor.hpp"
 #include "backend/relative_pose_factor.hpp"
-#include "slam_mms/backend/sliding_window_graph.hpp"
+#include "backend/sliding_window_graph.hpp"
 #include "slam_mms/backend/submap_graph.hpp"
 
 namespace slam_mms {

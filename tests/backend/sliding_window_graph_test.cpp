@@ -1,6 +1,6 @@
 // SlidingWindowGraph: marginalization against the full batch, consistency checking, IMU
 // preintegration factors through AddCostFunction, covariances, and invalid inputs.
-#include "slam_mms/backend/sliding_window_graph.hpp"
+#include "backend/sliding_window_graph.hpp"
 
 #include <ceres/normal_prior.h>
 #include <gtest/gtest.h>

@@ -1,7 +1,7 @@
 // PosSmoother: the RTS backward pass equals the batch least-squares solution of a linear model, and
 // on a noisy simulated drive with a 60 s GNSS outage the smoothed error inside the outage is far
 // below the forward filter's.
-#include "slam_mms/ins/pos_smoother.hpp"
+#include "ins/pos_smoother.hpp"
 
 #include <gtest/gtest.h>
 

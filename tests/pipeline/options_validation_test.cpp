@@ -35,7 +35,9 @@ const std::vector<BadOption>& Cases() {
       {"max_pos_jump_m", [](O* o) { o->max_pos_jump_m = kNaN; },
        "MappingSystem::Options::max_pos_jump_m = nan; must be > 0"},
       {"num_threads", [](O* o) { o->num_threads = 0; },
-       "MappingSystem::Options::num_threads = 0; must be >= 1"},
+       "MappingSystem::Options::num_threads = 0; must be in [1, 64]"},
+      {"num_threads 65", [](O* o) { o->num_threads = 65; },
+       "MappingSystem::Options::num_threads = 65; must be in [1, 64]"},
       {"gnss_outages",
        [](O* o) {
          o->gnss_outages = {{1.0, 2.0}, {5.0, 0.0}};
@@ -57,8 +59,6 @@ const std::vector<BadOption>& Cases() {
        "Localizer::Options::min_inlier_ratio = 1.5; must be in [0, 1]"},
       {"localizer.registration_voxel_m", [](O* o) { o->localizer.registration_voxel_m = 0.0; },
        "Localizer::Options::registration_voxel_m = 0; must be > 0"},
-      {"localizer.num_threads", [](O* o) { o->localizer.num_threads = 0; },
-       "Localizer::Options::num_threads = 0; must be >= 1"},
       {"localizer.icp.max_distance", [](O* o) { o->localizer.icp.max_distance = -0.5; },
        "ProjectiveIcp::Options::max_distance = -0.5; must be > 0"},
       {"localizer.icp.min_correspondences", [](O* o) { o->localizer.icp.min_correspondences = 3; },

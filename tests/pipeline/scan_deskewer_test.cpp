@@ -1,4 +1,4 @@
-#include "slam_mms/pipeline/scan_deskewer.hpp"
+#include "pipeline/scan_deskewer.hpp"
 
 #include <gtest/gtest.h>
 

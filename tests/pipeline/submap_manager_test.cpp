@@ -1,7 +1,7 @@
 // SubmapManager (level 2) on its own, through a fake SubmapSource: unknown ids, GNSS and map-to-map
 // registration pulling a drifted chain of submaps onto the truth (reading the source only), no
 // solve without a trigger, options validation at Create.
-#include "slam_mms/pipeline/submap_manager.hpp"
+#include "pipeline/submap_manager.hpp"
 
 #include <gtest/gtest.h>
 
@@ -131,7 +131,6 @@ SubmapManager::Options ChainOptions() {
   o.use_loops = false;         // a straight chain: no loop to find
   o.gnss_correlation_s = 0.0;  // independent fixes: the expected accuracy does not hinge on it
   o.icp.max_correspondence_distance = 0.5;  // the clouds are exact: no far associations
-  o.num_threads = 1;
   return o;
 }
 
@@ -157,7 +156,7 @@ TEST(SubmapManagerTest, UnknownSubmapIsNotFoundAndEmptyFinishSolvesNothing) {
 }
 
 TEST(SubmapManagerTest, GnssReturnPullsDriftedChainOntoTruthAndOnlyReadsTheSource) {
-  auto mgr = SubmapManager::Create(ChainOptions());
+  auto mgr = SubmapManager::Create(ChainOptions(), 1);
   ASSERT_TRUE(mgr.ok()) << mgr.status().ToString();
   FakeSource source;
   source.records.push_back(MakeRecord(0));
@@ -255,8 +254,7 @@ TEST(SubmapManagerTest, CreateRejectsBadOptionByName) {
             std::string::npos)
       << mgr.status().message();
   o.loop_distance_m = 25.0;
-  o.num_threads = 0;
-  auto mgr2 = SubmapManager::Create(o);
+  auto mgr2 = SubmapManager::Create(o, 0);
   ASSERT_FALSE(mgr2.ok());
   EXPECT_NE(mgr2.status().message().find("num_threads = 0; must be >= 1"), std::string::npos)
       << mgr2.status().message();

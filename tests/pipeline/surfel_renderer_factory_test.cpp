@@ -5,9 +5,9 @@
 #include <memory>
 #include <string>
 
-#include "slam_mms/surfel/cpu_surfel_renderer.hpp"
+#include "surfel/cpu_surfel_renderer.hpp"
 #if SLAM_MMS_HAVE_EGL
-#include "slam_mms/render_egl/egl_surfel_renderer.hpp"
+#include "render_egl/egl_surfel_renderer.hpp"
 #endif
 
 namespace slam_mms {
@@ -43,8 +43,10 @@ TEST(SurfelRendererFactoryTest, ChoosesCpuOnSoftwareGlAndHonoursExplicitChoice) 
     EXPECT_EQ(forced.status().code(), StatusCode::kUnavailable);
   }
   SurfelRendererOptions bad;
-  bad.num_threads = 0;
+  bad.min_facing_cos = 2.0;
   EXPECT_EQ(MakeSurfelRenderer(bad).status().code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(MakeSurfelRenderer(options, SurfelRendererBackend::kCpu, 0).status().code(),
+            StatusCode::kInvalidArgument);
 }
 
 }  // namespace

@@ -7,9 +7,9 @@
 #include <random>
 
 #include "registration/kitti_frames.hpp"
+#include "registration/point_icp.hpp"
+#include "registration/projective_icp.hpp"
 #include "slam_mms/core/lie.hpp"
-#include "slam_mms/registration/point_icp.hpp"
-#include "slam_mms/registration/projective_icp.hpp"
 #include "testing/test_data.hpp"
 
 namespace slam_mms {

@@ -1,4 +1,4 @@
-#include "slam_mms/registration/point_icp.hpp"
+#include "registration/point_icp.hpp"
 
 #include <gtest/gtest.h>
 

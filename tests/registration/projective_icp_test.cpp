@@ -1,13 +1,13 @@
-#include "slam_mms/registration/projective_icp.hpp"
+#include "registration/projective_icp.hpp"
 
 #include <gtest/gtest.h>
 
 #include <random>
 
+#include "registration/point_icp.hpp"
 #include "registration/synthetic_scene.hpp"
 #include "slam_mms/core/lie.hpp"
-#include "slam_mms/registration/point_icp.hpp"
-#include "slam_mms/surfel/cpu_surfel_renderer.hpp"
+#include "surfel/cpu_surfel_renderer.hpp"
 
 namespace slam_mms {
 namespace {

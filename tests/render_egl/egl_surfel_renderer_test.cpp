@@ -1,4 +1,4 @@
-#include "slam_mms/render_egl/egl_surfel_renderer.hpp"
+#include "render_egl/egl_surfel_renderer.hpp"
 
 #include <gtest/gtest.h>
 
@@ -6,8 +6,8 @@
 #include <cstdio>
 #include <memory>
 
-#include "slam_mms/surfel/cpu_surfel_renderer.hpp"
 #include "slam_mms/surfel/surfel_map.hpp"
+#include "surfel/cpu_surfel_renderer.hpp"
 #include "surfel/synthetic_surfels.hpp"
 
 namespace slam_mms {

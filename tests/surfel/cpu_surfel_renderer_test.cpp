@@ -1,4 +1,4 @@
-#include "slam_mms/surfel/cpu_surfel_renderer.hpp"
+#include "surfel/cpu_surfel_renderer.hpp"
 
 #include <gtest/gtest.h>
 
@@ -12,11 +12,10 @@
 namespace slam_mms {
 namespace {
 
-SurfelRendererOptions SmallOptions(int threads) {
+SurfelRendererOptions SmallOptions() {
   SurfelRendererOptions o;
   o.projection.rows = 16;
   o.projection.cols = 256;
-  o.num_threads = threads;
   return o;
 }
 
@@ -57,7 +56,7 @@ VertexNormalMap BruteForce(const RangeProjection& proj, double min_facing_cos,
 
 TEST(CpuSurfelRendererTest, MatchesBruteForceOracle) {
   for (int threads : {1, 2, 3}) {
-    auto renderer = CpuSurfelRenderer::Create(SmallOptions(threads));
+    auto renderer = CpuSurfelRenderer::Create(SmallOptions(), threads);
     ASSERT_TRUE(renderer.ok()) << renderer.status().ToString();
     const auto surfels = internal::MakeStreetSurfels(3000, 7, 30.0f);
     // Larger discs so they cover the small image's big pixels.
@@ -100,8 +99,7 @@ TEST(CpuSurfelRendererTest, FullSizeImageIsIndependentOfThreadsAndMatchesOracle)
   std::vector<VertexNormalMap> images;
   for (int threads : {1, 2, 3, 4}) {
     SurfelRendererOptions o;
-    o.num_threads = threads;
-    auto renderer = CpuSurfelRenderer::Create(o);
+    auto renderer = CpuSurfelRenderer::Create(o, threads);
     ASSERT_TRUE(renderer.ok());
     VertexNormalMap img;
     ASSERT_TRUE((*renderer)->Render(SurfelRenderInput::Subset(surfels, ids), T_ws, &img).ok());
@@ -234,8 +232,7 @@ TEST(CpuSurfelRendererTest, WrapAroundTheRearSeam) {
 
 TEST(CpuSurfelRendererTest, RejectsBadOptions) {
   SurfelRendererOptions o;
-  o.num_threads = 0;
-  auto r = CpuSurfelRenderer::Create(o);
+  auto r = CpuSurfelRenderer::Create(o, 0);
   ASSERT_FALSE(r.ok());
   EXPECT_NE(r.status().message().find("num_threads"), std::string::npos);
 }

@@ -82,11 +82,10 @@ StatusOr<RunCalibration> CalibrateRunExtrinsics(const DriveReader& reader,
   std::fflush(stdout);
   SLAM_MMS_ASSIGN_OR_RETURN(const OfflinePos pos, ComputeOfflinePos(reader, options));
   ExtrinsicCalibrationOptions co = options.level2.extrinsic_calibration;
-  co.num_threads = options.num_threads;
   RunCalibration out;
   SLAM_MMS_ASSIGN_OR_RETURN(
-      out.result,
-      CalibrateExtrinsics(reader, pos.states, reader.streams().T_body_lidar, 0.0, co, stop));
+      out.result, CalibrateExtrinsics(reader, pos.states, reader.streams().T_body_lidar, 0.0, co,
+                                      stop, options.num_threads));
   const ExtrinsicCalibration& c = out.result;
   out.extrinsics.T_body_lidar = c.T_body_lidar_estimated;
   out.extrinsics.lidar_time_offset_s = c.time_offset_s;

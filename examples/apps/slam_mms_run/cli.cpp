@@ -118,6 +118,8 @@ Options:
                           `localizer: {submap_duration_s: 2.0}` or `level2.use_loops: false`;
                           keys in docs/user_guide.md, "Options"); unknown keys, values of the
                           wrong type and keys given twice are errors naming file:line and key.
+  --preset NAME           the LiDAR: hdl64e (default, KITTI), hdl32e, vlp16, os1_64; sets the
+                          range-image geometry before --config (config key `preset`).
   --dump-config FILE      write the effective options (defaults + --config) as YAML, every key
                           commented with its type and default, then exit (--config reads it back).
   --crs EPSG:nnnn         output CRS of the LAS maps and the <method>_<crs>.csv trajectories
@@ -162,7 +164,7 @@ StatusOr<RunArgs> ParseRunArgs(int argc, const char* const* argv) {
   app.set_help_flag();  // --help is a flag of RunArgs (main prints RunUsage()).
   app.allow_windows_style_options(false);
   std::string kitti_raw, folder, rosbag, extrinsics, out, mode, pos, frames, config, sim_duration,
-      sim_seed, log_level, dump_config, las_tile_size, checkpoint_every;
+      sim_seed, log_level, dump_config, las_tile_size, checkpoint_every, preset;
   std::vector<std::string> outages;
   app.add_flag("-h,--help", args.help);
   app.add_flag("--version", args.version);
@@ -181,6 +183,7 @@ StatusOr<RunArgs> ParseRunArgs(int argc, const char* const* argv) {
   // Repeatable, and several windows may follow one flag.
   app.add_option("--gnss-outage", outages)->expected(1, CLI::detail::expected_max_vector_size);
   app.add_option("--config", config);
+  app.add_option("--preset", preset);
   app.add_option("--dump-config", dump_config);
   app.add_option("--sim-scenario", args.sim_scenario);
   app.add_option("--sim-duration", sim_duration);
@@ -210,6 +213,11 @@ StatusOr<RunArgs> ParseRunArgs(int argc, const char* const* argv) {
   args.extrinsics = extrinsics;
   args.out_dir = out;
   args.config = config;
+  if (given("--preset")) {
+    auto parsed = ParseLidarPreset(preset);
+    if (!parsed.ok()) return InvalidArgumentError("--preset: " + parsed.status().message());
+    args.preset = *parsed;
+  }
   args.dump_config = dump_config;
   if (given("--mode")) {
     MappingMode m;

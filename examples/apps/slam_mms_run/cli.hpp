@@ -10,6 +10,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -18,6 +19,7 @@
 #include "slam_mms/core/status.hpp"
 #include "slam_mms/drive/drive_runner.hpp"
 #include "slam_mms/pipeline/localization_result.hpp"
+#include "slam_mms/pipeline/sensor_presets.hpp"
 
 namespace slam_mms::app {
 
@@ -39,6 +41,8 @@ struct RunArgs {
   /// --gnss-outage windows [start_s, duration_s] relative to the first scan's start.
   std::vector<std::pair<double, double>> gnss_outages;
   std::filesystem::path config;  ///< Empty: none.
+  /// --preset NAME: the LiDAR's range-image geometry (sensor_presets.hpp), before --config.
+  std::optional<LidarPreset> preset;
   /// --sim-scenario: the drive simulated when no input is given (sim::DriveSimulator scenarios:
   /// "demo", about 60 s with four turns and a revisit; "default", 190 s; "long").
   std::string sim_scenario = "demo";

@@ -14,6 +14,7 @@
 #include <set>
 #include <sstream>
 
+#include "slam_mms/pipeline/sensor_presets.hpp"
 #include "slam_mms/version.hpp"
 
 namespace slam_mms::app {
@@ -347,13 +348,10 @@ const std::vector<std::pair<std::string, KeyHandler>>& Handlers() {
     SLAM_MMS_KEY_D("localizer.reg_sigma_floor_rot_rad", o->localizer.reg_sigma_floor_rot_rad);
     SLAM_MMS_KEY_D("localizer.reg_sigma_floor_trans_m", o->localizer.reg_sigma_floor_trans_m);
     SLAM_MMS_KEY_D("localizer.min_inlier_ratio", o->localizer.min_inlier_ratio);
-    SLAM_MMS_KEY_D("localizer.map_voxel_m", o->localizer.map_voxel_m);
-    SLAM_MMS_KEY_D("localizer.map_max_range_m", o->localizer.map_max_range_m);
     SLAM_MMS_KEY_D("localizer.registration_voxel_m", o->localizer.registration_voxel_m);
     SLAM_MMS_KEY_B("localizer.per_submap_surfels", o->localizer.per_submap_surfels);
     SLAM_MMS_KEY_B("localizer.archive_surfels", o->localizer.archive_surfels);
     h.emplace_back("localizer.spill_dir", Path([](Options* o) { return &o->localizer.spill_dir; }));
-    SLAM_MMS_KEY_I("localizer.num_threads", o->localizer.num_threads);
     SLAM_MMS_KEY_I("localizer.surfels.renderer.projection.cols",
                    o->localizer.surfels.renderer.projection.cols);
     h.emplace_back("localizer.renderer",
@@ -391,7 +389,6 @@ const std::vector<std::pair<std::string, KeyHandler>>& Handlers() {
     SLAM_MMS_KEY_D("level2.gnss_correlation_s", o->level2.gnss_correlation_s);
     SLAM_MMS_KEY_D("level2.attitude_prior_sigma_rad", o->level2.attitude_prior_sigma_rad);
     SLAM_MMS_KEY_I("level2.max_iterations", o->level2.max_iterations);
-    SLAM_MMS_KEY_I("level2.num_threads", o->level2.num_threads);
     SLAM_MMS_KEY_B("level2.estimate_extrinsics", o->level2.estimate_extrinsics);
     h.emplace_back(
         "level2.extrinsic_calibration.attitude_reference",
@@ -456,6 +453,7 @@ Status ApplyMapping(const YAML::Node& map, const std::string& prefix, ParseState
       return InvalidArgumentError(where + "expected a key name, got " + NodeKind(key_node));
     }
     const std::string key = prefix.empty() ? key_node.Scalar() : prefix + "." + key_node.Scalar();
+    if (key == "preset") continue;  // applied first (ApplyPreset)
     const KeyHandler* handler = FindHandler(key);
     if (handler == nullptr) {
       if (IsGroup(key)) {
@@ -567,6 +565,23 @@ std::vector<ConfigKeyInfo> ConfigKeys() {
   return keys;
 }
 
+// The top-level `preset` key: the sensor's image geometry, applied before every other key so that
+// the file's own keys override it wherever they stand.
+Status ApplyPreset(const YAML::Node& root, const ParseState& state, Options* options) {
+  const YAML::Node& croot = root;
+  const YAML::Node preset = croot["preset"];
+  if (!preset) return OkStatus();
+  const std::string where = Where(state, preset);
+  if (!preset.IsScalar()) {
+    return InvalidArgumentError(where + "key 'preset': expected a sensor name, got " +
+                                NodeKind(preset));
+  }
+  auto parsed = ParseLidarPreset(preset.Scalar());
+  if (!parsed.ok()) return InvalidArgumentError(where + "key " + parsed.status().message());
+  ApplyLidarPreset(*parsed, options);
+  return OkStatus();
+}
+
 Status ApplyConfigText(const std::string& text, const std::string& file_name, Options* options) {
   YAML::Node root;
   try {
@@ -579,6 +594,7 @@ Status ApplyConfigText(const std::string& text, const std::string& file_name, Op
   state.file_name = file_name;
   if (root.IsMap()) {
     try {
+      SLAM_MMS_RETURN_IF_ERROR(ApplyPreset(root, state, options));
       SLAM_MMS_RETURN_IF_ERROR(ApplyMapping(root, "", &state, options));
     } catch (const YAML::Exception& e) {
       return InvalidArgumentError(file_name + ":" + std::to_string(e.mark.line + 1) + ": " + e.msg);

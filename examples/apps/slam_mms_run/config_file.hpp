@@ -9,6 +9,10 @@
 //     icp: {max_iterations: 30}
 //   level2.use_loops: false
 //
+// A top-level `preset: NAME` (hdl64e, hdl32e, vlp16, os1_64; sensor_presets.hpp) sets the sensor's
+// range-image geometry first, wherever it stands; the file's other keys override it. It is not
+// written back: --dump-config writes the resulting values.
+//
 // Values: numbers (double), integers (int), booleans (true/false/yes/no/on/off/1/0), vectors of
 // three numbers ([0, 0, 0.75]), enum names, paths (a string; ~ or none = unset). The origin keys
 // take ~ for "unset" (the first valid GNSS fix) and go together (all three numbers or none).

@@ -41,6 +41,7 @@
 #include "slam_mms/io/map_io.hpp"
 #include "slam_mms/io/trajectory_io.hpp"
 #include "slam_mms/pipeline/mapping_system.hpp"
+#include "slam_mms/pipeline/sensor_presets.hpp"
 #include "slam_mms/sim/drive_simulator.hpp"
 #include "slam_mms/version.hpp"
 #include "slam_mms_run/calibration.hpp"
@@ -376,6 +377,7 @@ int RunMain(int argc, const char* const* argv) {
   const bool tty = StdoutIsTerminal();
 
   // The config file, then the output options, checked before any work.
+  if (args.preset) ApplyLidarPreset(*args.preset, &options);
   if (!args.config.empty()) {
     const Status s = ApplyConfigFile(args.config, &options);
     if (!s.ok()) return Fail(s, kExitUsage);

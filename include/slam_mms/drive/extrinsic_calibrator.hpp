@@ -102,10 +102,12 @@ const char* ExtrinsicParameterName(int i);
 /// the scans). Starts from (T_body_lidar_initial, time_offset_initial_s), which is also the
 /// prior's mean. `stop` (may be null) is polled between rounds: FailedPrecondition "stopped".
 /// Errors: InvalidArgument (options, non-rigid initial, unordered POS), FailedPrecondition (fewer
-/// than 10 usable scans or no associations).
+/// than 10 usable scans or no associations). `num_threads` (>= 1, the caller included) share
+/// the association and normal-equation work.
 [[nodiscard]] StatusOr<ExtrinsicCalibration> CalibrateExtrinsics(
     const DriveReader& reader, const std::vector<InsState>& pos,
     const Eigen::Isometry3d& T_body_lidar_initial, double time_offset_initial_s,
-    const ExtrinsicCalibrationOptions& options, const std::atomic<bool>* stop = nullptr);
+    const ExtrinsicCalibrationOptions& options, const std::atomic<bool>* stop = nullptr,
+    int num_threads = 2);
 
 }  // namespace slam_mms

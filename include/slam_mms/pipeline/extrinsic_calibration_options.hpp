@@ -95,7 +95,6 @@ struct ExtrinsicCalibrationOptions {
   double systematic_error_m = 0.0005;
   /// Time blocks of the jackknife (>= 2).
   int jackknife_blocks = 8;
-  int num_threads = 2;
   [[nodiscard]] Status Validate() const;
 };
 

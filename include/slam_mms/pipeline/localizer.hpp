@@ -32,16 +32,16 @@
 #include <optional>
 #include <vector>
 
-#include "slam_mms/backend/sliding_window_graph.hpp"
+#include "slam_mms/backend/sliding_window_options.hpp"
 #include "slam_mms/core/point_cloud.hpp"
 #include "slam_mms/core/sensor_data.hpp"
 #include "slam_mms/core/status.hpp"
 #include "slam_mms/ins/imu_preintegration.hpp"
+#include "slam_mms/pipeline/deskew_options.hpp"
 #include "slam_mms/pipeline/localization_result.hpp"
 #include "slam_mms/pipeline/map_point_stamps.hpp"
-#include "slam_mms/pipeline/scan_deskewer.hpp"
 #include "slam_mms/pipeline/submap_source.hpp"
-#include "slam_mms/registration/projective_icp.hpp"
+#include "slam_mms/registration/registration_options.hpp"
 #include "slam_mms/surfel/surfel_map.hpp"
 
 namespace slam_mms {
@@ -60,63 +60,79 @@ struct ScanMotionInput {
   Eigen::Vector3d g_world = Eigen::Vector3d(0.0, 0.0, -9.80665);
 };
 
+/// SurfelMapOptions with level 1's image width (see Level1Options::surfels).
+SurfelMapOptions DefaultLevel1SurfelOptions();
+
+/// Level 1's settings: what MappingSystem::Options::localizer carries (config keys
+/// "localizer.*"). The mode, the map output and the threads belong to the owner
+/// (MappingSystem::Options, or Localizer::Options for a Localizer used on its own), so each is set
+/// in one place.
+struct Level1Options {
+  double submap_duration_s = 5.0;  ///< WT [s], > 0.
+  /// Includes the range-image geometry: 64 x 1024 (an HDL-64E gives ~2000 firings a turn; SuMa
+  /// uses 900 columns for KITTI; 1024 halves the per-pixel work of 2048 and measured as
+  /// accurate on the simulated drive).
+  SurfelMapOptions surfels = DefaultLevel1SurfelOptions();
+  ProjectiveIcpOptions icp;
+  SlidingWindowOptions window;
+  DeskewOptions deskew;
+  ImuPreintegration::Options imu;
+  SurfelRendererBackend renderer = SurfelRendererBackend::kAuto;
+  /// Surfels rendered for registration: those within this radius with confidence above
+  /// min_model_confidence (SuMa: 0, the stable ones; over the first 10 scans the threshold ramps
+  /// up from ln(0.1/0.9) as in SuMa), of the current submap and, while the current one is younger
+  /// than previous_submap_model_s, of the previous one too [m, -, s].
+  double model_radius_m = 60.0;
+  float min_model_confidence = 0.0f;
+  double previous_submap_model_s = 2.5;
+  /// F_Odom noise per scan interval (1 sigma): rotation [rad] and translation [m].
+  double odom_sigma_rot_rad = 0.002;
+  double odom_sigma_trans_m = 0.02;
+  /// LiDAR only: constant-velocity factor noise per scan interval.
+  double cv_sigma_rot_rad = 0.02;
+  double cv_sigma_trans_m = 0.3;
+  /// Registration covariance: max(icp covariance * scale, floor^2) per axis.
+  double reg_cov_scale = 100.0;
+  double reg_sigma_floor_rot_rad = 0.0005;
+  double reg_sigma_floor_trans_m = 0.01;
+  /// Registration rejected when the inlier ratio is below this.
+  double min_inlier_ratio = 0.2;
+  /// Voxel of the per-submap registration cloud (level 2's map-to-map ICP and loops) [m].
+  double registration_voxel_m = 0.5;
+  /// Each submap has its own surfels (the paper's local maps): a scan is fused only into the
+  /// current submap, and registration sees the current and the previous submap. Once a submap is
+  /// two behind, its surfels leave the live map (bounded work and memory on long drives; a
+  /// revisited place is not fused into old surfels but closed as a loop by level 2).
+  bool per_submap_surfels = true;
+  /// Keep the stable surfels (confidence > surfels.confidence_threshold) of the submaps that
+  /// left the live map, for AllSurfels(). Off by default: they grow with the drive (measured
+  /// +0.3 MB a scan, 385 MB after 2 min), while the point-cloud map is the product's output.
+  bool archive_surfels = false;
+  /// Bounded memory on long drives: where finished submaps' point clouds go. Empty (default):
+  /// they stay in memory. Otherwise a private folder is created inside it (an error at Create
+  /// when that fails) and removed with the Localizer; a submap's map cloud is written there when
+  /// the submap is finished and its registration cloud when it is two behind, and read back on
+  /// demand (SubmapCloud: the final map, loop closure). A failed write keeps the cloud in memory
+  /// (logged); nothing is lost.
+  std::filesystem::path spill_dir;
+  /// InvalidArgument naming "Localizer::Options::<field>".
+  [[nodiscard]] Status Validate() const;
+};
+
 class Localizer final : public SubmapSource {
  public:
-  /// SurfelMapOptions with the Localizer's image width (see Options::surfels).
+  /// SurfelMapOptions with the Localizer's image width (DefaultLevel1SurfelOptions()).
   static SurfelMapOptions DefaultSurfelOptions();
-  struct Options {
+  /// Level 1's settings plus what its owner decides: MappingSystem fills these from its own
+  /// Options (mode, map_voxel_m, map_max_range_m, num_threads).
+  struct Options : Level1Options {
     MappingMode mode = MappingMode::kFull;
-    double submap_duration_s = 5.0;  ///< WT [s], > 0.
-    /// Includes the range-image geometry: 64 x 1024 (an HDL-64E gives ~2000 firings a turn; SuMa
-    /// uses 900 columns for KITTI; 1024 halves the per-pixel work of 2048 and measured as
-    /// accurate on the simulated drive).
-    SurfelMapOptions surfels = DefaultSurfelOptions();
-    ProjectiveIcp::Options icp;
-    SlidingWindowGraph::Options window;
-    ScanDeskewer::Options deskew;
-    ImuPreintegration::Options imu;
-    SurfelRendererBackend renderer = SurfelRendererBackend::kAuto;
-    /// Surfels rendered for registration: those within this radius with confidence above
-    /// min_model_confidence (SuMa: 0, the stable ones; over the first 10 scans the threshold ramps
-    /// up from ln(0.1/0.9) as in SuMa), of the current submap and, while the current one is younger
-    /// than previous_submap_model_s, of the previous one too [m, -, s].
-    double model_radius_m = 60.0;
-    float min_model_confidence = 0.0f;
-    double previous_submap_model_s = 2.5;
-    /// F_Odom noise per scan interval (1 sigma): rotation [rad] and translation [m].
-    double odom_sigma_rot_rad = 0.002;
-    double odom_sigma_trans_m = 0.02;
-    /// LiDAR only: constant-velocity factor noise per scan interval.
-    double cv_sigma_rot_rad = 0.02;
-    double cv_sigma_trans_m = 0.3;
-    /// Registration covariance: max(icp covariance * scale, floor^2) per axis.
-    double reg_cov_scale = 100.0;
-    double reg_sigma_floor_rot_rad = 0.0005;
-    double reg_sigma_floor_trans_m = 0.01;
-    /// Registration rejected when the inlier ratio is below this.
-    double min_inlier_ratio = 0.2;
     /// Map output: voxel of the per-submap point cloud [m], points up to this range [m].
     double map_voxel_m = 0.1;
     double map_max_range_m = 60.0;
-    double registration_voxel_m = 0.5;
-    /// Each submap has its own surfels (the paper's local maps): a scan is fused only into the
-    /// current submap, and registration sees the current and the previous submap. Once a submap is
-    /// two behind, its surfels leave the live map (bounded work and memory on long drives; a
-    /// revisited place is not fused into old surfels but closed as a loop by level 2).
-    bool per_submap_surfels = true;
-    /// Keep the stable surfels (confidence > surfels.confidence_threshold) of the submaps that
-    /// left the live map, for AllSurfels(). Off by default: they grow with the drive (measured
-    /// +0.3 MB a scan, 385 MB after 2 min), while the point-cloud map is the product's output.
-    bool archive_surfels = false;
-    /// Bounded memory on long drives: where finished submaps' point clouds go. Empty (default):
-    /// they stay in memory. Otherwise a private folder is created inside it (an error at Create
-    /// when that fails) and removed with the Localizer; a submap's map cloud is written there when
-    /// the submap is finished and its registration cloud when it is two behind, and read back on
-    /// demand (SubmapCloud: the final map, loop closure). A failed write keeps the cloud in memory
-    /// (logged); nothing is lost.
-    std::filesystem::path spill_dir;
-    /// > 1: the submap clouds are accumulated on a background thread while the next scan is
-    /// processed (the same clouds, bit for bit); 1: inline.
+    /// Threads of every level-1 stage (de-skew, range image, ICP, window solve, surfel update,
+    /// CPU render), the calling thread included; > 1 also accumulates the submap clouds on a
+    /// background thread while the next scan is processed (the same clouds, bit for bit).
     int num_threads = 2;
     [[nodiscard]] Status Validate() const;
   };

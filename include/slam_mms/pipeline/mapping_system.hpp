@@ -39,10 +39,10 @@
 #include "slam_mms/core/trajectory.hpp"
 #include "slam_mms/ins/gnss_prior.hpp"
 #include "slam_mms/ins/ins_filter.hpp"
+#include "slam_mms/pipeline/level2_options.hpp"
 #include "slam_mms/pipeline/localization_result.hpp"
 #include "slam_mms/pipeline/localizer.hpp"
 #include "slam_mms/pipeline/map_point_stamps.hpp"
-#include "slam_mms/pipeline/submap_manager.hpp"
 #include "slam_mms/surfel/surfel.hpp"
 
 namespace slam_mms {
@@ -57,9 +57,9 @@ class MappingSystem {
     std::optional<GeodeticPoint> origin;
     /// GNSS outage windows [start_s, start_s + duration_s) relative to the first scan's start.
     std::vector<std::pair<double, double>> gnss_outages;
-    InsFilter::Options ins;         ///< The POS (with ins.gnss: GnssPrior options, lever arm).
-    Localizer::Options localizer;   ///< Level 1.
-    SubmapManager::Options level2;  ///< Level 2 and loop closure.
+    InsFilter::Options ins;   ///< The POS (with ins.gnss: GnssPrior options, lever arm).
+    Level1Options localizer;  ///< Level 1 (the Localizer).
+    Level2Options level2;     ///< Level 2 and loop closure.
     /// Final map: points farther than this from the sensor are not kept [m].
     double map_max_range_m = 60.0;
     /// Final map voxel size [m] (the paper evaluates entropy on a 0.1 m grid).
@@ -70,6 +70,9 @@ class MappingSystem {
     /// IMU preintegration (F_Prein). Only checked where IMU samples cover the interval. > 0.
     double max_pos_jump_m = 0.06;
     double max_pos_jump_rad = 0.006;  ///< See max_pos_jump_m [rad], > 0.
+    /// The one thread count of the system (the calling thread included), in [1, 64]: every stage
+    /// of level 1 (de-skew, range image, ICP, window solve, surfel update, CPU render, background
+    /// submap clouds), level 2's solve and registration, and the final map.
     int num_threads = 2;
     [[nodiscard]] Status Validate() const;
   };
@@ -130,7 +133,7 @@ class MappingSystem {
   /// Scan intervals where the POS jumped (see Options::max_pos_jump_m): F_Prein instead of F_Odom.
   int num_pos_jumps() const;
   /// Level-2 statistics (loops found, solves).
-  SubmapManager::Stats level2_stats() const;
+  Level2Stats level2_stats() const;
   const Options& options() const;
 
  private:

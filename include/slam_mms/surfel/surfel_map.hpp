@@ -103,8 +103,9 @@ class SurfelMap {
  public:
   /// Default options (HDL-64 64 x 2048 images, SuMa's defaults).
   SurfelMap();
-  /// InvalidArgument when options.Validate() fails.
-  static StatusOr<SurfelMap> Create(const SurfelMapOptions& options);
+  /// InvalidArgument when options.Validate() fails or num_threads (the calling thread included;
+  /// the association, update and CPU-render loops) is outside [1, 64].
+  static StatusOr<SurfelMap> Create(const SurfelMapOptions& options, int num_threads = 2);
   ~SurfelMap();
   SurfelMap(SurfelMap&&) noexcept;
   SurfelMap& operator=(SurfelMap&&) noexcept;
@@ -134,7 +135,7 @@ class SurfelMap {
   /// same for the same map history, not sorted.
   void SelectActive(const Eigen::Vector3d& center_world, double radius_m, float min_confidence,
                     std::vector<uint32_t>* ids) const;
-  /// The same ids, the candidates filtered by the map's threads (renderer.num_threads); not to
+  /// The same ids, the candidates filtered by the map's threads (Create's num_threads); not to
   /// be called concurrently with anything else on this map.
   void SelectActive(const Eigen::Vector3d& center_world, double radius_m, float min_confidence,
                     std::vector<uint32_t>* ids);

@@ -38,8 +38,6 @@ struct SurfelRendererOptions {
   RangeProjectionOptions projection;
   /// Draw a surfel only if its normal faces the sensor: n . (-p/|p|) > min_facing_cos (SuMa: 0.01).
   double min_facing_cos = 0.01;
-  /// Threads of CpuSurfelRenderer (the calling thread included); ignored by EGL.
-  int num_threads = 2;
 
   [[nodiscard]] Status Validate() const;
 };

@@ -24,8 +24,10 @@ class CpuSurfelRenderer final : public SurfelRenderer {
  public:
   /// Default options (64 x 2048 HDL-64 image, 2 threads).
   CpuSurfelRenderer();
-  /// Returns InvalidArgument when options.Validate() fails.
-  static StatusOr<std::unique_ptr<CpuSurfelRenderer>> Create(const SurfelRendererOptions& options);
+  /// Returns InvalidArgument when options.Validate() fails or num_threads (the calling thread
+  /// included) is outside [1, 64].
+  static StatusOr<std::unique_ptr<CpuSurfelRenderer>> Create(const SurfelRendererOptions& options,
+                                                             int num_threads = 2);
   ~CpuSurfelRenderer() override;
   CpuSurfelRenderer(CpuSurfelRenderer&&) noexcept;
   CpuSurfelRenderer& operator=(CpuSurfelRenderer&&) noexcept;

@@ -25,6 +25,7 @@
 #include <memory>
 
 #include "slam_mms/core/status.hpp"
+#include "slam_mms/registration/registration_options.hpp"
 #include "slam_mms/registration/registration_result.hpp"
 #include "slam_mms/surfel/range_projection.hpp"
 #include "slam_mms/surfel/vertex_normal_map.hpp"
@@ -33,30 +34,10 @@ namespace slam_mms {
 
 class ProjectiveIcp {
  public:
-  struct Options {
-    /// Euclidean gate between the moved scan vertex and its model vertex [m] (SuMa
-    /// icp-max-distance).
-    double max_distance = 2.0;
-    /// Normal gate [deg] (SuMa icp-max-angle).
-    double max_angle_deg = 30.0;
-    /// Huber threshold on the point-to-plane residual [m] (SuMa factor 0.5); <= 0: no robust loss.
-    double huber_delta = 0.5;
-    int max_iterations = 20;
-    /// Fewer inliers than this in an iteration stops with kTooFewCorrespondences.
-    int min_correspondences = 100;
-    /// Convergence: |omega| of the last update [rad] and |v| [m] both below these.
-    double rotation_eps = 1e-4;
-    double translation_eps = 1e-4;
-    /// Relative eigenvalue (scaled Hessian, see DegeneracyAnalysis) below which a direction is
-    /// reported degenerate.
-    double degeneracy_threshold = 1e-2;
-    /// Degenerate directions keep the initial guess (solution remapping) instead of drifting.
-    bool freeze_degenerate_directions = true;
-    /// Use every k-th valid scan pixel (1: all).
-    int pixel_stride = 1;
-    /// Total threads including the caller.
+  /// The SDK's options (ProjectiveIcpOptions) plus the thread count its owner sets.
+  struct Options : ProjectiveIcpOptions {
+    /// Total threads including the caller, in [1, 256].
     int num_threads = 2;
-
     [[nodiscard]] Status Validate() const;
   };
 

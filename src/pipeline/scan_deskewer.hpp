@@ -19,16 +19,15 @@
 #include "slam_mms/core/point_cloud.hpp"
 #include "slam_mms/core/sensor_data.hpp"
 #include "slam_mms/core/status.hpp"
+#include "slam_mms/pipeline/deskew_options.hpp"
 
 namespace slam_mms {
 
 class ScanDeskewer {
  public:
-  struct Options {
+  /// The SDK's options (DeskewOptions) plus the thread count its owner sets.
+  struct Options : DeskewOptions {
     int num_threads = 2;  ///< Threads for the per-point loop (>= 1).
-    /// Number of interpolation knots over the scan; points between knots interpolate linearly.
-    /// 0 = exact per-point interpolation.
-    int num_knots = 64;
     [[nodiscard]] Status Validate() const;
   };
 
@@ -42,6 +41,11 @@ class ScanDeskewer {
   /// (naming the scan's source and the point).
   Status Deskew(const Scan& scan, const Eigen::Isometry3d& T_bstart_bend,
                 const Eigen::Isometry3d& T_body_lidar, PointCloud* out) const;
+
+  /// The time-offset check of Deskew on its own (InvalidArgument naming the scan and the first
+  /// point outside [-1 ms, duration + 1 ms]), for a caller that must know before it changes any
+  /// state.
+  static Status CheckTimeOffsets(const Scan& scan);
 
   const Options& options() const { return options_; }
 

@@ -44,6 +44,7 @@
 #include <vector>
 
 #include "slam_mms/backend/robust_loss.hpp"
+#include "slam_mms/backend/sliding_window_options.hpp"
 #include "slam_mms/backend/solve_summary.hpp"
 #include "slam_mms/core/lie.hpp"
 #include "slam_mms/core/status.hpp"
@@ -106,23 +107,12 @@ struct ConsistencyStats {
 
 class SlidingWindowGraph {
  public:
-  enum class ExitMode { kMarginalize, kFix };
-  enum class InconsistencyAction { kReject, kDownWeight };
+  using ExitMode = WindowExitMode;
+  using InconsistencyAction = WindowInconsistencyAction;
 
-  struct Options {
-    int window_size = 10;  ///< Non-kept states kept after Solve(), > 0.
-    ExitMode exit_mode = ExitMode::kMarginalize;
-    int max_iterations = 100;          ///< Levenberg-Marquardt iterations (paper: <= 100), > 0.
-    double max_solve_time_s = 1.0;     ///< Wall-time cap of one solve [s], > 0.
-    int num_threads = 2;               ///< Ceres threads, > 0.
-    double function_tolerance = 1e-8;  ///< Ceres relative cost change to stop, > 0.
-    /// Chi-square gate on d2 (6 DoF); 22.46 is the 99.9 % quantile. > 0.
-    double consistency_gate_chi2 = 22.46;
-    InconsistencyAction inconsistency_action = InconsistencyAction::kReject;
-    /// Eigenvalues of the marginal information below this fraction of the largest are dropped
-    /// (directions the removed factors did not observe), >= 0.
-    double marginalization_eigen_threshold = 1e-12;
-
+  /// The SDK's options (SlidingWindowOptions) plus the thread count its owner sets.
+  struct Options : SlidingWindowOptions {
+    int num_threads = 2;  ///< Ceres threads, > 0.
     [[nodiscard]] Status Validate() const;
   };
 

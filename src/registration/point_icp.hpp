@@ -19,38 +19,17 @@
 
 #include "slam_mms/core/point_cloud.hpp"
 #include "slam_mms/core/status.hpp"
+#include "slam_mms/registration/registration_options.hpp"
 #include "slam_mms/registration/registration_result.hpp"
 
 namespace slam_mms {
 
 class PointIcp {
  public:
-  struct Options {
-    /// Associations farther than this (Euclidean, to the nearest target point) are rejected [m].
-    double max_correspondence_distance = 2.0;
-    /// Neighbours used for the PCA normal of each target point (>= 3).
-    int num_normal_neighbors = 10;
-    /// A target normal is valid if its surface variation lambda_min / (l0 + l1 + l2) is below this
-    /// (0: perfect plane, 1/3: isotropic).
-    double max_surface_variation = 0.1;
-    /// Huber threshold on the point-to-plane residual [m]; <= 0 disables the robust loss.
-    double huber_delta = 0.1;
-    int max_iterations = 30;
-    /// Fewer inliers than this in an iteration stops with kTooFewCorrespondences.
-    int min_correspondences = 30;
-    /// Convergence: |omega| of the last update [rad] and |v| [m] both below these.
-    double rotation_eps = 1e-4;
-    double translation_eps = 1e-4;
-    /// Relative eigenvalue (scaled Hessian) below which a direction is reported degenerate.
-    double degeneracy_threshold = 1e-2;
-    /// Degenerate directions keep the initial guess (solution remapping) instead of drifting with
-    /// the noise; the covariance still reports their large variance.
-    bool freeze_degenerate_directions = true;
-    /// Source points are reduced to one per voxel of this size before matching [m]; 0 keeps all.
-    double source_voxel_size = 0.0;
-    /// Total threads used by SetTarget and Align (including the caller).
+  /// The SDK's options (PointIcpOptions) plus the thread count its owner sets.
+  struct Options : PointIcpOptions {
+    /// Total threads used by SetTarget and Align (including the caller), in [1, 256].
     int num_threads = 2;
-
     [[nodiscard]] Status Validate() const;
   };
 

@@ -1,0 +1,68 @@
+#pragma once
+// Level 2's options and statistics (paper §5.2), as the SDK exposes them:
+// MappingSystem::Options::level2 (config keys "level2.*") and MappingSystem::level2_stats(). Level
+// 2 itself (the submap manager on the backend's SubmapGraph) is internal (src/pipeline); its
+// threads are MappingSystem::Options::num_threads.
+//
+// Thread safety: plain values.
+
+#include "slam_mms/core/status.hpp"
+#include "slam_mms/pipeline/extrinsic_calibration_options.hpp"
+#include "slam_mms/registration/registration_options.hpp"
+
+namespace slam_mms {
+
+struct Level2Options {
+  bool enabled = true;
+  bool use_map_to_map = true;
+  bool use_gnss = true;
+  bool use_loops = true;
+  double loop_distance_m = 25.0;  ///< D_thr [m].
+  int loop_min_submap_gap = 6;    ///< Candidates at least this many submaps back.
+  double loop_min_inlier_ratio = 0.5;
+  double loop_max_rms_m = 0.25;
+  double loop_gate_chi2 = 50.0;  ///< Agreement with the graph (loose: drift is expected).
+  double long_outage_s = 10.0;   ///< GNSS back after at least this long: solve.
+  double reckon_sigma_rot_rad = 0.002;
+  double reckon_sigma_trans_m = 0.05;
+  double gnss_sigma_scale = 1.0;  ///< Multiplies the GNSS measurement covariance.
+  /// GNSS errors are time-correlated (an RTK-float or single-point bias wanders over tens of
+  /// seconds), so fixes at 10 Hz are not independent: the fixes within this window [s] count as
+  /// one, i.e. each fix's covariance is multiplied by window / (time since the previous fix),
+  /// at least 1. 0 treats every fix as independent. >= 0. On the default drive with a 60 s
+  /// outage, 10 s brings the largest error in the outage from 0.81 to 0.45 m (docs/results.md).
+  double gnss_correlation_s = 10.0;
+  /// With GNSS: an attitude prior on each submap reference. Where the POS attitude is given
+  /// (OnSubmapFinished's `pos_attitude`), the prior is the POS's roll, pitch and yaw with the
+  /// POS's own covariance: a weaker prior let the GNSS noise rotate the submaps where the
+  /// motion holds no rotation information (standing, stop-and-go: 0.19 deg of pitch error
+  /// against the POS's 0.01 on a sweep drive; a free yaw turned standing drives by 2-13 deg,
+  /// docs/sweep.md). Else level 1's roll and pitch with this sigma [rad] and a free yaw. 0
+  /// disables the prior.
+  double attitude_prior_sigma_rad = 0.0175;
+  int max_iterations = 100;  ///< Levenberg-Marquardt iterations of a level-2 solve, > 0.
+  /// Boresight self-calibration before the run (slam_mms_run --calibrate-extrinsics): the
+  /// LiDAR's extrinsic and clock offset estimated against the offline POS (CalibrateExtrinsics,
+  /// docs/calibration.md) and the run made with the estimate. Read by the hosts that own a
+  /// whole drive (slam_mms_run); a streaming MappingSystem cannot make the second pass and
+  /// ignores it. Off until measured to help (docs/calibration.md).
+  bool estimate_extrinsics = false;
+  /// Its options (its threads are the host's num_threads).
+  ExtrinsicCalibrationOptions extrinsic_calibration;
+  /// Map-to-map registration and loop verification.
+  PointIcpOptions icp;
+  /// InvalidArgument naming "SubmapManager::Options::<field>".
+  [[nodiscard]] Status Validate() const;
+};
+
+/// What level 2 did so far.
+struct Level2Stats {
+  int solves = 0;
+  int loops_tested = 0;
+  int loops_accepted = 0;
+  int map_to_map_accepted = 0;
+  int gnss_factors = 0;
+  double last_solve_ms = 0.0;
+};
+
+}  // namespace slam_mms

@@ -155,6 +155,16 @@ Eigen::Vector3d ImuPreintegration::CorrectedDeltaP(const Eigen::Vector3d& accel_
   return dp_ + dp_dba_ * (accel_bias_mps2 - ba_lin_) + dp_dbg_ * (gyro_bias_radps - bg_lin_);
 }
 
+NavState ImuPreintegration::Predict(const Eigen::Isometry3d& T_frame_body,
+                                    const Eigen::Vector3d& v_frame,
+                                    const Eigen::Vector3d& g_frame) const {
+  NavState s;
+  s.q_world_body = Eigen::Quaterniond(T_frame_body.linear());
+  s.p_world = T_frame_body.translation();
+  s.v_world = v_frame;
+  return Predict(s, g_frame);
+}
+
 NavState ImuPreintegration::Predict(const NavState& state_i, const Eigen::Vector3d& g_world) const {
   NavState s;
   const Eigen::Matrix3d R_i = state_i.q_world_body.toRotationMatrix();

@@ -57,11 +57,7 @@ Prediction Localizer::Impl::Predict(const Scan& scan, const ScanMotionInput& mot
       ImuPreintegration pre(opt.imu, bias_prev.head<3>(), bias_prev.tail<3>());
       const Status st = pre.IntegrateWindow(motion.imu, prev_stamp, scan.stamp_start);
       if (st.ok() && pre.num_samples() > 0) {
-        NavState s;
-        s.q_world_body = Eigen::Quaterniond(T_submap_prev.linear());
-        s.p_world = T_submap_prev.translation();
-        s.v_world = v_submap_prev;
-        const NavState e = pre.Predict(s, g_submap);
+        const NavState e = pre.Predict(T_submap_prev, v_submap_prev, g_submap);
         out.T_submap = MakeIsometry(e.q_world_body, e.p_world);
         out.v_submap = e.v_world;
         out.pre = std::move(pre);
@@ -165,11 +161,7 @@ Eigen::Isometry3d Localizer::Impl::DeskewMotion(const Scan& scan, const ScanMoti
       ImuPreintegration pre(opt.imu, bias_prev.head<3>(), bias_prev.tail<3>());
       if (pre.IntegrateWindow(motion.imu, scan.stamp_start, scan.stamp_end).ok() &&
           pre.num_samples() > 0) {
-        NavState s;
-        s.q_world_body = Eigen::Quaterniond(T_submap_pred.linear());
-        s.p_world = T_submap_pred.translation();
-        s.v_world = v_submap_pred;
-        const NavState e = pre.Predict(s, g_submap);
+        const NavState e = pre.Predict(T_submap_pred, v_submap_pred, g_submap);
         Eigen::Isometry3d T_end = MakeIsometry(e.q_world_body, e.p_world);
         return T_submap_pred.inverse() * T_end;
       }

@@ -86,6 +86,7 @@ StatusOr<std::unique_ptr<MappingSystem>> MappingSystem::Create(const Options& op
   static_cast<DeskewOptions&>(dopt) = options.localizer.deskew;
   dopt.num_threads = options.num_threads;
   SLAM_MMS_ASSIGN_OR_RETURN(ScanDeskewer deskewer, ScanDeskewer::Create(dopt));
+  m.motion_builder = internal::MotionInputBuilder(options.max_pos_jump_m, options.max_pos_jump_rad);
   m.pos_mapper = internal::PosMapper(std::move(deskewer), options.T_body_lidar, options.map_voxel_m,
                                      options.map_max_range_m);
   if (options.mode != MappingMode::kGnssIns) {
@@ -215,7 +216,7 @@ std::vector<GnssAvailabilityInterval> MappingSystem::GnssAvailability() const {
   return impl_->ins.gnss_prior().AvailabilityIntervals();
 }
 
-int MappingSystem::num_pos_jumps() const { return impl_->pos_jumps; }
+int MappingSystem::num_pos_jumps() const { return impl_->motion_builder.num_pos_jumps(); }
 int MappingSystem::num_skipped_scans() const { return impl_->skipped; }
 
 Level2Stats MappingSystem::level2_stats() const {

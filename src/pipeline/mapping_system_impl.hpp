@@ -14,6 +14,7 @@
 #include <utility>
 #include <vector>
 
+#include "pipeline/motion_input_builder.hpp"
 #include "pipeline/pos_mapper.hpp"
 #include "pipeline/scan_deskewer.hpp"
 #include "pipeline/sensor_buffer.hpp"
@@ -39,8 +40,7 @@ struct MappingSystem::Impl {
   std::vector<LocalizationResult> results;
   std::function<void(const LocalizationResult&)> callback;
   int skipped = 0;
-  int pos_jumps = 0;
-  std::optional<InsState> prev_pos;  // the POS state at the previous scan's start
+  internal::MotionInputBuilder motion_builder;  // level 1's motion input (F_Odom/F_Prein/CV)
   bool in_outage = false;
   Timestamp outage_start;
   bool gnss_returned_pending = false;
@@ -61,12 +61,6 @@ struct MappingSystem::Impl {
   bool Ready(const Scan& scan) const;
 
   // ---- per scan and level 2 (mapping_system_scans.cpp) -----------------------------------------
-  /// How far the POS moved from `a` to `b` beyond what its IMU measured between them (position
-  /// [m], rotation [rad]); empty where the IMU does not cover [a, b].
-  std::optional<std::pair<double, double>> PosJump(const InsState& a, const InsState& b) const;
-  /// Whether the POS jumped from the previous scan to this one or within this scan (then its
-  /// relative motion is no odometry measurement).
-  bool PosJumped(const Scan& scan, const InsState& s0, const InsState& s1);
   Status ProcessQueued();
   /// One scan, once the POS covers it: POS-only mapping (gnss_ins) or level 1 and 2.
   Status ProcessScan(const Scan& scan);

@@ -12,42 +12,6 @@
 
 namespace slam_mms {
 
-std::optional<std::pair<double, double>> MappingSystem::Impl::PosJump(const InsState& a,
-                                                                      const InsState& b) const {
-  if (!(a.stamp < b.stamp)) return std::nullopt;
-  const std::vector<ImuSample> imu = input.ImuBetween(a.stamp, b.stamp);
-  ImuPreintegration pre(ImuPreintegration::Options(), a.accel_bias_mps2, a.gyro_bias_radps);
-  if (imu.empty() || !pre.IntegrateWindow(imu, a.stamp, b.stamp).ok()) return std::nullopt;
-  NavState s;
-  s.q_world_body = Eigen::Quaterniond(a.T_world_body.linear());
-  s.p_world = a.T_world_body.translation();
-  s.v_world = a.v_world_mps;
-  const NavState e = pre.Predict(s, ins.gravity_world());
-  const double dp = (e.p_world - b.T_world_body.translation()).norm();
-  const double dr =
-      Eigen::AngleAxisd(e.q_world_body.toRotationMatrix().transpose() * b.T_world_body.linear())
-          .angle();
-  return std::make_pair(dp, dr);
-}
-
-bool MappingSystem::Impl::PosJumped(const Scan& scan, const InsState& s0, const InsState& s1) {
-  for (const auto& [a, b] :
-       {std::make_pair(prev_pos, std::optional<InsState>(s0)),
-        std::make_pair(std::optional<InsState>(s0), std::optional<InsState>(s1))}) {
-    if (!a) continue;
-    const auto jump = PosJump(*a, *b);
-    if (!jump || (jump->first <= opt.max_pos_jump_m && jump->second <= opt.max_pos_jump_rad)) {
-      continue;
-    }
-    ++pos_jumps;
-    SLAM_MMS_LOG(kInfo) << "POS jumped by " << jump->first << " m, " << jump->second
-                        << " rad beyond its IMU before scan '" << scan.source
-                        << "': level 1 uses F_Prein for it, not F_Odom";
-    return true;
-  }
-  return false;
-}
-
 Status MappingSystem::Impl::ProcessQueued() {
   std::deque<Scan>& queue = input.scans();
   while (!queue.empty() && Ready(queue.front())) {
@@ -72,7 +36,7 @@ Status MappingSystem::Impl::ProcessScan(const Scan& scan) {
   }
   last_scan_start = scan.stamp_start;
   have_scan = true;
-  prev_pos = s0.ok() ? std::optional<InsState>(*s0) : std::nullopt;
+  motion_builder.SetPrevious(s0.ok() ? std::optional<InsState>(*s0) : std::nullopt);
   results.push_back(res);
   if (callback) callback(results.back());
   return OkStatus();
@@ -128,38 +92,24 @@ StatusOr<bool> MappingSystem::Impl::MapWithPos(const Scan& scan, const StatusOr<
 
 ScanMotionInput MappingSystem::Impl::MotionInput(const Scan& scan, const StatusOr<InsState>& s0,
                                                  const StatusOr<InsState>& s1) {
-  ScanMotionInput motion;
-  motion.g_world = ins.initialized() ? ins.gravity_world() : Eigen::Vector3d(0, 0, -9.80665);
-  const bool lidar_only = opt.mode == MappingMode::kLidarOnly;
-  if (lidar_only) {
-    motion.type = MotionFactorType::kConstantVelocity;
-    if (results.empty() && s0.ok()) {
-      loc->SetInitialPose(s0->T_world_body);  // the anchor, as SuMa is started at a known pose
-    }
-  } else {
+  internal::MotionInputBuilder::Context context;
+  context.g_world = ins.initialized() ? ins.gravity_world() : Eigen::Vector3d(0, 0, -9.80665);
+  context.g_pos = ins.gravity_world();
+  context.lidar_only = opt.mode == MappingMode::kLidarOnly;
+  if (!context.lidar_only) {
     // An external POS is a solution over GNSS outages too (e.g. a smoothed one): F_Odom from it
     // throughout; the GNSS availability (where fixes are fed) only triggers level 2.
     const bool gnss_available =
         ins.gnss_prior().AvailabilityAt(scan.stamp_start) != GnssAvailability::kOutage;
-    const bool gnss_valid = external_pos || gnss_available;
+    context.gnss_valid = external_pos || gnss_available;
     if (!external_pos || have_gnss_fed) UpdateOutageState(gnss_available, scan.stamp_start);
-    if (gnss_valid && s0.ok() && s1.ok() && !PosJumped(scan, *s0, *s1)) {
-      motion.type = MotionFactorType::kOdometry;
-      motion.T_world_body_pos_start = s0->T_world_body;
-      motion.T_world_body_pos_end = s1->T_world_body;
-      motion.v_world_pos = s0->v_world_mps;
-      motion.pos_bias << s0->accel_bias_mps2, s0->gyro_bias_radps;
-    } else {
-      motion.type = MotionFactorType::kPreintegration;
-      if (s0.ok()) {
-        motion.v_world_pos = s0->v_world_mps;
-        motion.pos_bias << s0->accel_bias_mps2, s0->gyro_bias_radps;
-        if (results.empty()) loc->SetInitialPose(s0->T_world_body);
-      }
-      const Timestamp from = have_scan ? last_scan_start : scan.stamp_start;
-      motion.imu = input.ImuBetween(from, scan.stamp_end);
-      if (motion.imu.empty()) motion.type = MotionFactorType::kConstantVelocity;
-    }
+  }
+  context.imu_from = have_scan ? last_scan_start : scan.stamp_start;
+  ScanMotionInput motion = motion_builder.Build(scan, s0, s1, context, input);
+  // Where level 1 does not start from the POS pose (F_Odom does), the first scan is anchored at
+  // it, as SuMa is started at a known pose.
+  if (results.empty() && s0.ok() && motion.type != MotionFactorType::kOdometry) {
+    loc->SetInitialPose(s0->T_world_body);
   }
   return motion;
 }

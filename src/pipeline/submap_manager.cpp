@@ -96,6 +96,19 @@ struct SubmapManager::Impl {
     return std::move(r).value();
   }
 
+  /// The loop gate (Level2Options::loop_gate_chi2): the squared Mahalanobis distance of the
+  /// loop's correction c of the current estimate of T_cand_this, d2 = c^T (S_loop + S_chain)^-1 c,
+  /// with S_chain the covariance of the sequential chain (reckon, map-to-map) between the two
+  /// submaps: how far the graph's relative pose may have drifted. Empty where the chain has a gap.
+  std::optional<double> LoopMahalanobisSq(int32_t cand, int32_t current,
+                                          const RegistrationResult& reg, const Vector6d& correction,
+                                          const Matrix6d& loop_covariance) const {
+    auto chain = graph->CheckLoop(cand, current, reg.T_target_source, loop_covariance);
+    if (!chain.ok() || !chain->chain_available) return std::nullopt;
+    const Matrix6d S = loop_covariance + chain->chain_covariance;
+    return correction.dot(S.ldlt().solve(correction));
+  }
+
   Matrix6d RegistrationCovariance(const RegistrationResult& r) const {
     Matrix6d cov = noise::kMapToMapCovarianceScale * r.covariance;
     cov.diagonal() += internal::DiagonalPoseCovariance(noise::kMapToMapSigmaFloorRotRad,
@@ -287,18 +300,22 @@ StatusOr<std::vector<SubmapPoseUpdate>> SubmapManager::OnSubmapFinished(
       auto reg = m.Register(*cand_cloud, rec->registration_cloud, T_init);
       if (!reg) continue;
       const Vector6d correction = se3::Log(T_init.inverse() * reg->T_target_source);
+      const Matrix6d loop_covariance = m.RegistrationCovariance(*reg);
+      const std::optional<double> d2 =
+          m.LoopMahalanobisSq(cand->id, submap_id, *reg, correction, loop_covariance);
       const bool verified = reg->inlier_ratio >= m.opt.loop_min_inlier_ratio &&
                             reg->rms_residual_m <= m.opt.loop_max_rms_m &&
-                            correction.squaredNorm() < m.opt.loop_gate_chi2;
+                            (!d2 || *d2 < m.opt.loop_gate_chi2);
       SLAM_MMS_LOG(kDebug) << "level 2: loop " << cand->id << " <-> " << submap_id << ": inliers "
                            << reg->inlier_ratio << ", rms " << reg->rms_residual_m
-                           << ", correction " << correction.tail<3>().norm() << " m -> "
+                           << ", correction " << correction.tail<3>().norm() << " m "
+                           << correction.head<3>().norm() << " rad, d2 "
+                           << (d2 ? std::to_string(*d2) : std::string("- (no chain)")) << " -> "
                            << (verified ? "accepted" : "rejected");
       if (!verified) continue;
-      SLAM_MMS_RETURN_IF_ERROR(m.graph
-                                   ->AddLoopFactor(cand->id, submap_id, reg->T_target_source,
-                                                   m.RegistrationCovariance(*reg))
-                                   .status());
+      SLAM_MMS_RETURN_IF_ERROR(
+          m.graph->AddLoopFactor(cand->id, submap_id, reg->T_target_source, loop_covariance)
+              .status());
       ++m.stats.loops_accepted;
       loop = true;
       break;  // the most compatible (nearest verified) candidate

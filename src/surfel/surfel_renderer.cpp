@@ -2,14 +2,15 @@
 
 #include <sstream>
 
+#include "core/option_error.hpp"
+
 namespace slam_mms {
 
 Status SurfelRendererOptions::Validate() const {
   SLAM_MMS_RETURN_IF_ERROR(projection.Validate().WithContext("SurfelRendererOptions::projection"));
   if (!(min_facing_cos >= -1.0 && min_facing_cos < 1.0)) {
-    std::ostringstream os;
-    os << "SurfelRendererOptions::min_facing_cos = " << min_facing_cos << "; must be in [-1, 1)";
-    return InvalidArgumentError(os.str());
+    return internal::OptionError("SurfelRendererOptions", "min_facing_cos", min_facing_cos,
+                                 "must be in [-1, 1)");
   }
   return OkStatus();
 }

@@ -73,6 +73,14 @@ TEST(ImuPreintegrationTest, PerfectImuReproducesTheTruth) {
   EXPECT_LT((nav_j.p_world - sj.p).norm(), 1e-4);
   EXPECT_LT((nav_j.v_world - sj.v).norm(), 1e-4);
   EXPECT_LT(rot_err, 1e-6);
+  // The pose-and-velocity overload is the same prediction, bit for bit.
+  Eigen::Isometry3d T_i = Eigen::Isometry3d::Identity();
+  T_i.linear() = si.R;
+  T_i.translation() = si.p;
+  const NavState nav_j2 = pre.Predict(T_i, si.v, Eigen::Vector3d(0, 0, -drive.gravity()));
+  EXPECT_EQ(nav_j2.p_world, nav_j.p_world);
+  EXPECT_EQ(nav_j2.v_world, nav_j.v_world);
+  EXPECT_EQ(nav_j2.q_world_body.coeffs(), nav_j.q_world_body.coeffs());
   // Covariance: symmetric positive definite.
   const Matrix9d& C = pre.covariance();
   EXPECT_TRUE(C.isApprox(C.transpose(), 1e-12));

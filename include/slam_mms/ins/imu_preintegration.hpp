@@ -96,6 +96,9 @@ class ImuPreintegration {
   /// the biases at their linearisation point:
   ///   R_j = R_i dR, v_j = v_i + g dt + R_i dv, p_j = p_i + v_i dt + 1/2 g dt^2 + R_i dp.
   NavState Predict(const NavState& state_i, const Eigen::Vector3d& g_world) const;
+  /// The same from a pose T_frame_body and velocity v_frame (in `frame`, gravity g_frame there).
+  NavState Predict(const Eigen::Isometry3d& T_frame_body, const Eigen::Vector3d& v_frame,
+                   const Eigen::Vector3d& g_frame) const;
 
   const Options& options() const { return options_; }
 

@@ -21,8 +21,14 @@ struct Level2Options {
   int loop_min_submap_gap = 6;    ///< Candidates at least this many submaps back.
   double loop_min_inlier_ratio = 0.5;
   double loop_max_rms_m = 0.25;
-  double loop_gate_chi2 = 50.0;  ///< Agreement with the graph (loose: drift is expected).
-  double long_outage_s = 10.0;   ///< GNSS back after at least this long: solve.
+  /// Agreement of a loop with the graph: its correction c of the graph's current relative pose
+  /// must have c^T (S_loop + S_chain)^-1 c below this, S_chain being the covariance of the
+  /// sequential chain (reckon and map-to-map factors) between the two submaps (a chi-square
+  /// with 6 DoF: 22.46 is its 99.9 % quantile). Loose by default: level 1's drift can exceed the
+  /// reckon covariance (reckon_sigma_*), and the gate is there for wrong registrations (metres
+  /// off), not for drift. > 0.
+  double loop_gate_chi2 = 50.0;
+  double long_outage_s = 10.0;  ///< GNSS back after at least this long: solve.
   double reckon_sigma_rot_rad = 0.002;
   double reckon_sigma_trans_m = 0.05;
   double gnss_sigma_scale = 1.0;  ///< Multiplies the GNSS measurement covariance.

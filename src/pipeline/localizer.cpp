@@ -88,6 +88,7 @@ StatusOr<std::unique_ptr<Localizer>> Localizer::Create(const Options& options,
   m.T_body_lidar = T_body_lidar;
   m.T_lidar_body = T_body_lidar.inverse();
   m.use_imu_states = options.mode == MappingMode::kFull;
+  m.motion_prior = internal::MotionPrior(options.imu, m.use_imu_states);
   SLAM_MMS_ASSIGN_OR_RETURN(m.projection,
                             RangeProjection::Create(options.surfels.renderer.projection));
   const int threads = options.num_threads;

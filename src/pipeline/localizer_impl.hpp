@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "backend/sliding_window_graph.hpp"
+#include "pipeline/motion_prior.hpp"
 #include "pipeline/scan_deskewer.hpp"
 #include "pipeline/submap_cloud_builder.hpp"
 #include "pipeline/submap_store.hpp"
@@ -32,9 +33,6 @@ namespace slam_mms {
 
 using Clock = std::chrono::steady_clock;
 
-/// Scan intervals over which LiDAR-only mode measures the velocity it de-skews with.
-constexpr size_t kDeskewVelocityIntervals = 3;
-
 inline double MsSince(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
@@ -45,13 +43,7 @@ std::unique_ptr<ceres::CostFunction> MakeNormalPrior(const Eigen::VectorXd& mean
                                                      const Eigen::VectorXd& sigma);
 }  // namespace internal
 
-/// What ProcessScan predicts for a scan before registering it.
-struct Prediction {
-  Eigen::Isometry3d T_submap = Eigen::Isometry3d::Identity();  ///< T_submap_body.
-  Eigen::Vector3d v_submap = Eigen::Vector3d::Zero();          ///< Body velocity in the submap.
-  MotionFactorType factor = MotionFactorType::kNone;           ///< The motion factor to add.
-  std::optional<ImuPreintegration> pre;  ///< F_Prein's preintegration (kPreintegration).
-};
+using internal::Prediction;
 
 /// One scan's working values, handed from stage to stage of ProcessScan.
 struct ScanStep {
@@ -97,9 +89,8 @@ struct Localizer::Impl {
   Timestamp prev_stamp;
   Eigen::Isometry3d T_submap_prev = Eigen::Isometry3d::Identity();
   int64_t num_processed = 0;
-  /// The last optimized poses (oldest first, the newest is the previous scan's), in the current
-  /// submap's frame: the constant-velocity motion of LiDAR-only mode is taken from them.
-  std::deque<std::pair<Timestamp, Eigen::Isometry3d>> recent;
+  /// Step 2 and the de-skew motion; it keeps the last optimized poses (current submap frame).
+  internal::MotionPrior motion_prior;
   bool has_pos_prev = false;
   Eigen::Isometry3d pos_prev_start = Eigen::Isometry3d::Identity();
   Eigen::Vector3d v_submap_prev = Eigen::Vector3d::Zero();
@@ -133,12 +124,9 @@ struct Localizer::Impl {
   void RecordScan(const Scan& scan, const ScanMotionInput& motion, const ScanStep& step,
                   LocalizationResult* res);
 
-  // ---- the motion prior (localizer_motion.cpp) -------------------------------------------------
-  /// Step 2 of ProcessScan: the pose and velocity predicted for `scan` from the previous one and
-  /// the motion factor that will tie them (F_Odom only where the previous scan had a POS pose).
-  Prediction Predict(const Scan& scan, const ScanMotionInput& motion, bool is_reference,
-                     const Eigen::Isometry3d& T_world_submap,
-                     const Eigen::Vector3d& g_submap) const;
+  // ---- the motion factor (localizer_motion.cpp) ------------------------------------------------
+  /// The previous scan's optimized state, as the motion prior reads it.
+  internal::PreviousScan Previous() const;
 
   /// Step 5 of ProcessScan, the motion factor between the previous scan's state and `cur_state`:
   /// F_Odom (eq 12), F_Prein (eq 14) or the constant-velocity factor. Returns its covariance (the
@@ -147,16 +135,6 @@ struct Localizer::Impl {
                                      const Prediction& pred, double dt,
                                      const Eigen::Isometry3d& T_world_submap,
                                      const Eigen::Vector3d& g_submap);
-
-  /// Body motion over `duration` seconds at the mean velocity of the last `intervals` scan
-  /// intervals (fewer at the start); nullopt before two scans.
-  std::optional<Eigen::Isometry3d> ConstantVelocityMotion(double duration, size_t intervals) const;
-
-  /// De-skew motion over the scan, T_bstart_bend, by the motion source.
-  Eigen::Isometry3d DeskewMotion(const Scan& scan, const ScanMotionInput& motion,
-                                 const Eigen::Isometry3d& T_submap_pred,
-                                 const Eigen::Vector3d& v_submap_pred,
-                                 const Eigen::Vector3d& g_submap) const;
 
   // ---- the submap life cycle (localizer_submaps.cpp) -------------------------------------------
   Status StartWindow(const Eigen::Vector3d& v_submap, const Vector6d& bias);

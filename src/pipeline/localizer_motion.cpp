@@ -1,6 +1,6 @@
-// The motion prior of level 1 (Localizer::Impl): the prediction of a scan's pose, the de-skew
-// motion over the scan, and the motion factor between consecutive scans (F_Odom, eq 12; F_Prein,
-// eq 14; or the constant-velocity factor of LiDAR-only mode).
+// The motion factor of level 1 (Localizer::Impl) between consecutive scans (F_Odom, eq 12;
+// F_Prein, eq 14; or the constant-velocity factor of LiDAR-only mode); the prediction and the
+// de-skew motion are the MotionPrior's (motion_prior.hpp).
 #include <ceres/normal_prior.h>
 
 #include <algorithm>
@@ -16,14 +16,6 @@
 namespace slam_mms {
 
 namespace noise = internal::noise;
-namespace {
-
-/// Pose T scaled along its twist: Exp(s * Log(T)).
-Eigen::Isometry3d ScalePose(const Eigen::Isometry3d& T, double s) {
-  return se3::Exp(s * se3::Log(T));
-}
-
-}  // namespace
 
 namespace internal {
 std::unique_ptr<ceres::CostFunction> MakeNormalPrior(const Eigen::VectorXd& mean,
@@ -37,44 +29,15 @@ std::unique_ptr<ceres::CostFunction> MakeNormalPrior(const Eigen::VectorXd& mean
 
 using internal::MakeNormalPrior;
 
-Prediction Localizer::Impl::Predict(const Scan& scan, const ScanMotionInput& motion,
-                                    bool is_reference, const Eigen::Isometry3d& T_world_submap,
-                                    const Eigen::Vector3d& g_submap) const {
-  Prediction out;
-  out.T_submap = T_submap_prev;
-  out.v_submap = v_submap_prev;
-  out.factor = is_reference ? MotionFactorType::kNone : motion.type;
-  if (!is_reference) {
-    const double dt = scan.stamp_start.SecondsSince(prev_stamp);
-    if (out.factor == MotionFactorType::kOdometry && !has_pos_prev) {
-      out.factor = use_imu_states && !motion.imu.empty() ? MotionFactorType::kPreintegration
-                                                         : MotionFactorType::kConstantVelocity;
-    }
-    if (out.factor == MotionFactorType::kOdometry) {
-      out.T_submap = T_submap_prev * (pos_prev_start.inverse() * motion.T_world_body_pos_start);
-      out.v_submap = T_world_submap.linear().transpose() * motion.v_world_pos;
-    } else if (out.factor == MotionFactorType::kPreintegration) {
-      ImuPreintegration pre(opt.imu, bias_prev.head<3>(), bias_prev.tail<3>());
-      const Status st = pre.IntegrateWindow(motion.imu, prev_stamp, scan.stamp_start);
-      if (st.ok() && pre.num_samples() > 0) {
-        const NavState e = pre.Predict(T_submap_prev, v_submap_prev, g_submap);
-        out.T_submap = MakeIsometry(e.q_world_body, e.p_world);
-        out.v_submap = e.v_world;
-        out.pre = std::move(pre);
-      } else {
-        SLAM_MMS_LOG(kWarning) << "Localizer: scan " << scan.index
-                               << ": IMU does not cover the scan interval (" << st.message()
-                               << "); constant-velocity prediction instead";
-        out.factor = MotionFactorType::kConstantVelocity;
-      }
-    }
-    if (out.factor == MotionFactorType::kConstantVelocity) {
-      // The prediction follows the last interval (it tracks acceleration; registration corrects
-      // it, so it does not feed back like the de-skew).
-      if (auto motion_cv = ConstantVelocityMotion(dt, 1)) out.T_submap = T_submap_prev * *motion_cv;
-    }
-  }
-  return out;
+internal::PreviousScan Localizer::Impl::Previous() const {
+  internal::PreviousScan prev;
+  prev.stamp = prev_stamp;
+  prev.T_submap = T_submap_prev;
+  prev.v_submap = v_submap_prev;
+  prev.bias = bias_prev;
+  prev.has_pos = has_pos_prev;
+  prev.pos_start = pos_prev_start;
+  return prev;
 }
 
 StatusOr<Matrix6d> Localizer::Impl::AddMotionFactor(StateId cur_state,
@@ -136,46 +99,6 @@ StatusOr<Matrix6d> Localizer::Impl::AddMotionFactor(StateId cur_state,
             .status());
   }
   return cov_motion;
-}
-
-std::optional<Eigen::Isometry3d> Localizer::Impl::ConstantVelocityMotion(double duration,
-                                                                         size_t intervals) const {
-  if (recent.size() < 2) return std::nullopt;
-  const size_t first = recent.size() - 1 - std::min(intervals, recent.size() - 1);
-  const auto& [t0, T0] = recent[first];
-  const auto& [t1, T1] = recent.back();
-  const double dt = t1.SecondsSince(t0);
-  if (!(dt > 1e-3)) return std::nullopt;
-  return ScalePose(T0.inverse() * T1, duration / dt);
-}
-
-Eigen::Isometry3d Localizer::Impl::DeskewMotion(const Scan& scan, const ScanMotionInput& motion,
-                                                const Eigen::Isometry3d& T_submap_pred,
-                                                const Eigen::Vector3d& v_submap_pred,
-                                                const Eigen::Vector3d& g_submap) const {
-  const double duration = scan.DurationSeconds();
-  switch (motion.type) {
-    case MotionFactorType::kOdometry:
-      return motion.T_world_body_pos_start.inverse() * motion.T_world_body_pos_end;
-    case MotionFactorType::kPreintegration: {
-      ImuPreintegration pre(opt.imu, bias_prev.head<3>(), bias_prev.tail<3>());
-      if (pre.IntegrateWindow(motion.imu, scan.stamp_start, scan.stamp_end).ok() &&
-          pre.num_samples() > 0) {
-        const NavState e = pre.Predict(T_submap_pred, v_submap_pred, g_submap);
-        Eigen::Isometry3d T_end = MakeIsometry(e.q_world_body, e.p_world);
-        return T_submap_pred.inverse() * T_end;
-      }
-      [[fallthrough]];
-    }
-    default:
-      // The velocity over several scan intervals, not the last one: with the last interval, an
-      // error in the estimated rotation between two scans bends the next de-skewed scan, whose
-      // registration then errs the other way, and the alternating error grows (measured on the
-      // simulated drive: 40 deg of roll error after 8 s). Averaging over
-      // kDeskewVelocityIntervals intervals cancels that alternating mode.
-      return ConstantVelocityMotion(duration, kDeskewVelocityIntervals)
-          .value_or(Eigen::Isometry3d::Identity());
-  }
 }
 
 }  // namespace slam_mms

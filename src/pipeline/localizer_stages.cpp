@@ -57,7 +57,8 @@ ScanStep Localizer::Impl::BeginScan(const Scan& scan, const ScanMotionInput& mot
 void Localizer::Impl::PredictStage(const Scan& scan, const ScanMotionInput& motion, ScanStep* step,
                                    LocalizationResult* res) const {
   const auto t0 = Clock::now();
-  step->pred = Predict(scan, motion, step->is_reference, step->T_world_submap, step->g_submap);
+  step->pred = motion_prior.Predict(scan, motion, step->is_reference, Previous(),
+                                    step->T_world_submap, step->g_submap);
   res->motion_factor = step->pred.factor;
   res->timings.predict_ms = MsSince(t0);
 }
@@ -72,8 +73,8 @@ Status Localizer::Impl::DeskewStage(const Scan& scan, const ScanMotionInput& mot
       motion.type == MotionFactorType::kOdometry) {
     deskew_motion.type = MotionFactorType::kOdometry;  // POS is fine for de-skew even without prev
   }
-  const Eigen::Isometry3d T_bstart_bend =
-      DeskewMotion(scan, deskew_motion, step.pred.T_submap, step.pred.v_submap, step.g_submap);
+  const Eigen::Isometry3d T_bstart_bend = motion_prior.DeskewMotion(
+      scan, deskew_motion, step.pred.T_submap, step.pred.v_submap, step.g_submap, bias_prev);
   SLAM_MMS_RETURN_IF_ERROR(deskewer.Deskew(scan, T_bstart_bend, T_body_lidar, &deskewed));
   range_image->ComputeVertexNormalMap(projection, deskewed.View(), &scan_vnm);
   res->timings.deskew_ms = MsSince(t0);
@@ -242,8 +243,7 @@ void Localizer::Impl::RecordScan(const Scan& scan, const ScanMotionInput& motion
   res->submap_id = current().id;
   res->T_world_body = step.T_world_submap * T_submap_cur;
   ++num_processed;
-  recent.emplace_back(scan.stamp_start, T_submap_cur);
-  while (recent.size() > kDeskewVelocityIntervals + 1) recent.pop_front();
+  motion_prior.Record(scan.stamp_start, T_submap_cur);
   T_submap_prev = T_submap_cur;
   prev_stamp = scan.stamp_start;
   prev_id = step.cur_state;

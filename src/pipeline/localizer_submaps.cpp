@@ -105,7 +105,7 @@ Status Localizer::Impl::CutSubmap(const Scan& scan, const Eigen::Isometry3d& T_w
               cov_prev_this);
   // Re-express the level-1 state in the new frame.
   const Eigen::Isometry3d T_new_old = T_submap_cur.inverse();
-  for (auto& [stamp, T] : recent) T = T_new_old * T;
+  motion_prior.Reframe(T_new_old);
   T_submap_prev = Eigen::Isometry3d::Identity();
   v_submap_prev = T_submap_cur.linear().transpose() * v_submap_prev;
   SLAM_MMS_RETURN_IF_ERROR(StartWindow(v_submap_prev, bias_prev));

@@ -17,8 +17,6 @@ SurfelMapOptions DefaultLevel1SurfelOptions() {
   return o;
 }
 
-SurfelMapOptions Localizer::DefaultSurfelOptions() { return DefaultLevel1SurfelOptions(); }
-
 Status Level1Options::Validate() const {
   auto bad = [](const char* field, double v, const char* rule) {
     return internal::OptionError("Localizer::Options", field, v, rule);

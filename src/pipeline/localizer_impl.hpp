@@ -86,15 +86,12 @@ struct Localizer::Impl {
   StateId next_id = 0;
   StateId ref_id = 0;
   StateId prev_id = 0;
-  Timestamp prev_stamp;
-  Eigen::Isometry3d T_submap_prev = Eigen::Isometry3d::Identity();
   int64_t num_processed = 0;
+  /// The previous scan's optimized state (stamp, pose, velocity, biases, POS pose): what the
+  /// motion prior predicts from and the next scan's factors tie to.
+  internal::PreviousScan prev;
   /// Step 2 and the de-skew motion; it keeps the last optimized poses (current submap frame).
   internal::MotionPrior motion_prior;
-  bool has_pos_prev = false;
-  Eigen::Isometry3d pos_prev_start = Eigen::Isometry3d::Identity();
-  Eigen::Vector3d v_submap_prev = Eigen::Vector3d::Zero();
-  Vector6d bias_prev = Vector6d::Zero();
 
   // Scratch, reused across scans.
   PointCloud deskewed;
@@ -125,8 +122,6 @@ struct Localizer::Impl {
                   LocalizationResult* res);
 
   // ---- the motion factor (localizer_motion.cpp) ------------------------------------------------
-  /// The previous scan's optimized state, as the motion prior reads it.
-  internal::PreviousScan Previous() const;
 
   /// Step 5 of ProcessScan, the motion factor between the previous scan's state and `cur_state`:
   /// F_Odom (eq 12), F_Prein (eq 14) or the constant-velocity factor. Returns its covariance (the

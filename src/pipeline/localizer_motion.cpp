@@ -29,17 +29,6 @@ std::unique_ptr<ceres::CostFunction> MakeNormalPrior(const Eigen::VectorXd& mean
 
 using internal::MakeNormalPrior;
 
-internal::PreviousScan Localizer::Impl::Previous() const {
-  internal::PreviousScan prev;
-  prev.stamp = prev_stamp;
-  prev.T_submap = T_submap_prev;
-  prev.v_submap = v_submap_prev;
-  prev.bias = bias_prev;
-  prev.has_pos = has_pos_prev;
-  prev.pos_start = pos_prev_start;
-  return prev;
-}
-
 StatusOr<Matrix6d> Localizer::Impl::AddMotionFactor(StateId cur_state,
                                                     const ScanMotionInput& motion,
                                                     const Prediction& pred, double dt,
@@ -53,7 +42,7 @@ StatusOr<Matrix6d> Localizer::Impl::AddMotionFactor(StateId cur_state,
     SLAM_MMS_RETURN_IF_ERROR(
         window
             ->AddRelativePoseFactor(prev_id, cur_state,
-                                    pos_prev_start.inverse() * motion.T_world_body_pos_start,
+                                    prev.pos_start.inverse() * motion.T_world_body_pos_start,
                                     cov_motion, FactorKind::kMotion)
             .status());
     if (use_imu_states) {
@@ -93,7 +82,7 @@ StatusOr<Matrix6d> Localizer::Impl::AddMotionFactor(StateId cur_state,
     cov_motion = internal::DiagonalPoseCovariance(opt.cv_sigma_rot_rad, opt.cv_sigma_trans_m);
     SLAM_MMS_RETURN_IF_ERROR(
         window
-            ->AddRelativePoseFactor(prev_id, cur_state, T_submap_prev.inverse() * pred.T_submap,
+            ->AddRelativePoseFactor(prev_id, cur_state, prev.T_submap.inverse() * pred.T_submap,
                                     cov_motion, FactorKind::kMotion,
                                     RobustLoss::Huber(noise::kMotionHuberSigmas))
             .status());

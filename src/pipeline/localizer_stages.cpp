@@ -19,10 +19,10 @@ Status Localizer::Impl::CheckScan(const Scan& scan, const ScanMotionInput& motio
     return InvalidArgumentError("Localizer: scan '" + scan.source + "' (index " +
                                 std::to_string(scan.index) + ") has no points");
   }
-  if (started && !(prev_stamp < scan.stamp_start)) {
+  if (started && !(prev.stamp < scan.stamp_start)) {
     return InvalidArgumentError("Localizer: scan '" + scan.source + "' starts at " +
                                 scan.stamp_start.ToKittiString() +
-                                ", not after the previous scan at " + prev_stamp.ToKittiString());
+                                ", not after the previous scan at " + prev.stamp.ToKittiString());
   }
   if (motion.type == MotionFactorType::kOdometry &&
       (!motion.T_world_body_pos_start.matrix().allFinite() ||
@@ -38,10 +38,10 @@ Status Localizer::Impl::StartFirstSubmap(const Scan& scan, const ScanMotionInput
   StartSubmap(T_world_body0, scan.stamp_start, scan.index, Eigen::Isometry3d::Identity(),
               Matrix6d::Identity() * noise::kAnchorPoseVariance);
   const Eigen::Vector3d v_submap0 = T_world_body0.linear().transpose() * motion.v_world_pos;
-  bias_prev = motion.pos_bias;
-  SLAM_MMS_RETURN_IF_ERROR(StartWindow(v_submap0, bias_prev));
+  prev.bias = motion.pos_bias;
+  SLAM_MMS_RETURN_IF_ERROR(StartWindow(v_submap0, prev.bias));
   started = true;
-  v_submap_prev = v_submap0;
+  prev.v_submap = v_submap0;
   return OkStatus();
 }
 
@@ -57,8 +57,8 @@ ScanStep Localizer::Impl::BeginScan(const Scan& scan, const ScanMotionInput& mot
 void Localizer::Impl::PredictStage(const Scan& scan, const ScanMotionInput& motion, ScanStep* step,
                                    LocalizationResult* res) const {
   const auto t0 = Clock::now();
-  step->pred = motion_prior.Predict(scan, motion, step->is_reference, Previous(),
-                                    step->T_world_submap, step->g_submap);
+  step->pred = motion_prior.Predict(scan, motion, step->is_reference, prev, step->T_world_submap,
+                                    step->g_submap);
   res->motion_factor = step->pred.factor;
   res->timings.predict_ms = MsSince(t0);
 }
@@ -74,7 +74,7 @@ Status Localizer::Impl::DeskewStage(const Scan& scan, const ScanMotionInput& mot
     deskew_motion.type = MotionFactorType::kOdometry;  // POS is fine for de-skew even without prev
   }
   const Eigen::Isometry3d T_bstart_bend = motion_prior.DeskewMotion(
-      scan, deskew_motion, step.pred.T_submap, step.pred.v_submap, step.g_submap, bias_prev);
+      scan, deskew_motion, step.pred.T_submap, step.pred.v_submap, step.g_submap, prev.bias);
   SLAM_MMS_RETURN_IF_ERROR(deskewer.Deskew(scan, T_bstart_bend, T_body_lidar, &deskewed));
   range_image->ComputeVertexNormalMap(projection, deskewed.View(), &scan_vnm);
   res->timings.deskew_ms = MsSince(t0);
@@ -146,7 +146,7 @@ Status Localizer::Impl::RegisterStage(const Scan& scan, ScanStep* step, Localiza
 Status Localizer::Impl::FactorStage(const Scan& scan, const ScanMotionInput& motion, ScanStep* step,
                                     LocalizationResult* res) {
   const auto t0 = Clock::now();
-  const double dt = step->is_reference ? 0.0 : scan.stamp_start.SecondsSince(prev_stamp);
+  const double dt = step->is_reference ? 0.0 : scan.stamp_start.SecondsSince(prev.stamp);
   step->cur_state = ref_id;
   if (!step->is_reference) {
     const StateId cur_state = step->cur_state = next_id++;
@@ -154,7 +154,7 @@ Status Localizer::Impl::FactorStage(const Scan& scan, const ScanMotionInput& mot
     init.T_frame_body = step->T_submap_reg.value_or(step->pred.T_submap);
     if (use_imu_states) {
       init.v_frame = step->pred.v_submap;
-      init.imu_bias = bias_prev;
+      init.imu_bias = prev.bias;
     }
     SLAM_MMS_RETURN_IF_ERROR(window->AddState(cur_state, init));
     SLAM_MMS_ASSIGN_OR_RETURN(
@@ -200,8 +200,8 @@ Status Localizer::Impl::OptimizeStage(const Scan& scan, ScanStep* step, Localiza
     if (use_imu_states) {
       auto v = window->Velocity(step->cur_state);
       auto b = window->ImuBias(step->cur_state);
-      if (v.ok()) v_submap_prev = *v;
-      if (b.ok()) bias_prev = *b;
+      if (v.ok()) prev.v_submap = *v;
+      if (b.ok()) prev.bias = *b;
     }
     auto cov = window->PoseCovariance(step->cur_state);
     res->cov_T_world_body =
@@ -244,13 +244,13 @@ void Localizer::Impl::RecordScan(const Scan& scan, const ScanMotionInput& motion
   res->T_world_body = step.T_world_submap * T_submap_cur;
   ++num_processed;
   motion_prior.Record(scan.stamp_start, T_submap_cur);
-  T_submap_prev = T_submap_cur;
-  prev_stamp = scan.stamp_start;
+  prev.T_submap = T_submap_cur;
+  prev.stamp = scan.stamp_start;
   prev_id = step.cur_state;
-  has_pos_prev = motion.type == MotionFactorType::kOdometry;
-  pos_prev_start = motion.T_world_body_pos_start;
+  prev.has_pos = motion.type == MotionFactorType::kOdometry;
+  prev.pos_start = motion.T_world_body_pos_start;
   if (!use_imu_states && motion.type == MotionFactorType::kOdometry) {
-    v_submap_prev = step.T_world_submap.linear().transpose() * motion.v_world_pos;
+    prev.v_submap = step.T_world_submap.linear().transpose() * motion.v_world_pos;
   }
 }
 

@@ -106,9 +106,9 @@ Status Localizer::Impl::CutSubmap(const Scan& scan, const Eigen::Isometry3d& T_w
   // Re-express the level-1 state in the new frame.
   const Eigen::Isometry3d T_new_old = T_submap_cur.inverse();
   motion_prior.Reframe(T_new_old);
-  T_submap_prev = Eigen::Isometry3d::Identity();
-  v_submap_prev = T_submap_cur.linear().transpose() * v_submap_prev;
-  SLAM_MMS_RETURN_IF_ERROR(StartWindow(v_submap_prev, bias_prev));
+  prev.T_submap = Eigen::Isometry3d::Identity();
+  prev.v_submap = T_submap_cur.linear().transpose() * prev.v_submap;
+  SLAM_MMS_RETURN_IF_ERROR(StartWindow(prev.v_submap, prev.bias));
   clouds->Add(deskewed, scan.cloud.time_offsets_s(), scan.stamp_start.nanoseconds(), scan.index,
               T_body_lidar, opt.map_max_range_m);
   res->new_submap = true;

@@ -13,11 +13,6 @@ PosMapper::PosMapper(ScanDeskewer deskewer, const Eigen::Isometry3d& T_body_lida
 
 StatusOr<LocalizationResult> PosMapper::Map(const Scan& scan, const InsState& s0,
                                             const InsState& s1) {
-  if (!trajectory_.empty() && !(trajectory_.end() < scan.stamp_start)) {
-    return InvalidArgumentError(
-        "PosMapper: scan '" + scan.source + "' at " + scan.stamp_start.ToKittiString() +
-        " is not after the previous scan at " + trajectory_.end().ToKittiString());
-  }
   const Eigen::Isometry3d T_bstart_bend = s0.T_world_body.inverse() * s1.T_world_body;
   SLAM_MMS_RETURN_IF_ERROR(deskewer_.Deskew(scan, T_bstart_bend, T_body_lidar_, &deskewed_));
   const ScanStamp stamp{scan.stamp_start.nanoseconds(), &scan.cloud.time_offsets_s(), scan.index};
@@ -25,7 +20,9 @@ StatusOr<LocalizationResult> PosMapper::Map(const Scan& scan, const InsState& s0
   pose.stamp = scan.stamp_start;
   pose.T_world_body = s0.T_world_body;
   pose.cov_T_world_body = s0.cov_T_world_body;
-  SLAM_MMS_RETURN_IF_ERROR(trajectory_.Add(pose));
+  // The trajectory checks the stamp order; nothing is added to the map before it has.
+  SLAM_MMS_RETURN_IF_ERROR(
+      trajectory_.Add(pose).WithContext("PosMapper: scan '" + scan.source + "'"));
   map_.Add(deskewed_, s0.T_world_body * T_body_lidar_, map_max_range_m_, &stamp);
   LocalizationResult res;
   res.scan_index = scan.index;

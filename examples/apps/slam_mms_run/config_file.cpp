@@ -2,17 +2,12 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include <cerrno>
-#include <charconv>
-#include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <fstream>
-#include <functional>
-#include <map>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "slam_mms/pipeline/sensor_presets.hpp"
 #include "slam_mms/version.hpp"

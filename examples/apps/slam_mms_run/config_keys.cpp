@@ -7,14 +7,10 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <fstream>
 #include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
-#include <set>
 #include <sstream>
-
-#include "slam_mms/version.hpp"
 
 namespace slam_mms::app::config {
 namespace {

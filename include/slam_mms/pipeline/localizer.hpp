@@ -121,8 +121,6 @@ struct Level1Options {
 
 class Localizer final : public SubmapSource {
  public:
-  /// SurfelMapOptions with the Localizer's image width (DefaultLevel1SurfelOptions()).
-  static SurfelMapOptions DefaultSurfelOptions();
   /// Level 1's settings plus what its owner decides: MappingSystem fills these from its own
   /// Options (mode, map_voxel_m, map_max_range_m, num_threads).
   struct Options : Level1Options {

@@ -165,6 +165,10 @@ StatusOr<DriveMeasures> Measure(const std::string& label, const fs::path& dir,
     MappingSystem::Options o = base;
     o.mode = MappingMode::kLidarOnly;
     o.num_threads = args.threads;
+    o.T_body_lidar = reader->streams().T_body_lidar;  // as slam_mms_run does
+    if (reader->streams().t_body_antenna_m) {
+      o.ins.gnss.t_body_antenna = *reader->streams().t_body_antenna_m;
+    }
     DriveRun run = RunDrive(*reader, o);
     if (!run.status.ok()) return run.status.WithContext(label + ": lidar_only");
     origin = run.origin;

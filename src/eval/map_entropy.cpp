@@ -6,30 +6,18 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
-#include <nanoflann.hpp>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "eval/points_kdtree.hpp"
 #include "slam_mms/core/voxel_downsample.hpp"
 
 namespace slam_mms::eval {
 namespace {
 
-// nanoflann dataset adaptor over a vector of float points.
-struct PointsAdaptor {
-  const std::vector<Eigen::Vector3f>& points;
-  size_t kdtree_get_point_count() const { return points.size(); }
-  float kdtree_get_pt(uint32_t idx, size_t dim) const { return points[idx][dim]; }
-  template <class BBox>
-  bool kdtree_get_bbox(BBox& /*bb*/) const {
-    return false;
-  }
-};
-
-using KdTree =
-    nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, PointsAdaptor>,
-                                        PointsAdaptor, 3, uint32_t>;
+using internal::KdTree;
+using internal::PointsAdaptor;
 
 // A nanoflann radius-search result set that accumulates the first and second moments of the
 // neighbours (relative to the query, in double) instead of storing them.

@@ -4,31 +4,21 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <nanoflann.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 #include <utility>
 
 #include "core/option_error.hpp"
 #include "eval/plot_canvas.hpp"
+#include "eval/points_kdtree.hpp"
 
 namespace slam_mms::eval {
 namespace {
 
 constexpr double kTwoPi = 2.0 * M_PI;
 
-struct PointsAdaptor {
-  const std::vector<Eigen::Vector3f>& points;
-  size_t kdtree_get_point_count() const { return points.size(); }
-  float kdtree_get_pt(uint32_t idx, size_t dim) const { return points[idx][dim]; }
-  template <class BBox>
-  bool kdtree_get_bbox(BBox& /*bb*/) const {
-    return false;
-  }
-};
-using KdTree =
-    nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, PointsAdaptor>,
-                                        PointsAdaptor, 3, uint32_t>;
+using internal::KdTree;
+using internal::PointsAdaptor;
 
 double WrapPi(double a) {
   while (a > M_PI) a -= kTwoPi;

@@ -5,6 +5,7 @@
 #include <string_view>
 
 #include "core/option_error.hpp"
+#include "pipeline/scan_deskewer.hpp"
 #include "registration/point_icp.hpp"
 #include "slam_mms/core/lie.hpp"
 #include "slam_mms/core/voxel_downsample.hpp"
@@ -42,24 +43,18 @@ Status IcpOdometryOptions::Validate() const {
 
 namespace {
 
-// The scan's finite points beyond min_range, de-skewed to the scan start with the motion
-// T_start_end over the scan's duration (identity: no de-skew).
-PointCloud Prepare(const Scan& scan, const Eigen::Isometry3d& T_start_end, double duration_s,
-                   double min_range_m) {
+// The scan's finite points beyond min_range (judged on the raw points), de-skewed to the scan start
+// with the lidar motion T_start_end over the sweep (exact per-point interpolation).
+StatusOr<PointCloud> Prepare(const ScanDeskewer& deskewer, const Scan& scan,
+                             const Eigen::Isometry3d& T_start_end, double min_range_m) {
+  PointCloud deskewed;
+  SLAM_MMS_RETURN_IF_ERROR(
+      deskewer.Deskew(scan, T_start_end, Eigen::Isometry3d::Identity(), &deskewed));
   PointCloud out;
   out.reserve(scan.cloud.size());
-  const Vector6d xi = se3::Log(T_start_end);
-  const bool deskew = duration_s > 0.0 && xi.norm() > 0.0;
-  const std::vector<Eigen::Vector3f>& pts = scan.cloud.points();
-  const std::vector<float>& dt = scan.cloud.time_offsets_s();
-  for (size_t i = 0; i < pts.size(); ++i) {
-    if (!pts[i].allFinite() || pts[i].norm() < min_range_m) continue;
-    Eigen::Vector3f p = pts[i];
-    if (deskew && i < dt.size()) {
-      const Eigen::Isometry3d T = se3::Exp(Vector6d((dt[i] / duration_s) * xi));
-      p = (T * p.cast<double>()).cast<float>();
-    }
-    out.Add(p);
+  const std::vector<Eigen::Vector3f>& raw = scan.cloud.points();
+  for (size_t i = 0; i < raw.size(); ++i) {
+    if (raw[i].allFinite() && raw[i].norm() >= min_range_m) out.Add(deskewed.points()[i]);
   }
   return out;
 }
@@ -77,6 +72,16 @@ StatusOr<IcpOdometryResult> RunIcpOdometry(const DriveReader& reader,
   io.source_voxel_size = 0.0;  // reduced here
   io.num_threads = options.num_threads;
   SLAM_MMS_ASSIGN_OR_RETURN(PointIcp icp, PointIcp::Create(io));
+  // Without a velocity yet (the second scan) the prediction can be a metre or more off: that
+  // registration first takes a coarse pass with a wide association gate, against scan 0.
+  PointIcp::Options coarse_options = io;
+  coarse_options.max_correspondence_distance = 4.0 * options.max_correspondence_m;
+  coarse_options.huber_delta = 4.0 * options.huber_delta_m;
+  SLAM_MMS_ASSIGN_OR_RETURN(PointIcp coarse, PointIcp::Create(coarse_options));
+  ScanDeskewer::Options deskew_options;
+  deskew_options.num_knots = 0;  // exact
+  deskew_options.num_threads = options.num_threads;
+  SLAM_MMS_ASSIGN_OR_RETURN(const ScanDeskewer deskewer, ScanDeskewer::Create(deskew_options));
 
   const Eigen::Isometry3d T_body_lidar = reader.streams().T_body_lidar;
   const Eigen::Isometry3d T_lidar_body = T_body_lidar.inverse();
@@ -87,10 +92,6 @@ StatusOr<IcpOdometryResult> RunIcpOdometry(const DriveReader& reader,
   Timestamp prev_start;
   bool have_prev = false;
   bool have_velocity = false;
-  PointCloud prev_target;  // kept for the coarse pass of the second scan only
-  PointIcp::Options coarse_options = io;
-  coarse_options.max_correspondence_distance = 4.0 * options.max_correspondence_m;
-  coarse_options.huber_delta = 4.0 * options.huber_delta_m;
   double rms_sum = 0.0;
   size_t rms_n = 0;
   for (size_t k = 0; k < reader.NumScans(); ++k) {
@@ -109,20 +110,17 @@ StatusOr<IcpOdometryResult> RunIcpOdometry(const DriveReader& reader,
       if (!options.deskew || !(dt_s > 0.0)) return Eigen::Isometry3d(Eigen::Isometry3d::Identity());
       return se3::Exp(Vector6d(se3::Log(T) * (duration_s / dt_s)));
     };
-    PointCloud prepared = Prepare(*scan, sweep_motion(T_rel), duration_s, options.min_range_m);
+    SLAM_MMS_ASSIGN_OR_RETURN(PointCloud prepared,
+                              Prepare(deskewer, *scan, sweep_motion(T_rel), options.min_range_m));
     if (prepared.size() < 100) {
       return DataLossError("IcpOdometry: scan " + std::to_string(k) + " (" + scan->source +
                            ") has " + std::to_string(prepared.size()) +
                            " usable points; at least 100 are needed");
     }
     if (have_prev) {
-      // Without a velocity yet (the second scan) the prediction can be a metre or more off: a
-      // coarse pass with a wide association gate first.
       if (!have_velocity) {
         SLAM_MMS_ASSIGN_OR_RETURN(const PointCloud source,
                                   VoxelDownsample(prepared, options.source_voxel_m));
-        SLAM_MMS_ASSIGN_OR_RETURN(PointIcp coarse, PointIcp::Create(coarse_options));
-        SLAM_MMS_RETURN_IF_ERROR(coarse.SetTarget(prev_target.View()));
         StatusOr<RegistrationResult> c = coarse.Align(source.View(), T_rel);
         if (c.ok() && c->IsUsable()) T_rel = c->T_target_source;
       }
@@ -132,7 +130,8 @@ StatusOr<IcpOdometryResult> RunIcpOdometry(const DriveReader& reader,
       bool usable = false;
       for (int pass = 0; pass < options.deskew_passes; ++pass) {
         if (pass > 0) {
-          prepared = Prepare(*scan, sweep_motion(T_rel), duration_s, options.min_range_m);
+          SLAM_MMS_ASSIGN_OR_RETURN(
+              prepared, Prepare(deskewer, *scan, sweep_motion(T_rel), options.min_range_m));
         }
         SLAM_MMS_ASSIGN_OR_RETURN(const PointCloud source,
                                   VoxelDownsample(prepared, options.source_voxel_m));
@@ -161,7 +160,9 @@ StatusOr<IcpOdometryResult> RunIcpOdometry(const DriveReader& reader,
     SLAM_MMS_RETURN_IF_ERROR(
         icp.SetTarget(target.View())
             .WithContext("IcpOdometry: scan " + std::to_string(k) + " as target"));
-    if (!have_velocity) prev_target = target;
+    if (!have_prev) {
+      SLAM_MMS_RETURN_IF_ERROR(coarse.SetTarget(target.View()));
+    }
     prev_start = scan->stamp_start;
     have_prev = true;
   }

@@ -17,59 +17,8 @@ namespace slam_mms::eval {
 namespace {
 
 using internal::KdTree;
+using internal::MomentAccumulator;
 using internal::PointsAdaptor;
-
-// A nanoflann radius-search result set that accumulates the first and second moments of the
-// neighbours (relative to the query, in double) instead of storing them.
-class MomentAccumulator {
- public:
-  MomentAccumulator(float radius_sq, const Eigen::Vector3f& query,
-                    const std::vector<Eigen::Vector3f>& points)
-      : radius_sq_(radius_sq), query_(query), points_(points) {}
-
-  void init() { clear(); }
-  void clear() {
-    n_ = 0;
-    s_.setZero();
-    xx_ = xy_ = xz_ = yy_ = yz_ = zz_ = 0.0;
-  }
-  size_t size() const { return n_; }
-  bool full() const { return true; }
-  float worstDist() const { return radius_sq_; }
-  bool addPoint(float dist_sq, uint32_t index) {
-    if (dist_sq < radius_sq_) {
-      const Eigen::Vector3d d = (points_[index] - query_).cast<double>();
-      s_ += d;
-      xx_ += d.x() * d.x();
-      xy_ += d.x() * d.y();
-      xz_ += d.x() * d.z();
-      yy_ += d.y() * d.y();
-      yz_ += d.y() * d.z();
-      zz_ += d.z() * d.z();
-      ++n_;
-    }
-    return true;
-  }
-
-  /// Maximum-likelihood covariance (divided by N) of the accumulated neighbours.
-  Eigen::Matrix3d Covariance() const {
-    const double inv_n = 1.0 / static_cast<double>(n_);
-    const Eigen::Vector3d m = s_ * inv_n;
-    Eigen::Matrix3d c;
-    c << xx_, xy_, xz_, xy_, yy_, yz_, xz_, yz_, zz_;
-    c *= inv_n;
-    c -= m * m.transpose();
-    return c;
-  }
-
- private:
-  float radius_sq_;
-  Eigen::Vector3f query_;
-  const std::vector<Eigen::Vector3f>& points_;
-  size_t n_ = 0;
-  Eigen::Vector3d s_ = Eigen::Vector3d::Zero();
-  double xx_ = 0, xy_ = 0, xz_ = 0, yy_ = 0, yz_ = 0, zz_ = 0;
-};
 
 // |a - b|^2 as nanoflann's L2_Simple_Adaptor computes it (float, dimensions in order), so that
 // the grid search below keeps exactly the neighbours the k-d tree keeps.

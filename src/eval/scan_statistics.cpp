@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 #include <utility>
@@ -18,6 +19,7 @@ namespace {
 constexpr double kTwoPi = 2.0 * M_PI;
 
 using internal::KdTree;
+using internal::MomentAccumulator;
 using internal::PointsAdaptor;
 
 double WrapPi(double a) {
@@ -152,15 +154,27 @@ Status ScanStatistics::Add(const ScanStatistics& o) {
   return normal_abs_z.Merge(o.normal_abs_z);
 }
 
-std::vector<int> RecoverRings(const PointCloud& scan, int num_beams) {
-  const std::vector<Eigen::Vector3f>& pts = scan.points();
-  std::vector<double> az;
-  std::vector<size_t> idx;
-  az.reserve(pts.size());
-  idx.reserve(pts.size());
+namespace {
+
+// Azimuth atan2(y, x) of every point; NaN where the point is not finite or on the z axis.
+std::vector<double> Azimuths(const std::vector<Eigen::Vector3f>& pts) {
+  std::vector<double> az(pts.size(), std::numeric_limits<double>::quiet_NaN());
   for (size_t i = 0; i < pts.size(); ++i) {
     if (!Finite(pts[i]) || (pts[i].x() == 0.0f && pts[i].y() == 0.0f)) continue;
-    az.push_back(std::atan2(static_cast<double>(pts[i].y()), static_cast<double>(pts[i].x())));
+    az[i] = std::atan2(static_cast<double>(pts[i].y()), static_cast<double>(pts[i].x()));
+  }
+  return az;
+}
+
+// RecoverRings on the points' azimuths (NaN: no ring).
+std::vector<int> RingsFromAzimuth(const std::vector<double>& az_all, int num_beams) {
+  std::vector<double> az;
+  std::vector<size_t> idx;
+  az.reserve(az_all.size());
+  idx.reserve(az_all.size());
+  for (size_t i = 0; i < az_all.size(); ++i) {
+    if (std::isnan(az_all[i])) continue;
+    az.push_back(az_all[i]);
     idx.push_back(i);
   }
   if (az.size() < static_cast<size_t>(10 * num_beams)) return {};
@@ -175,7 +189,7 @@ std::vector<int> RecoverRings(const PointCloud& scan, int num_beams) {
   // starts when the progress passes 2 pi k (a small margin for ring starts that jitter by a few
   // firings).
   constexpr double kMargin = 0.05;
-  std::vector<int> ring(pts.size(), -1);
+  std::vector<int> ring(az_all.size(), -1);
   double progress = 0.0;
   ring[idx[0]] = 0;
   int max_ring = 0;
@@ -192,6 +206,12 @@ std::vector<int> RecoverRings(const PointCloud& scan, int num_beams) {
   return ring;
 }
 
+}  // namespace
+
+std::vector<int> RecoverRings(const PointCloud& scan, int num_beams) {
+  return RingsFromAzimuth(Azimuths(scan.points()), num_beams);
+}
+
 StatusOr<ScanStatistics> ComputeScanStatistics(const PointCloud& scan,
                                                const ScanStatisticsOptions& options) {
   SLAM_MMS_RETURN_IF_ERROR(options.Validate());
@@ -201,16 +221,19 @@ StatusOr<ScanStatistics> ComputeScanStatistics(const PointCloud& scan,
   const std::vector<float>& inten = scan.intensities();
   std::vector<Eigen::Vector3f> finite;
   finite.reserve(pts.size());
+  std::vector<double> range(pts.size(), std::numeric_limits<double>::quiet_NaN());
   for (size_t i = 0; i < pts.size(); ++i) {
     if (!Finite(pts[i])) continue;
     finite.push_back(pts[i]);
-    s.range_m.Add(pts[i].norm());
+    range[i] = pts[i].norm();
+    s.range_m.Add(range[i]);
     if (i < inten.size()) s.intensity.Add(inten[i]);
   }
   s.points = finite.size();
 
   // Rings: share per ring, range-image fill, mixed pixels along each ring.
-  const std::vector<int> ring = RecoverRings(scan, options.num_beams);
+  const std::vector<double> az = Azimuths(pts);
+  const std::vector<int> ring = RingsFromAzimuth(az, options.num_beams);
   if (!ring.empty()) {
     s.rings_recovered_scans = 1;
     int rings = 0;
@@ -221,8 +244,7 @@ StatusOr<ScanStatistics> ComputeScanStatistics(const PointCloud& scan,
     for (size_t i = 0; i < pts.size(); ++i) {
       if (ring[i] < 0) continue;
       s.ring_share.Add(ring[i]);
-      const double a = std::atan2(static_cast<double>(pts[i].y()), static_cast<double>(pts[i].x()));
-      const int c = std::clamp(static_cast<int>((a + M_PI) / kTwoPi * cols), 0, cols - 1);
+      const int c = std::clamp(static_cast<int>((az[i] + M_PI) / kTwoPi * cols), 0, cols - 1);
       cell[static_cast<size_t>(ring[i]) * cols + c] = 1;
       members[static_cast<size_t>(ring[i])].push_back(i);
     }
@@ -235,19 +257,16 @@ StatusOr<ScanStatistics> ComputeScanStatistics(const PointCloud& scan,
     // but smooth surface (a wall at grazing incidence) has large steps all along and is not one.
     const double tol = options.mixed_pixel_min_offset_m;
     for (const std::vector<size_t>& m : members) {
+      // close[j]: points j and j + 1 of the ring are neighbours.
+      std::vector<uint8_t> close(m.size(), 0);
+      for (size_t j = 0; j + 1 < m.size(); ++j) {
+        close[j] = std::abs(WrapPi(az[m[j + 1]] - az[m[j]])) <= kMaxNeighbourStep;
+      }
       for (size_t k = 2; k + 2 < m.size(); ++k) {
-        bool adjacent = true;
-        for (size_t j = k - 2; j < k + 2; ++j) {
-          const Eigen::Vector3f &u = pts[m[j]], &v = pts[m[j + 1]];
-          if (std::abs(WrapPi(std::atan2(v.y(), v.x()) - std::atan2(u.y(), u.x()))) >
-              kMaxNeighbourStep) {
-            adjacent = false;
-          }
-        }
-        if (!adjacent) continue;
+        if (!(close[k - 2] && close[k - 1] && close[k] && close[k + 1])) continue;
         ++s.mixed_pixel_candidates;
-        const double r0 = pts[m[k - 2]].norm(), ra = pts[m[k - 1]].norm(), rb = pts[m[k]].norm(),
-                     rc = pts[m[k + 1]].norm(), r4 = pts[m[k + 2]].norm();
+        const double r0 = range[m[k - 2]], ra = range[m[k - 1]], rb = range[m[k]],
+                     rc = range[m[k + 1]], r4 = range[m[k + 2]];
         const double near = std::min(ra, rc), far = std::max(ra, rc);
         if (far - near > options.mixed_pixel_min_gap_m && std::abs(r0 - ra) < tol &&
             std::abs(r4 - rc) < tol && rb > near + tol && rb < far - tol) {
@@ -264,26 +283,16 @@ StatusOr<ScanStatistics> ComputeScanStatistics(const PointCloud& scan,
     tree.buildIndex();
     const float r2 =
         static_cast<float>(options.neighborhood_radius_m * options.neighborhood_radius_m);
-    std::vector<std::pair<uint32_t, float>> found;
     const nanoflann::SearchParams params(32, 0.0f, /*sorted=*/false);
     for (size_t q = 0; q < finite.size(); q += static_cast<size_t>(options.query_stride)) {
       ++s.pca_queries;
-      found.clear();
-      tree.radiusSearch(finite[q].data(), r2, found, params);
-      if (found.size() < static_cast<size_t>(options.min_neighbors)) {
+      MomentAccumulator acc(r2, finite[q], finite);
+      tree.radiusSearchCustomCallback(finite[q].data(), acc, params);
+      if (acc.size() < static_cast<size_t>(options.min_neighbors)) {
         ++s.class_other;
         continue;
       }
-      Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-      for (const auto& f : found) mean += finite[f.first].cast<double>();
-      mean /= static_cast<double>(found.size());
-      Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-      for (const auto& f : found) {
-        const Eigen::Vector3d d = finite[f.first].cast<double>() - mean;
-        cov += d * d.transpose();
-      }
-      cov /= static_cast<double>(found.size());
-      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(acc.Covariance());
       const Eigen::Vector3d l = eig.eigenvalues().cwiseMax(0.0);  // ascending
       const double total = l.sum();
       if (!(total > 0.0)) {

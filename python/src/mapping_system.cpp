@@ -129,6 +129,8 @@ void RegisterMappingSystem(py::module_& m) {
       .def_readonly("consistency_mahalanobis_sq", &LR::consistency_mahalanobis_sq)
       .def_readonly("num_surfels", &LR::num_surfels)
       .def_readonly("num_model_surfels", &LR::num_model_surfels)
+      .def_readonly("num_moving_objects", &LR::num_moving_objects)
+      .def_readonly("num_moving_pixels", &LR::num_moving_pixels)
       .def_property_readonly("timings_ms",
                              [](const LR& r) {
                                py::dict d;

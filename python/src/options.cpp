@@ -12,6 +12,7 @@
 #include "slam_mms/ins/imu_preintegration.hpp"
 #include "slam_mms/ins/ins_filter.hpp"
 #include "slam_mms/pipeline/deskew_options.hpp"
+#include "slam_mms/pipeline/dynamic_object_options.hpp"
 #include "slam_mms/pipeline/level2_options.hpp"
 #include "slam_mms/pipeline/localizer.hpp"
 #include "slam_mms/pipeline/mapping_system.hpp"
@@ -261,6 +262,19 @@ void RegisterOptions(py::module_& m) {
       .Validated()
       .Done();
 
+  using DO = DynamicObjectOptions;
+  OptionsClass<DO>(m, "DynamicObjectOptions",
+                   "How level 1 keeps moving objects out of registration and the maps.")
+      .Field("enabled", &DO::enabled, "")
+      .Field("min_object_pixels", &DO::min_object_pixels, "")
+      .Field("segmentation_angle_deg", &DO::segmentation_angle_deg, "[deg]")
+      .Field("ground_max_tilt_deg", &DO::ground_max_tilt_deg, "[deg]")
+      .Field("min_residual_m", &DO::min_residual_m, "[m]")
+      .Field("residual_sigmas", &DO::residual_sigmas, "")
+      .Field("min_outlier_fraction", &DO::min_outlier_fraction, "")
+      .Validated()
+      .Done();
+
   using IP = ImuPreintegration::Options;
   OptionsClass<IP>(m, "ImuPreintegrationOptions", "IMU preintegration noise (F_Prein).")
       .Field("gyro_noise_density", &IP::gyro_noise_density, "[rad/s/sqrt(Hz)]")
@@ -279,6 +293,7 @@ void RegisterOptions(py::module_& m) {
       .Field("icp", &LO::icp, "ProjectiveIcpOptions")
       .Field("window", &LO::window, "SlidingWindowOptions")
       .Field("deskew", &LO::deskew, "DeskewOptions")
+      .Field("dynamic", &LO::dynamic, "DynamicObjectOptions")
       .Field("imu", &LO::imu, "ImuPreintegrationOptions")
       .Field("renderer", &LO::renderer, "SurfelRendererBackend")
       .Field("model_radius_m", &LO::model_radius_m, "[m]")

@@ -52,6 +52,7 @@ Status Level1Options::Validate() const {
   SLAM_MMS_RETURN_IF_ERROR(icp.Validate());
   SLAM_MMS_RETURN_IF_ERROR(window.Validate());
   SLAM_MMS_RETURN_IF_ERROR(deskew.Validate());
+  SLAM_MMS_RETURN_IF_ERROR(dynamic.Validate());
   SLAM_MMS_RETURN_IF_ERROR(imu.Validate());
   return OkStatus();
 }
@@ -105,6 +106,8 @@ StatusOr<std::unique_ptr<Localizer>> Localizer::Create(const Options& options,
   static_cast<ProjectiveIcpOptions&>(icp) = options.icp;
   icp.num_threads = threads;
   SLAM_MMS_ASSIGN_OR_RETURN(m.icp, ProjectiveIcp::Create(m.projection, icp));
+  m.dynamic = internal::DynamicObjectFilter(options.dynamic, m.projection, options.icp.max_distance,
+                                            options.icp.max_angle_deg);
   m.clouds = std::make_unique<internal::SubmapCloudBuilder>(
       options.map_voxel_m, options.registration_voxel_m, /*asynchronous=*/options.num_threads > 1);
   m.range_image = std::make_unique<internal::ParallelRangeImage>(options.num_threads);

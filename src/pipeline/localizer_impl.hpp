@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "backend/sliding_window_graph.hpp"
+#include "pipeline/dynamic_objects.hpp"
 #include "pipeline/motion_prior.hpp"
 #include "pipeline/scan_deskewer.hpp"
 #include "pipeline/submap_cloud_builder.hpp"
@@ -68,6 +69,9 @@ struct Localizer::Impl {
   SurfelMap map;
   std::unique_ptr<SurfelRenderer> renderer;
   ProjectiveIcp icp;
+  internal::DynamicObjectFilter dynamic;
+  /// The path travelled (per scan stamp), for the filter's model age.
+  internal::TravelHistory travel;
   std::unique_ptr<SlidingWindowGraph> window;
   /// The submaps: records, clouds, spill files (the one owner).
   internal::SubmapStore store;

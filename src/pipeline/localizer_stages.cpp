@@ -113,6 +113,29 @@ Status Localizer::Impl::RenderStage(const Scan& scan, ScanStep* step, Localizati
 Status Localizer::Impl::RegisterStage(const Scan& scan, ScanStep* step, LocalizationResult* res) {
   const auto t0 = Clock::now();
   if (step->have_model && !step->is_reference) {
+    // Moving objects (DynamicObjectOptions), judged at the prediction where it comes from the POS
+    // or the IMU. A constant-velocity prediction (LiDAR only, a submap's second scan) is not good
+    // enough to judge by, nor is a registration that moving objects may have pulled.
+    const MotionFactorType factor = step->pred.factor;
+    if (opt.dynamic.enabled &&
+        (factor == MotionFactorType::kOdometry || factor == MotionFactorType::kPreintegration)) {
+      const Eigen::Isometry3d T_submap_lidar =
+          step->T_world_submap.inverse() * step->T_world_lidar_pred;
+      const Eigen::Vector3f up_lidar =
+          (-(T_submap_lidar.linear().transpose() * step->g_submap).normalized()).cast<float>();
+      if (up_lidar.allFinite()) {
+        const internal::DynamicObjectStats st =
+            dynamic.Detect(scan_vnm, model_vnm, Eigen::Isometry3f::Identity(), up_lidar,
+                           map.surfels(), travel.StampBefore(opt.dynamic.max_model_travel_m));
+        if (st.num_moving > 0) {
+          dynamic.Apply(&scan_vnm);
+          map.RemoveSurfels(dynamic.seen_through());
+          dynamic.MaskPoints(&deskewed);
+        }
+        res->num_moving_objects = st.num_moving;
+        res->num_moving_pixels = st.num_masked_pixels;
+      }
+    }
     auto reg = icp.Align(scan_vnm, model_vnm, Eigen::Isometry3d::Identity());
     if (!reg.ok()) return reg.status().WithContext("Localizer: scan " + std::to_string(scan.index));
     const RegistrationResult& r = *reg;
@@ -244,6 +267,8 @@ void Localizer::Impl::RecordScan(const Scan& scan, const ScanMotionInput& motion
   res->T_world_body = step.T_world_submap * T_submap_cur;
   ++num_processed;
   motion_prior.Record(scan.stamp_start, T_submap_cur);
+  travel.Add(scan.stamp_start.nanoseconds(), res->T_world_body.translation(),
+             opt.dynamic.max_model_travel_m);
   prev.T_submap = T_submap_cur;
   prev.stamp = scan.stamp_start;
   prev_id = step.cur_state;

@@ -20,6 +20,17 @@ size_t SurfelMap::RemoveSubmap(int32_t submap_id, std::vector<Surfel>* removed) 
   return n;
 }
 
+size_t SurfelMap::RemoveSurfels(const std::vector<uint32_t>& ids) {
+  Impl& m = *impl_;
+  size_t n = 0;
+  for (uint32_t id : ids) {
+    if (id >= m.surfels.size() || !m.alive[id]) continue;
+    m.RemoveSlot(id);
+    ++n;
+  }
+  return n;
+}
+
 size_t SurfelMap::RemoveSubmapsExcept(const std::vector<int32_t>& keep,
                                       std::vector<Surfel>* removed) {
   Impl& m = *impl_;

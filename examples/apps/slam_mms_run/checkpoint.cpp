@@ -66,6 +66,8 @@ Json ResultJson(const LocalizationResult& r) {
               {"consistency_mahalanobis_sq", r.consistency_mahalanobis_sq},
               {"num_surfels", r.num_surfels},
               {"num_model_surfels", r.num_model_surfels},
+              {"num_moving_objects", r.num_moving_objects},
+              {"num_moving_pixels", r.num_moving_pixels},
               {"timings_ms", r.timings.Values()},
               {"total_ms", r.timings.total_ms}};
 }
@@ -93,6 +95,8 @@ bool ReadResult(const Json& j, LocalizationResult* r) {
   r->consistency_mahalanobis_sq = j.at("consistency_mahalanobis_sq").get<double>();
   r->num_surfels = j.at("num_surfels").get<size_t>();
   r->num_model_surfels = j.at("num_model_surfels").get<size_t>();
+  r->num_moving_objects = j.value("num_moving_objects", 0);
+  r->num_moving_pixels = j.value("num_moving_pixels", 0);
   const auto t = j.at("timings_ms").get<std::vector<double>>();
   if (t.size() != StageTimings::kNumStages) return false;
   StageTimings& s = r->timings;

@@ -347,6 +347,16 @@ const std::vector<std::pair<std::string, KeyHandler>>& Handlers() {
     SLAM_MMS_KEY_I("localizer.icp.max_iterations", o->localizer.icp.max_iterations);
     SLAM_MMS_KEY_I("localizer.icp.min_correspondences", o->localizer.icp.min_correspondences);
     SLAM_MMS_KEY_I("localizer.icp.pixel_stride", o->localizer.icp.pixel_stride);
+    SLAM_MMS_KEY_B("localizer.dynamic.enabled", o->localizer.dynamic.enabled);
+    SLAM_MMS_KEY_I("localizer.dynamic.min_object_pixels", o->localizer.dynamic.min_object_pixels);
+    SLAM_MMS_KEY_D("localizer.dynamic.segmentation_angle_deg",
+                   o->localizer.dynamic.segmentation_angle_deg);
+    SLAM_MMS_KEY_D("localizer.dynamic.ground_max_tilt_deg",
+                   o->localizer.dynamic.ground_max_tilt_deg);
+    SLAM_MMS_KEY_D("localizer.dynamic.min_residual_m", o->localizer.dynamic.min_residual_m);
+    SLAM_MMS_KEY_D("localizer.dynamic.residual_sigmas", o->localizer.dynamic.residual_sigmas);
+    SLAM_MMS_KEY_D("localizer.dynamic.min_outlier_fraction",
+                   o->localizer.dynamic.min_outlier_fraction);
     SLAM_MMS_KEY_D("localizer.surfels.max_distance_m", o->localizer.surfels.max_distance_m);
     SLAM_MMS_KEY_D("localizer.surfels.active_radius_m", o->localizer.surfels.active_radius_m);
     SLAM_MMS_KEY_I("localizer.window.window_size", o->localizer.window.window_size);

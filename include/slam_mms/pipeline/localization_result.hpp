@@ -73,6 +73,10 @@ struct LocalizationResult {
   bool degenerate = false;  ///< Some direction weakly observed (tunnel, open field).
   Vector6d degeneracy_axis_information = Vector6d::Zero();  ///< Per axis, see DegeneracyAnalysis.
   double consistency_mahalanobis_sq = 0.0;
+  /// Moving objects left out of registration, fusion and the map (Level1Options::dynamic), and
+  /// their pixels.
+  int num_moving_objects = 0;
+  int num_moving_pixels = 0;
   // Map.
   size_t num_surfels = 0;
   size_t num_model_surfels = 0;  ///< Surfels rendered for registration.

@@ -38,6 +38,7 @@
 #include "slam_mms/core/status.hpp"
 #include "slam_mms/ins/imu_preintegration.hpp"
 #include "slam_mms/pipeline/deskew_options.hpp"
+#include "slam_mms/pipeline/dynamic_object_options.hpp"
 #include "slam_mms/pipeline/localization_result.hpp"
 #include "slam_mms/pipeline/map_point_stamps.hpp"
 #include "slam_mms/pipeline/submap_source.hpp"
@@ -76,6 +77,8 @@ struct Level1Options {
   ProjectiveIcpOptions icp;
   SlidingWindowOptions window;
   DeskewOptions deskew;
+  /// Moving objects kept out of registration, the surfel map and the point-cloud map.
+  DynamicObjectOptions dynamic;
   ImuPreintegration::Options imu;
   SurfelRendererBackend renderer = SurfelRendererBackend::kAuto;
   /// Surfels rendered for registration: those within this radius with confidence above

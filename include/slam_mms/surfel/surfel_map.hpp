@@ -156,6 +156,10 @@ class SurfelMap {
   /// Heap bytes held: surfel slots, flags, spatial index and scratch buffers.
   size_t MemoryBytes() const;
 
+  /// Removes the listed surfels (ids as in RayHit/VertexNormalMap::index; dead or unknown ids are
+  /// ignored), e.g. those a moving object was seen through. Returns how many were removed.
+  size_t RemoveSurfels(const std::vector<uint32_t>& ids);
+
   /// Moves every surfel of `submap_id` by T_new_old (positions and normals); returns how many.
   size_t TransformSubmap(int32_t submap_id, const Eigen::Isometry3d& T_new_old);
 

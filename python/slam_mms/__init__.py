@@ -69,6 +69,7 @@ ProjectiveIcpOptions = _C.ProjectiveIcpOptions
 PointIcpOptions = _C.PointIcpOptions
 SlidingWindowOptions = _C.SlidingWindowOptions
 DeskewOptions = _C.DeskewOptions
+DynamicObjectOptions = _C.DynamicObjectOptions
 ImuPreintegrationOptions = _C.ImuPreintegrationOptions
 
 MappingSystem = _C.MappingSystem
@@ -144,6 +145,7 @@ def _options_to_dict(self) -> dict:
 for _cls in (Options, InsOptions, GnssPriorOptions, GnssErrorModel, LocalizerOptions, Level2Options,
              SurfelMapOptions, SurfelRendererOptions, RangeProjectionOptions,
              ProjectiveIcpOptions, PointIcpOptions, SlidingWindowOptions, DeskewOptions,
+             DynamicObjectOptions,
              ImuPreintegrationOptions, KittiRawReaderOptions):
     _cls.__repr__ = _options_repr
     _cls.to_dict = _options_to_dict

@@ -296,6 +296,56 @@ class DriveStreams:
     def t_body_antenna_m(self) -> Optional[numpy.ndarray]:
         """(3,) or None."""
 
+class DynamicObjectOptions:
+    """How level 1 keeps moving objects out of registration and the maps."""
+    _fields: typing.ClassVar[tuple]
+    def to_dict(self) -> dict: ...
+    def __init__(self: DynamicObjectOptions) -> None:
+        ...
+    def __copy__(self: DynamicObjectOptions) -> DynamicObjectOptions:
+        ...
+    def copy(self: DynamicObjectOptions) -> DynamicObjectOptions:
+        """A deep copy."""
+    @property
+    def enabled(self) -> bool:
+        ...
+    @enabled.setter
+    def enabled(self, value: bool) -> None: ...
+    @property
+    def min_object_pixels(self) -> int:
+        ...
+    @min_object_pixels.setter
+    def min_object_pixels(self, value: int) -> None: ...
+    @property
+    def segmentation_angle_deg(self) -> float:
+        """[deg]"""
+    @segmentation_angle_deg.setter
+    def segmentation_angle_deg(self, value: float) -> None: ...
+    @property
+    def ground_max_tilt_deg(self) -> float:
+        """[deg]"""
+    @ground_max_tilt_deg.setter
+    def ground_max_tilt_deg(self, value: float) -> None: ...
+    @property
+    def min_residual_m(self) -> float:
+        """[m]"""
+    @min_residual_m.setter
+    def min_residual_m(self, value: float) -> None: ...
+    @property
+    def residual_sigmas(self) -> float:
+        ...
+    @residual_sigmas.setter
+    def residual_sigmas(self, value: float) -> None: ...
+    @property
+    def min_outlier_fraction(self) -> float:
+        ...
+    @min_outlier_fraction.setter
+    def min_outlier_fraction(self, value: float) -> None: ...
+    def validate(self: DynamicObjectOptions) -> None:
+        """Raises ValueError naming the first bad field and its rule."""
+    def to_dict(*args, **kwargs) -> typing.Any:
+        """The fields as a dict (nested options as dicts, arrays as lists)."""
+
 class FolderDriveReader(DriveReader):
     """A plain drive folder (scans.csv + point files, imu.csv, gnss.csv or NMEA, extrinsics.yaml; docs/drive_folder.md) as a DriveReader."""
     def __init__(self: FolderDriveReader, dir: os.PathLike[str], first_frame: int = 0, last_frame: int = -1, per_point_time: bool = True, allow_missing_extrinsics: bool = False, nmea_utc_date: str = '') -> None:
@@ -1062,6 +1112,12 @@ class LocalizationResult:
     def num_model_surfels(self) -> int:
         ...
     @property
+    def num_moving_objects(self) -> int:
+        ...
+    @property
+    def num_moving_pixels(self) -> int:
+        ...
+    @property
     def timings_ms(self) -> dict:
         ...
 
@@ -1100,6 +1156,11 @@ class LocalizerOptions:
         """DeskewOptions"""
     @deskew.setter
     def deskew(self, value: DeskewOptions) -> None: ...
+    @property
+    def dynamic(self) -> DynamicObjectOptions:
+        """DynamicObjectOptions"""
+    @dynamic.setter
+    def dynamic(self, value: DynamicObjectOptions) -> None: ...
     @property
     def imu(self) -> ImuPreintegrationOptions:
         """ImuPreintegrationOptions"""

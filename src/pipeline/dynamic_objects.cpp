@@ -122,7 +122,6 @@ void DynamicObjectFilter::Segment(const VertexNormalMap& scan, const Eigen::Vect
 
 DynamicObjectStats DynamicObjectFilter::Detect(const VertexNormalMap& scan,
                                                const VertexNormalMap& model,
-                                               const Eigen::Isometry3f& T_model_scan,
                                                const Eigen::Vector3f& up_scan,
                                                const std::vector<Surfel>& surfels,
                                                int64_t min_created_ns) {
@@ -135,38 +134,28 @@ DynamicObjectStats DynamicObjectFilter::Detect(const VertexNormalMap& scan,
   }
   Segment(scan, up_scan);
 
-  // Point-to-plane residual of every scan pixel against the model pixel it projects into
-  // (> 0: the scan point is in front of the model surface, < 0: behind it, seen through it).
+  // Point-to-plane residual of every scan pixel against the model pixel in the same place (both
+  // images are for one pose; > 0: the scan point is in front of the model surface, < 0: behind
+  // it, seen through it).
   residual_.assign(static_cast<size_t>(n), std::numeric_limits<float>::quiet_NaN());
-  model_px_.assign(static_cast<size_t>(n), -1);
-  std::vector<float> all;
-  all.reserve(static_cast<size_t>(n) / 2);
-  const bool identity = T_model_scan.matrix().isIdentity(0.0f);
-  ProjectedPoint px;
+  std::vector<float>& all = all_residuals_;
+  all.clear();
   for (int i = 0; i < n; ++i) {
-    if (!scan.HasNormal(i)) continue;
-    const Eigen::Vector3f p = T_model_scan * scan.vertex[static_cast<size_t>(i)];
-    int m = i;
-    if (!identity) {
-      if (!projection_.Project(p, &px)) continue;
-      m = px.row * model.cols + px.col;
-    }
-    if (!model.HasVertex(m)) continue;
-    const int32_t id = model.index[static_cast<size_t>(m)];
+    const size_t k = static_cast<size_t>(i);
+    if (!scan.HasNormal(i) || !model.HasVertex(i)) continue;
+    const int32_t id = model.index[k];
     if (id < 0 || static_cast<size_t>(id) >= surfels.size() ||
         surfels[static_cast<size_t>(id)].created_ns < min_created_ns) {
       continue;
     }
-    const Eigen::Vector3f d = p - model.vertex[static_cast<size_t>(m)];
-    const Eigen::Vector3f& n_model = model.normal[static_cast<size_t>(m)];
+    const Eigen::Vector3f d = scan.vertex[k] - model.vertex[k];
+    const Eigen::Vector3f& n_model = model.normal[k];
     if (d.norm() > max_correspondence_m_) continue;
-    if ((T_model_scan.linear() * scan.normal[static_cast<size_t>(i)]).cross(n_model).norm() >
-        max_sin_) {
+    if (scan.normal[k].cross(n_model).norm() > max_sin_) {
       continue;  // another surface: the registration does not pair them either
     }
     const float r = n_model.dot(d);
-    residual_[static_cast<size_t>(i)] = r;
-    model_px_[static_cast<size_t>(i)] = m;
+    residual_[k] = r;
     all.push_back(r);
   }
   if (all.empty()) return stats;
@@ -185,7 +174,8 @@ DynamicObjectStats DynamicObjectFilter::Detect(const VertexNormalMap& scan,
     const float r = residual_[static_cast<size_t>(i)];
     if (l >= 0 && std::isfinite(r)) object_residuals_[static_cast<size_t>(l)].push_back(r);
   }
-  std::vector<int8_t> moving(static_cast<size_t>(num_labels_), 0);  // +1 in front, -1 behind
+  std::vector<int8_t>& moving = moving_;  // per object: +1 in front, -1 behind, 0 static
+  moving.assign(static_cast<size_t>(num_labels_), 0);
   for (int l = 0; l < num_labels_; ++l) {
     std::vector<float>& v = object_residuals_[static_cast<size_t>(l)];
     if (static_cast<int>(v.size()) < options_.min_object_pixels) continue;
@@ -206,7 +196,7 @@ DynamicObjectStats DynamicObjectFilter::Detect(const VertexNormalMap& scan,
     ++stats.num_masked_pixels;
     const float r = residual_[static_cast<size_t>(i)];
     if (moving[static_cast<size_t>(l)] < 0 && r < -tau) {
-      const int32_t id = model.index[static_cast<size_t>(model_px_[static_cast<size_t>(i)])];
+      const int32_t id = model.index[static_cast<size_t>(i)];
       if (id >= 0) seen_through_.push_back(static_cast<uint32_t>(id));
     }
   }

@@ -53,16 +53,16 @@ class DynamicObjectFilter {
   DynamicObjectFilter(const DynamicObjectOptions& options, const RangeProjection& projection,
                       double max_correspondence_m, double max_angle_deg);
 
-  /// Judges `scan` (sensor frame) against `model` (rendered at the pose T_model_scan maps the scan
-  /// into; identity when both are for the same pose). `up_scan`: the world's up direction in the
+  /// Judges `scan` (sensor frame) against `model`, rendered for the same sensor pose (pixel i of
+  /// one faces pixel i of the other). `up_scan`: the world's up direction in the
   /// scan's frame. Correspondences beyond the registration's gates (max_correspondence_m, normals
   /// more than max_angle_deg apart) are not used: what the registration ignores cannot pull it.
   /// Only model pixels whose surfel (model.index into `surfels`) was created at or after
   /// min_created_ns are used: older parts of the map have drifted against the scan with the
   /// vehicle's travel, and that is what registration corrects, not motion.
   DynamicObjectStats Detect(const VertexNormalMap& scan, const VertexNormalMap& model,
-                            const Eigen::Isometry3f& T_model_scan, const Eigen::Vector3f& up_scan,
-                            const std::vector<Surfel>& surfels, int64_t min_created_ns);
+                            const Eigen::Vector3f& up_scan, const std::vector<Surfel>& surfels,
+                            int64_t min_created_ns);
 
   /// Per scan pixel: 1 where a moving object was found by the last Detect.
   const std::vector<uint8_t>& mask() const { return mask_; }
@@ -86,8 +86,9 @@ class DynamicObjectFilter {
   std::vector<int32_t> label_;  // object per pixel; -1: none
   std::vector<int32_t> queue_;
   int num_labels_ = 0;
-  std::vector<float> residual_;    // per pixel; NaN: no correspondence
-  std::vector<int32_t> model_px_;  // per pixel: the model pixel it corresponds to
+  std::vector<float> residual_;       // per pixel; NaN: no correspondence
+  std::vector<float> all_residuals_;  // the finite ones, for the robust scale
+  std::vector<int8_t> moving_;        // per object
   std::vector<std::vector<float>> object_residuals_;
   std::vector<uint8_t> mask_;
   std::vector<uint32_t> seen_through_;

@@ -119,14 +119,13 @@ Status Localizer::Impl::RegisterStage(const Scan& scan, ScanStep* step, Localiza
     const MotionFactorType factor = step->pred.factor;
     if (opt.dynamic.enabled &&
         (factor == MotionFactorType::kOdometry || factor == MotionFactorType::kPreintegration)) {
-      const Eigen::Isometry3d T_submap_lidar =
-          step->T_world_submap.inverse() * step->T_world_lidar_pred;
+      const Eigen::Matrix3d R_submap_lidar = step->pred.T_submap.linear() * T_body_lidar.linear();
       const Eigen::Vector3f up_lidar =
-          (-(T_submap_lidar.linear().transpose() * step->g_submap).normalized()).cast<float>();
+          (-(R_submap_lidar.transpose() * step->g_submap).normalized()).cast<float>();
       if (up_lidar.allFinite()) {
         const internal::DynamicObjectStats st =
-            dynamic.Detect(scan_vnm, model_vnm, Eigen::Isometry3f::Identity(), up_lidar,
-                           map.surfels(), travel.StampBefore(opt.dynamic.max_model_travel_m));
+            dynamic.Detect(scan_vnm, model_vnm, up_lidar, map.surfels(),
+                           travel.StampBefore(opt.dynamic.max_model_travel_m));
         if (st.num_moving > 0) {
           dynamic.Apply(&scan_vnm);
           map.RemoveSurfels(dynamic.seen_through());

@@ -101,8 +101,7 @@ TEST_F(DynamicObjectsTest, CarThatMovedAwayIsMaskedAndNothingElse) {
   const VertexNormalMap model = Render(proj_, &old_car);
   VertexNormalMap scan = Render(proj_, &new_car);
   DynamicObjectFilter f = Filter();
-  const DynamicObjectStats st =
-      f.Detect(scan, model, Eigen::Isometry3f::Identity(), up_, surfels_, all_);
+  const DynamicObjectStats st = f.Detect(scan, model, up_, surfels_, all_);
   EXPECT_EQ(st.num_moving, 1);
   const int car = CountCarPixels(scan, nullptr, 6.5f, true);
   const int car_masked = CountCarPixels(scan, &f.mask(), 6.5f, true);
@@ -135,8 +134,8 @@ TEST_F(DynamicObjectsTest, CarThatCameCloserIsMasked) {
   const Box old_car = Car(6.5f);
   const Box new_car = Car(6.0f);
   DynamicObjectFilter f = Filter();
-  const DynamicObjectStats st = f.Detect(Render(proj_, &new_car), Render(proj_, &old_car),
-                                         Eigen::Isometry3f::Identity(), up_, surfels_, all_);
+  const DynamicObjectStats st =
+      f.Detect(Render(proj_, &new_car), Render(proj_, &old_car), up_, surfels_, all_);
   EXPECT_EQ(st.num_moving, 1);
   EXPECT_TRUE(f.seen_through().empty()) << "a car in front of its old place sees through nothing";
 }
@@ -145,12 +144,10 @@ TEST_F(DynamicObjectsTest, StaticSceneAndSmallPoseErrorsFlagNothing) {
   const Box car = Car(6.0f);
   const VertexNormalMap model = Render(proj_, &car);
   DynamicObjectFilter f = Filter();
-  EXPECT_EQ(f.Detect(Render(proj_, &car), model, Eigen::Isometry3f::Identity(), up_, surfels_, all_)
-                .num_moving,
-            0);
+  EXPECT_EQ(f.Detect(Render(proj_, &car), model, up_, surfels_, all_).num_moving, 0);
   // A 4 cm prediction error moves everything alike: below the threshold, nothing is moving.
-  EXPECT_EQ(f.Detect(Render(proj_, &car, Eigen::Vector3f(-0.04f, 0.02f, 0.0f)), model,
-                     Eigen::Isometry3f::Identity(), up_, surfels_, all_)
+  EXPECT_EQ(f.Detect(Render(proj_, &car, Eigen::Vector3f(-0.04f, 0.02f, 0.0f)), model, up_,
+                     surfels_, all_)
                 .num_moving,
             0);
 }
@@ -162,11 +159,10 @@ TEST_F(DynamicObjectsTest, OldModelSurfelsAndDisabledFilterJudgeNothing) {
   const VertexNormalMap scan = Render(proj_, &new_car);
   DynamicObjectFilter f = Filter();
   // Every surfel created at 0 ns, before the travel cut-off: the map there may have drifted.
-  EXPECT_EQ(f.Detect(scan, model, Eigen::Isometry3f::Identity(), up_, surfels_, 1).num_moving, 0);
+  EXPECT_EQ(f.Detect(scan, model, up_, surfels_, 1).num_moving, 0);
   options_.enabled = false;
   DynamicObjectFilter off = Filter();
-  EXPECT_EQ(off.Detect(scan, model, Eigen::Isometry3f::Identity(), up_, surfels_, all_).num_moving,
-            0);
+  EXPECT_EQ(off.Detect(scan, model, up_, surfels_, all_).num_moving, 0);
 }
 
 TEST(DynamicObjectOptionsTest, ValidateNamesTheField) {

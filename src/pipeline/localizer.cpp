@@ -48,6 +48,11 @@ Status Level1Options::Validate() const {
   if (!(registration_voxel_m > 0.0)) {
     return bad("registration_voxel_m", registration_voxel_m, "must be > 0");
   }
+  // One field decides what Integrate fuses into (issue #19): per_submap_surfels.
+  if (surfels.integrate_current_submap_only) {
+    return bad("surfels.integrate_current_submap_only", 1.0,
+               "must be false: a Localizer sets it from per_submap_surfels");
+  }
   SLAM_MMS_RETURN_IF_ERROR(surfels.Validate());
   SLAM_MMS_RETURN_IF_ERROR(icp.Validate());
   SLAM_MMS_RETURN_IF_ERROR(window.Validate());
@@ -96,7 +101,7 @@ StatusOr<std::unique_ptr<Localizer>> Localizer::Create(const Options& options,
   deskew.num_threads = threads;
   SLAM_MMS_ASSIGN_OR_RETURN(m.deskewer, ScanDeskewer::Create(deskew));
   SurfelMapOptions surfel_options = options.surfels;
-  if (options.per_submap_surfels) surfel_options.integrate_current_submap_only = true;
+  surfel_options.integrate_current_submap_only = options.per_submap_surfels;
   SLAM_MMS_ASSIGN_OR_RETURN(m.map, SurfelMap::Create(surfel_options, threads));
   auto renderer = MakeSurfelRenderer(options.surfels.renderer, options.renderer, threads);
   if (!renderer.ok()) return renderer.status().WithContext("Localizer renderer");

@@ -57,6 +57,10 @@ const std::vector<BadOption>& Cases() {
        "Localizer::Options::odom_sigma_trans_m = 0; must be > 0"},
       {"localizer.min_inlier_ratio", [](O* o) { o->localizer.min_inlier_ratio = 1.5; },
        "Localizer::Options::min_inlier_ratio = 1.5; must be in [0, 1]"},
+      {"localizer.surfels.integrate_current_submap_only",
+       [](O* o) { o->localizer.surfels.integrate_current_submap_only = true; },
+       "Localizer::Options::surfels.integrate_current_submap_only = 1; must be false: a Localizer "
+       "sets it from per_submap_surfels"},
       {"localizer.registration_voxel_m", [](O* o) { o->localizer.registration_voxel_m = 0.0; },
        "Localizer::Options::registration_voxel_m = 0; must be > 0"},
       {"localizer.icp.max_distance", [](O* o) { o->localizer.icp.max_distance = -0.5; },

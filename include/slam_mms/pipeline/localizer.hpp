@@ -105,7 +105,9 @@ struct Level1Options {
   /// Each submap has its own surfels (the paper's local maps): a scan is fused only into the
   /// current submap, and registration sees the current and the previous submap. Once a submap is
   /// two behind, its surfels leave the live map (bounded work and memory on long drives; a
-  /// revisited place is not fused into old surfels but closed as a loop by level 2).
+  /// revisited place is not fused into old surfels but closed as a loop by level 2). Off: one
+  /// live map, every scan fused into any surfel it sees. It sets the surfel map's
+  /// integrate_current_submap_only (surfels.integrate_current_submap_only must stay false).
   bool per_submap_surfels = true;
   /// Keep the stable surfels (confidence > surfels.confidence_threshold) of the submaps that
   /// left the live map, for AllSurfels(). Off by default: they grow with the drive (measured

@@ -83,6 +83,8 @@ struct SurfelMapOptions {
   /// Integrate associates and fuses only with surfels of the current submap (SetSubmapId), so each
   /// submap is a self-contained local map as in the paper (§5.1); surfels of other submaps are
   /// neither confirmed nor removed by it. SelectActive / RenderModel still see every submap.
+  /// Inside a Localizer it is Level1Options::per_submap_surfels, and Level1Options::surfels
+  /// must leave it false (Validate says so): one field decides.
   bool integrate_current_submap_only = false;
 
   [[nodiscard]] Status Validate() const;

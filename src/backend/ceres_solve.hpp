@@ -1,5 +1,5 @@
 #pragma once
-// The one place where the backend calls ceres::Solve and ceres::Covariance (private).
+// The one place where the backend calls ceres::Solve and computes covariances (private).
 
 #include <ceres/problem.h>
 
@@ -20,8 +20,10 @@ struct CeresSolveOptions {
 /// reports a failure or leaves a non-finite value.
 SolveSummary SolveProblem(ceres::Problem* problem, const CeresSolveOptions& options);
 
-/// Covariance of one pose block, rotation first, right perturbation. FailedPrecondition when the
-/// block is constant or the problem does not constrain it.
+/// Covariance of one pose block, rotation first, right perturbation: its block of (J^T J)^-1 over
+/// every free block, with the robust losses applied. Deterministic (independent of memory
+/// addresses and thread count). FailedPrecondition when the block is constant or the problem
+/// does not constrain it (a rank-deficient Jacobian).
 StatusOr<Matrix6d> PoseBlockCovariance(ceres::Problem* problem, const double* pose_block,
                                        int num_threads);
 

@@ -1,6 +1,5 @@
 #include "backend/sliding_window_graph.hpp"
 
-#include <ceres/covariance.h>
 #include <ceres/problem.h>
 #include <ceres/solver.h>
 

@@ -97,6 +97,8 @@ py::array_t<float> CloudToXyzi(const PointCloud& cloud);
 /// TypeError for a wrong dtype, ValueError for a wrong shape or length, naming the argument.
 PointCloud CloudFromArrays(const py::handle& points, const py::handle& intensities,
                            const py::handle& times);
+/// `obj` as a numpy array of float32 or float64 (any shape), or a TypeError naming `name`.
+py::array FloatArray(const py::handle& obj, const char* name);
 
 // ---- the log sink (core.cpp) --------------------------------------------------------------------
 

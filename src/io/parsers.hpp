@@ -7,6 +7,7 @@
 // Thread safety: pure functions; safe from any thread.
 
 #include <Eigen/Geometry>
+#include <filesystem>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -19,6 +20,9 @@
 #include "slam_mms/io/oxts_record.hpp"
 
 namespace slam_mms::io_internal {
+
+/// A .bin or .txt KITTI scan file into x y z reflectance quadruples (non-finite values kept).
+Status ReadKittiRawScan(const std::filesystem::path& file, std::vector<float>* xyzr);
 
 /// A KITTI .bin scan (float32 x y z reflectance, little endian) into `xyzr` (non-finite values
 /// kept). kDataLoss when the size is not a multiple of 16.

@@ -233,7 +233,8 @@ def run_drive(path: PathLike, mode: Union[str, "_C.MappingMode"] = "full",
               options: Optional["_C.Options"] = None, config: Optional[PathLike] = None,
               evaluate: bool = True, ground_truth_map: bool = True,
               progress: Optional[Callable[[int, int], None]] = None, check: bool = True,
-              kind: str = "auto", pos: str = "forward", **open_kwargs: Any) -> DriveResult:
+              kind: str = "auto", pos: str = "forward", calibrate_extrinsics: bool = False,
+              **open_kwargs: Any) -> DriveResult:
     """Runs one mapping method over a whole drive with the C++ ``RunDrive`` (the loop
     ``slam_mms_run`` runs), so the trajectory equals slam_mms_run's on the same input and options.
 
@@ -244,6 +245,9 @@ def run_drive(path: PathLike, mode: Union[str, "_C.MappingMode"] = "full",
             :class:`MappingMode`); gnss_ins_smoothed is offline: the whole IMU/GNSS stream is
             smoothed (forward EKF + Rauch-Tung-Striebel) before the scans are placed.
         pos: "forward" (default, as slam_mms_run --pos) or "smoothed": the POS `full` runs on.
+        calibrate_extrinsics: the boresight self-calibration first (as slam_mms_run
+            --calibrate-extrinsics; needs IMU, GNSS and an initial attitude), then the run with
+            the estimate; ``result.run.extrinsic_calibration`` holds it.
         frames: ``"A:B"`` / ``(A, B)`` inclusive, as ``slam_mms_run --frames A:B``; None = all.
         gnss_outages: ``[(start_s, duration_s), ...]`` relative to the first scan's start.
         options: :class:`Options` to start from (copied; default: the C++ defaults). As the app
@@ -272,7 +276,7 @@ def run_drive(path: PathLike, mode: Union[str, "_C.MappingMode"] = "full",
     outages = [(float(s), float(d)) for s, d in gnss_outages]
     _options_for_reader(opts, reader, outages)
     return _run_reader(reader, drive, mode, opts, outages, evaluate, ground_truth_map, progress,
-                       check, pos)
+                       check, pos, calibrate_extrinsics)
 
 
 def _options_for_reader(opts: "_C.Options", reader: "_C.DriveReader", outages) -> None:
@@ -287,22 +291,18 @@ def _options_for_reader(opts: "_C.Options", reader: "_C.DriveReader", outages) -
 
 def _run_reader(reader, drive: pathlib.Path, mode, options: "_C.Options", outages,
                 evaluate: bool = True, ground_truth_map: bool = True, progress=None,
-                check: bool = True, pos: str = "forward") -> DriveResult:
+                check: bool = True, pos: str = "forward",
+                calibrate_extrinsics: bool = False) -> DriveResult:
     """One method over an opened reader with `options` (copied; mode set here)."""
     opts = options.copy()
     opts.mode = _mode_of(mode)
-    if opts.level2.estimate_extrinsics:
-        raise NotImplementedError(
-            "level2.estimate_extrinsics: the boresight self-calibration runs in slam_mms_run "
-            "(--calibrate-extrinsics); the Python package does not run it yet: run slam_mms_run, "
-            "then open the drive with extrinsics=<DIR>/calib_imu_to_velo_estimated.txt")
     # gnss_ins_smoothed is RunDrive's (offline): MappingSystem itself runs it as gnss_ins.
     check_opts = opts.copy()
     if check_opts.mode == _C.MappingMode.GNSS_INS_SMOOTHED:
         check_opts.mode = _C.MappingMode.GNSS_INS
     check_opts.validate()
     workflow = _pos_of(pos)
-    run = _C._run_drive(reader, opts, progress, workflow)
+    run = _C._run_drive(reader, opts, progress, workflow, bool(calibrate_extrinsics))
     if check:
         run.raise_if_error()
     traj = run.trajectory

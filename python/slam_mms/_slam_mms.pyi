@@ -216,6 +216,9 @@ class DriveRun:
     def smoothing_wall_s(self) -> float:
         ...
     @property
+    def extrinsic_calibration(self) -> object:
+        """With estimate_extrinsics: the boresight self-calibration the run was made with (CalibrateExtrinsics' estimate, its sigmas and which of the seven parameters the drive observes), else None."""
+    @property
     def ok(self) -> bool:
         ...
     @property
@@ -1032,11 +1035,6 @@ class Level2Options:
         ...
     @max_iterations.setter
     def max_iterations(self, value: int) -> None: ...
-    @property
-    def estimate_extrinsics(self) -> bool:
-        """boresight self-calibration before the run (slam_mms_run --calibrate-extrinsics)"""
-    @estimate_extrinsics.setter
-    def estimate_extrinsics(self, value: bool) -> None: ...
     @property
     def icp(self) -> PointIcpOptions:
         """PointIcpOptions"""
@@ -2189,8 +2187,8 @@ def _open_drive(path: os.PathLike[str], kind: str = 'auto', first_frame: int = 0
 def _remove_log_sink() -> None:
     """Removes the sink (messages are dropped again) and ends _drain_log."""
 
-def _run_drive(reader: DriveReader, options: Options, progress: object = None, pos: PosWorkflow = ...) -> DriveRun:
-    """The C++ RunDrive (GIL released); pos: the POS `full` runs on. progress(fed, total) after every scan; an exception in it (or Ctrl-C) stops the run after the current scan and is raised."""
+def _run_drive(reader: DriveReader, options: Options, progress: object = None, pos: PosWorkflow = ..., estimate_extrinsics: bool = False) -> DriveRun:
+    """The C++ RunDrive (GIL released); pos: the POS `full` runs on; estimate_extrinsics: the boresight self-calibration first (DriveRunOptions). progress(fed, total) after every scan; an exception in it (or Ctrl-C) stops the run after the current scan and is raised."""
 
 def _simulate_drive(out_dir: os.PathLike[str], scenario: str = 'default', duration_s: float = 30.0, seed: int = 1, oxts_drive_dir: Optional[os.PathLike[str]] = None, write_scene_cloud: bool = True, num_threads: int = 2, progress: object = None) -> dict:
     """Simulates a drive into out_dir (GIL released); returns the Summary as a dict."""

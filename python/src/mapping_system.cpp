@@ -374,6 +374,35 @@ void RegisterMappingSystem(py::module_& m) {
       .def_readonly("complete", &DriveRun::complete)
       .def_readonly("smoothed_pos", &DriveRun::smoothed_pos)
       .def_readonly("smoothing_wall_s", &DriveRun::smoothing_wall_s)
+      .def_property_readonly(
+          "extrinsic_calibration",
+          [](const DriveRun& r) -> py::object {
+            if (!r.extrinsic_calibration) return py::none();
+            const ExtrinsicCalibration& c = *r.extrinsic_calibration;
+            py::dict d;
+            d["T_body_lidar_initial"] = IsometryToArray(c.T_body_lidar_initial);
+            d["T_body_lidar_estimated"] = IsometryToArray(c.T_body_lidar_estimated);
+            d["time_offset_s"] = c.time_offset_s;
+            d["correction_rpy_rad"] =
+                std::vector<double>(c.correction_rpy_rad.data(), c.correction_rpy_rad.data() + 3);
+            d["correction_xyz_m"] =
+                std::vector<double>(c.correction_xyz_m.data(), c.correction_xyz_m.data() + 3);
+            d["sigma_rpy_rad"] =
+                std::vector<double>(c.sigma_rpy_rad.data(), c.sigma_rpy_rad.data() + 3);
+            d["sigma_xyz_m"] = std::vector<double>(c.sigma_xyz_m.data(), c.sigma_xyz_m.data() + 3);
+            d["sigma_time_s"] = c.sigma_time_s;
+            py::dict observable;
+            for (int i = 0; i < 7; ++i) observable[ExtrinsicParameterName(i)] = c.observable[i];
+            d["observable"] = observable;
+            d["scans_used"] = c.scans_used;
+            d["rms_initial_m"] = c.rms_initial_m;
+            d["rms_final_m"] = c.rms_final_m;
+            d["wall_s"] = c.wall_s;
+            return d;
+          },
+          "With estimate_extrinsics: the boresight self-calibration the run was made with "
+          "(CalibrateExtrinsics' estimate, its sigmas and which of the seven parameters the drive "
+          "observes), else None.")
       .def_property_readonly("ok", [](const DriveRun& r) { return r.status.ok(); })
       .def_property_readonly("status_message",
                              [](const DriveRun& r) { return r.status.ToString(); })
@@ -473,7 +502,7 @@ void RegisterMappingSystem(py::module_& m) {
   m.def(
       "_run_drive",
       [](const DriveReader& reader, const MappingSystem::Options& options, py::object progress,
-         PosWorkflow pos) {
+         PosWorkflow pos, bool estimate_extrinsics) {
         PendingError pending;
         std::atomic<bool> stop{false};
         DriveRunCallbacks callbacks;
@@ -491,14 +520,16 @@ void RegisterMappingSystem(py::module_& m) {
         };
         DriveRunOptions run_options;
         run_options.pos = pos;
+        run_options.estimate_extrinsics = estimate_extrinsics;
         DriveRun run =
             WithoutGil([&] { return RunDrive(reader, options, callbacks, run_options); });
         pending.RaiseIfAny();
         return run;
       },
       py::arg("reader"), py::arg("options"), py::arg("progress") = py::none(),
-      py::arg("pos") = PosWorkflow::kForward,
-      "The C++ RunDrive (GIL released); pos: the POS `full` runs on. progress(fed, total) after "
+      py::arg("pos") = PosWorkflow::kForward, py::arg("estimate_extrinsics") = false,
+      "The C++ RunDrive (GIL released); pos: the POS `full` runs on; estimate_extrinsics: the "
+      "boresight self-calibration first (DriveRunOptions). progress(fed, total) after "
       "every scan; an exception in "
       "it (or Ctrl-C) stops the run after the current scan and is raised.");
 }

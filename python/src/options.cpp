@@ -332,8 +332,6 @@ void RegisterOptions(py::module_& m) {
       .Field("gnss_correlation_s", &SO::gnss_correlation_s, "[s]")
       .Field("attitude_prior_sigma_rad", &SO::attitude_prior_sigma_rad, "[rad]")
       .Field("max_iterations", &SO::max_iterations, "")
-      .Field("estimate_extrinsics", &SO::estimate_extrinsics,
-             "boresight self-calibration before the run (slam_mms_run --calibrate-extrinsics)")
       .Field("icp", &SO::icp, "PointIcpOptions")
       .Validated()
       .Done();

@@ -47,7 +47,7 @@ def test_reader_frame_range_and_errors(sim_drive, tmp_path):
         slam_mms.KittiRawReader(tmp_path / "no_such_drive")
 
 
-def test_kitti_calibration_file_overrides_and_calibration_key_is_refused(sim_drive, tmp_path):
+def test_kitti_calibration_file_overrides_and_run_drive_calibrates(sim_drive, tmp_path):
     # A calib_imu_to_velo.txt with a LiDAR clock offset (what slam_mms_run
     # --calibrate-extrinsics writes) taken by open_drive over a KITTI drive's own calibration.
     calib = tmp_path / "calib.txt"
@@ -57,10 +57,23 @@ def test_kitti_calibration_file_overrides_and_calibration_key_is_refused(sim_dri
     shifted = slam_mms.open_drive(sim_drive, extrinsics=calib)
     np.testing.assert_allclose(shifted.streams.T_body_lidar[:3, 3], [0.8, -0.3, 0.9])
     assert shifted[0].stamp_start_ns - base[0].stamp_start_ns == 20_000_000
-    opts = slam_mms.Options()
-    opts.level2.estimate_extrinsics = True
-    with pytest.raises(NotImplementedError, match="calibrate-extrinsics"):
-        slam_mms.run_drive(sim_drive, mode="gnss_ins", options=opts, evaluate=False)
+    # run_drive runs the boresight self-calibration first (RunDrive's estimate_extrinsics).
+    res = slam_mms.run_drive(sim_drive, mode="gnss_ins", evaluate=False,
+                             calibrate_extrinsics=True)
+    cal = res.run.extrinsic_calibration
+    assert cal is not None and cal["scans_used"] >= 10
+    T0 = base.streams.T_body_lidar
+    np.testing.assert_allclose(cal["T_body_lidar_initial"], T0, atol=1e-12)
+    # The simulator's calibration file is its truth: the estimate stays near it.
+    assert np.linalg.norm(cal["T_body_lidar_estimated"][:3, 3] - T0[:3, 3]) < 0.1
+    assert set(cal["observable"]) == {"roll", "pitch", "yaw", "x", "y", "z", "time_offset"}
+    plain = slam_mms.run_drive(sim_drive, mode="gnss_ins", evaluate=False)
+    assert plain.run.extrinsic_calibration is None
+    # The keys moved from level2 to drive, and a system-only caller refuses drive keys.
+    with pytest.raises(ValueError, match="moved to 'drive.estimate_extrinsics'"):
+        slam_mms.apply_config_text("level2:\n  estimate_extrinsics: true\n", slam_mms.Options())
+    with pytest.raises(ValueError, match="drive"):
+        slam_mms.apply_config_text("drive.estimate_extrinsics: true\n", slam_mms.Options())
 
 
 def test_eval_metrics_on_known_errors():

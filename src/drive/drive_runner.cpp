@@ -7,9 +7,11 @@
 #include <limits>
 #include <memory>
 
+#include "core/option_error.hpp"
 #include "ins/pos_smoother.hpp"
 #include "slam_mms/core/geodesy.hpp"
 #include "slam_mms/core/logging.hpp"
+#include "slam_mms/drive/open_drive.hpp"
 
 namespace slam_mms {
 namespace {
@@ -98,8 +100,26 @@ StatusOr<OfflinePos> ComputeOfflinePos(const DriveReader& reader,
   return out;
 }
 
-DriveRun RunDrive(const DriveReader& reader, const MappingSystem::Options& base_options,
-                  const DriveRunCallbacks& callbacks, const DriveRunOptions& run_options) {
+Status DriveRunOptions::Validate() const {
+  if (pos != PosWorkflow::kForward && pos != PosWorkflow::kSmoothed) {
+    return internal::OptionError("DriveRunOptions", "pos", static_cast<double>(pos),
+                                 "must be kForward or kSmoothed");
+  }
+  return extrinsic_calibration.Validate();
+}
+
+StatusOr<ExtrinsicCalibration> CalibrateDriveExtrinsics(
+    const DriveReader& reader, const MappingSystem::Options& options,
+    const ExtrinsicCalibrationOptions& calibration, const std::atomic<bool>* stop) {
+  SLAM_MMS_ASSIGN_OR_RETURN(const OfflinePos pos, ComputeOfflinePos(reader, options));
+  return CalibrateExtrinsics(reader, pos.states, reader.streams().T_body_lidar, 0.0, calibration,
+                             stop, options.num_threads);
+}
+
+namespace {
+
+DriveRun RunMethod(const DriveReader& reader, const MappingSystem::Options& base_options,
+                   const DriveRunCallbacks& callbacks, const DriveRunOptions& run_options) {
   const DriveStreams& in = reader.streams();
   DriveRun run;
   run.mode = base_options.mode;
@@ -234,6 +254,44 @@ DriveRun RunDrive(const DriveReader& reader, const MappingSystem::Options& base_
   run.availability = system->GnssAvailability();
   run.scans_skipped_by_system = system->num_skipped_scans();
   run.scans_processed = run.trajectory.size();
+  return run;
+}
+
+}  // namespace
+
+DriveRun RunDrive(const DriveReader& reader, const MappingSystem::Options& base_options,
+                  const DriveRunCallbacks& callbacks, const DriveRunOptions& run_options) {
+  const Status valid = run_options.Validate();
+  if (!valid.ok() || !run_options.estimate_extrinsics) {
+    if (valid.ok()) return RunMethod(reader, base_options, callbacks, run_options);
+    DriveRun failed;
+    failed.mode = base_options.mode;
+    failed.scans_total = reader.NumScans();
+    failed.status = valid;
+    return failed;
+  }
+  // The boresight self-calibration first, then the method with its estimate (file comment).
+  const auto t0 = std::chrono::steady_clock::now();
+  StatusOr<ExtrinsicCalibration> calibration = CalibrateDriveExtrinsics(
+      reader, base_options, run_options.extrinsic_calibration, callbacks.stop);
+  if (!calibration.ok()) {
+    DriveRun failed;
+    failed.mode = base_options.mode;
+    failed.scans_total = reader.NumScans();
+    failed.status = calibration.status().WithContext("boresight self-calibration");
+    return failed;
+  }
+  DriveExtrinsics extrinsics;
+  extrinsics.T_body_lidar = calibration->T_body_lidar_estimated;
+  extrinsics.lidar_time_offset_s = calibration->time_offset_s;
+  const std::unique_ptr<DriveReader> calibrated = OverrideExtrinsics(reader, extrinsics);
+  MappingSystem::Options options = base_options;
+  options.T_body_lidar = extrinsics.T_body_lidar;
+  const double calibration_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  DriveRun run = RunMethod(*calibrated, options, callbacks, run_options);
+  run.wall_s += calibration_s;
+  run.extrinsic_calibration = std::move(calibration).value();
   return run;
 }
 

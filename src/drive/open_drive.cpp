@@ -17,8 +17,10 @@ namespace {
 // A reader whose calibration is replaced (--extrinsics): see OverrideExtrinsics.
 class ExtrinsicsOverride final : public DriveReader {
  public:
-  ExtrinsicsOverride(std::unique_ptr<DriveReader> base, const DriveExtrinsics& extrinsics)
-      : base_(std::move(base)),
+  ExtrinsicsOverride(std::unique_ptr<DriveReader> owned, const DriveReader* base,
+                     const DriveExtrinsics& extrinsics)
+      : owned_(std::move(owned)),
+        base_(base),
         streams_(base_->streams()),
         lidar_offset_ns_(std::llround(extrinsics.lidar_time_offset_s * 1e9)) {
     streams_.T_body_lidar = extrinsics.T_body_lidar;
@@ -47,7 +49,8 @@ class ExtrinsicsOverride final : public DriveReader {
     return Timestamp::FromNanoseconds(lidar_stamp.nanoseconds() + lidar_offset_ns_);
   }
 
-  std::unique_ptr<DriveReader> base_;
+  std::unique_ptr<DriveReader> owned_;  // empty where the caller keeps base_
+  const DriveReader* base_;
   DriveStreams streams_;
   int64_t lidar_offset_ns_ = 0;
 };
@@ -56,7 +59,13 @@ class ExtrinsicsOverride final : public DriveReader {
 
 std::unique_ptr<DriveReader> OverrideExtrinsics(std::unique_ptr<DriveReader> base,
                                                 const DriveExtrinsics& extrinsics) {
-  return std::make_unique<ExtrinsicsOverride>(std::move(base), extrinsics);
+  const DriveReader* b = base.get();
+  return std::make_unique<ExtrinsicsOverride>(std::move(base), b, extrinsics);
+}
+
+std::unique_ptr<DriveReader> OverrideExtrinsics(const DriveReader& base,
+                                                const DriveExtrinsics& extrinsics) {
+  return std::make_unique<ExtrinsicsOverride>(nullptr, &base, extrinsics);
 }
 
 const char* DriveSourceKindName(DriveSourceKind kind) {

@@ -66,7 +66,6 @@ Status Level2Options::Validate() const {
     return bad("attitude_prior_sigma_rad", attitude_prior_sigma_rad, "must be >= 0");
   }
   if (max_iterations < 1) return bad("max_iterations", max_iterations, "must be >= 1");
-  SLAM_MMS_RETURN_IF_ERROR(extrinsic_calibration.Validate());
   return icp.Validate();
 }
 

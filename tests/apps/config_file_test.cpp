@@ -190,5 +190,51 @@ TEST(ConfigFileTest, JsonHasTheSameTree) {
   EXPECT_EQ(leaves, ConfigKeys().size());
 }
 
+// drive.* keys set the drive runner's options (RunConfig::drive); the keys moved from level2.
+TEST(ConfigFileTest, DriveKeysAndMovedKeys) {
+  RunConfig c;
+  const Status s = ApplyConfigText(
+      "drive:\n"
+      "  estimate_extrinsics: true\n"
+      "  extrinsic_calibration: {attitude_reference: travel_direction, max_scans: 50}\n"
+      "level2.use_loops: off\n",
+      "my.yaml", &c);
+  ASSERT_TRUE(s.ok()) << s.ToString();
+  EXPECT_TRUE(c.drive.estimate_extrinsics);
+  EXPECT_EQ(c.drive.extrinsic_calibration.attitude_reference,
+            ExtrinsicCalibrationOptions::AttitudeReference::kTravelDirection);
+  EXPECT_EQ(c.drive.extrinsic_calibration.max_scans, 50);
+  EXPECT_FALSE(c.system.level2.use_loops);
+  // Dump, read, dump again: the same bytes, drive keys included.
+  const std::string yaml = OptionsToYaml(c);
+  EXPECT_NE(yaml.find("drive:\n  estimate_extrinsics: true  # bool; default false"),
+            std::string::npos)
+      << yaml;
+  RunConfig back;
+  ASSERT_TRUE(ApplyConfigText(yaml, "dump.yaml", &back).ok());
+  EXPECT_EQ(OptionsToYaml(back), yaml);
+  // The calibration's own rules apply (DriveRunOptions::Validate).
+  RunConfig bad;
+  const Status invalid =
+      ApplyConfigText("drive.extrinsic_calibration.max_scans: 0\n", "b.yaml", &bad);
+  ASSERT_FALSE(invalid.ok());
+  EXPECT_NE(invalid.message().find("b.yaml: "), std::string::npos) << invalid.message();
+  EXPECT_NE(invalid.message().find("max_scans"), std::string::npos) << invalid.message();
+  // The old keys name their new place, nested or dotted.
+  EXPECT_NE(Error("level2:\n  estimate_extrinsics: true\n")
+                .find("my.yaml:2: key 'level2.estimate_extrinsics' moved to "
+                      "'drive.estimate_extrinsics'"),
+            std::string::npos);
+  EXPECT_NE(Error("level2.extrinsic_calibration.max_scans: 5\n")
+                .find("moved to 'drive.extrinsic_calibration.max_scans'"),
+            std::string::npos);
+  // A caller of MappingSystem options alone refuses drive keys it would ignore, takes defaults.
+  EXPECT_NE(Error("drive.estimate_extrinsics: true\n").find("my.yaml: drive.* keys"),
+            std::string::npos);
+  Options o;
+  EXPECT_TRUE(Apply("drive.estimate_extrinsics: false\nlevel2.use_loops: off\n", &o).ok());
+  EXPECT_FALSE(o.level2.use_loops);
+}
+
 }  // namespace
 }  // namespace slam_mms::app

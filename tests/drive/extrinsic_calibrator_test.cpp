@@ -199,6 +199,61 @@ TEST(ExtrinsicCalibratorTest, OptionsAndInputsAreChecked) {
   EXPECT_NEAR((rpy - Eigen::Vector3d(0.1, -0.2, 2.5)).norm(), 0.0, 1e-12);
 }
 
+// RunDrive with DriveRunOptions::estimate_extrinsics is the two steps by hand: the calibration
+// (CalibrateDriveExtrinsics), then the run over the reader with the estimate; its errors carry the
+// step that failed.
+TEST(ExtrinsicCalibratorTest, RunDriveCalibratesFirstWhenAsked) {
+  std::filesystem::path drive_dir;
+  const auto drive = Simulate("cal_rundrive", "demo", 12.0, Eigen::Vector3d(0.0, 0.0, 1.0),
+                              Eigen::Vector3d(0.05, 0.0, 0.0), 0.02, &drive_dir);
+  ASSERT_TRUE(drive);
+  Case c = Open(drive_dir);
+  ASSERT_TRUE(c.reader);
+  MappingSystem::Options mo;
+  mo.mode = MappingMode::kGnssIns;
+  mo.T_body_lidar = c.reader->streams().T_body_lidar;
+  DriveRunOptions ro;
+  ro.estimate_extrinsics = true;
+  const DriveRun run = RunDrive(*c.reader, mo, {}, ro);
+  ASSERT_TRUE(run.status.ok()) << run.status.ToString();
+  ASSERT_TRUE(run.complete);
+  ASSERT_TRUE(run.extrinsic_calibration.has_value());
+  const ExtrinsicCalibration& cal = *run.extrinsic_calibration;
+  // The wrong 1 deg of yaw and 20 ms of clock are found (loose: a 12 s drive).
+  const Eigen::Vector3d rot_err = RollPitchYaw(cal.T_body_lidar_estimated.linear() *
+                                               drive->T_body_lidar_true.linear().transpose());
+  EXPECT_LT(std::abs(rot_err(2)), 0.2 * kDeg);
+  EXPECT_LT(std::abs(cal.time_offset_s - 0.02), 0.01);
+
+  StatusOr<ExtrinsicCalibration> by_hand =
+      CalibrateDriveExtrinsics(*c.reader, mo, ro.extrinsic_calibration);
+  ASSERT_TRUE(by_hand.ok()) << by_hand.status().ToString();
+  EXPECT_EQ(by_hand->T_body_lidar_estimated.matrix(), cal.T_body_lidar_estimated.matrix());
+  EXPECT_EQ(by_hand->time_offset_s, cal.time_offset_s);
+  DriveExtrinsics e;
+  e.T_body_lidar = by_hand->T_body_lidar_estimated;
+  e.lidar_time_offset_s = by_hand->time_offset_s;
+  const std::unique_ptr<DriveReader> calibrated = OverrideExtrinsics(*c.reader, e);
+  MappingSystem::Options mo2 = mo;
+  mo2.T_body_lidar = e.T_body_lidar;
+  const DriveRun two_steps = RunDrive(*calibrated, mo2);
+  ASSERT_TRUE(two_steps.status.ok());
+  EXPECT_FALSE(two_steps.extrinsic_calibration.has_value());
+  ASSERT_EQ(two_steps.trajectory.size(), run.trajectory.size());
+  for (size_t i = 0; i < run.trajectory.size(); ++i) {
+    ASSERT_EQ(run.trajectory[i].stamp, two_steps.trajectory[i].stamp) << i;
+    ASSERT_EQ(run.trajectory[i].T_world_body.matrix(),
+              two_steps.trajectory[i].T_world_body.matrix())
+        << i;
+  }
+  // Bad calibration options: nothing runs, the field is named.
+  ro.extrinsic_calibration.max_scans = 5;
+  const DriveRun bad = RunDrive(*c.reader, mo, {}, ro);
+  EXPECT_EQ(bad.status.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(bad.status.message().find("max_scans"), std::string::npos) << bad.status.ToString();
+  EXPECT_EQ(bad.scans_processed, 0u);
+}
+
 // A measurement, not a check (docs/calibration.md): SLAM_MMS_CAL_DRIVE=<simulated KITTI raw drive>
 // perturbs its true calibration (0.4, -0.3, 1.0 deg; 8, -6, 5 cm; -20 ms; x SLAM_MMS_CAL_SCALE),
 // calibrates (SLAM_MMS_CAL_TRAVEL=1: the travel-direction reference; SLAM_MMS_CAL_GTPOS=1: the

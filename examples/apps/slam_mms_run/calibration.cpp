@@ -75,17 +75,15 @@ std::string CalibrationJson(const ExtrinsicCalibration& c, const std::string& fi
 
 StatusOr<RunCalibration> CalibrateRunExtrinsics(const DriveReader& reader,
                                                 const MappingSystem::Options& options,
+                                                const ExtrinsicCalibrationOptions& calibration,
                                                 const std::filesystem::path& out_dir,
                                                 double input_time_offset_s,
                                                 const std::atomic<bool>* stop) {
   std::printf("[calibration] offline POS of the drive, then the LiDAR extrinsic against it\n");
   std::fflush(stdout);
-  SLAM_MMS_ASSIGN_OR_RETURN(const OfflinePos pos, ComputeOfflinePos(reader, options));
-  ExtrinsicCalibrationOptions co = options.level2.extrinsic_calibration;
   RunCalibration out;
-  SLAM_MMS_ASSIGN_OR_RETURN(
-      out.result, CalibrateExtrinsics(reader, pos.states, reader.streams().T_body_lidar, 0.0, co,
-                                      stop, options.num_threads));
+  SLAM_MMS_ASSIGN_OR_RETURN(out.result,
+                            CalibrateDriveExtrinsics(reader, options, calibration, stop));
   const ExtrinsicCalibration& c = out.result;
   out.extrinsics.T_body_lidar = c.T_body_lidar_estimated;
   out.extrinsics.lidar_time_offset_s = c.time_offset_s;

@@ -1,7 +1,8 @@
 #pragma once
-// slam_mms_run --calibrate-extrinsics (config key level2.estimate_extrinsics): the boresight
-// self-calibration before the methods run (docs/calibration.md). The offline POS of the drive
-// (ComputeOfflinePos), CalibrateExtrinsics against it from the drive's own calibration, the
+// slam_mms_run --calibrate-extrinsics (config key drive.estimate_extrinsics): the boresight
+// self-calibration before the methods run, once for all of them (docs/calibration.md): the
+// library's CalibrateDriveExtrinsics (the offline POS of the drive, CalibrateExtrinsics against it
+// from the drive's own calibration), the
 // estimate written as DIR/calib_imu_to_velo_estimated.txt (KITTI format plus lidar_time_offset_s:
 // a later run takes it with --extrinsics) and as report.json's "extrinsics" object.
 
@@ -25,17 +26,16 @@ struct RunCalibration {
 };
 
 /// Calibrates `reader`'s extrinsic (its streams().T_body_lidar the initial value and prior) with
-/// `options` (ins, origin, gnss_outages, level2.extrinsic_calibration, num_threads), writes the
+/// `options` (ins, origin, gnss_outages, num_threads) and `calibration`, writes the
 /// file into `out_dir` and prints a summary on stdout. `input_time_offset_s`: the clock offset the
 /// reader already applies (an --extrinsics file's); the file and report.json give the total
 /// offset from the drive's own LiDAR stamps, RunCalibration::extrinsics the one still to apply
 /// over `reader`. Errors: those of ComputeOfflinePos and CalibrateExtrinsics, kUnavailable when
 /// the file cannot be written.
-[[nodiscard]] StatusOr<RunCalibration> CalibrateRunExtrinsics(const DriveReader& reader,
-                                                              const MappingSystem::Options& options,
-                                                              const std::filesystem::path& out_dir,
-                                                              double input_time_offset_s,
-                                                              const std::atomic<bool>* stop);
+[[nodiscard]] StatusOr<RunCalibration> CalibrateRunExtrinsics(
+    const DriveReader& reader, const MappingSystem::Options& options,
+    const ExtrinsicCalibrationOptions& calibration, const std::filesystem::path& out_dir,
+    double input_time_offset_s, const std::atomic<bool>* stop);
 
 /// The "extrinsics" object of report.json for `c` and the file name written; time offsets from
 /// the drive's own stamps (`input_time_offset_s` added).

@@ -100,7 +100,7 @@ Options:
   --calibrate-extrinsics  estimate the LiDAR boresight, lever arm and clock offset from the drive
                           against the offline POS first, write DIR/calib_imu_to_velo_estimated.txt
                           and report.json "extrinsics", and run with the estimate (config key
-                          level2.estimate_extrinsics; docs/calibration.md).
+                          drive.estimate_extrinsics; docs/calibration.md).
   --out DIR               output folder (created).
   --mode M                full | gnss_ins | gnss_ins_smoothed | lidar_only | all (default all =
                           the four in turn). gnss_ins: scans on the forward GNSS/INS filter (the

@@ -19,7 +19,21 @@ namespace {
 using config::Handlers;
 using config::Json;
 using config::KeyHandler;
-using Options = MappingSystem::Options;
+using Options = RunConfig;
+
+// Keys that moved (issue #19: the calibration is the drive runner's, not level 2's).
+const char* MovedTo(const std::string& key) {
+  static const std::pair<const char*, const char*> kMoved[] = {
+      {"level2.estimate_extrinsics", "drive.estimate_extrinsics"},
+      {"level2.extrinsic_calibration.attitude_reference",
+       "drive.extrinsic_calibration.attitude_reference"},
+      {"level2.extrinsic_calibration.max_scans", "drive.extrinsic_calibration.max_scans"},
+      {"level2.extrinsic_calibration", "drive.extrinsic_calibration"}};
+  for (const auto& [from, to] : kMoved) {
+    if (key == from) return to;
+  }
+  return nullptr;
+}
 
 const KeyHandler* FindHandler(const std::string& key) {
   for (const auto& [name, handler] : Handlers()) {
@@ -77,6 +91,9 @@ Status ApplyMapping(const YAML::Node& map, const std::string& prefix, ParseState
         }
         SLAM_MMS_RETURN_IF_ERROR(ApplyMapping(value, key, state, options));
         continue;
+      }
+      if (const char* to = MovedTo(key)) {
+        return InvalidArgumentError(where + "key '" + key + "' moved to '" + to + "'");
       }
       return InvalidArgumentError(where + "unknown key '" + key +
                                   "' (slam_mms_run --config-keys lists them; docs/user_guide.md, "
@@ -191,7 +208,7 @@ Status ApplyPreset(const YAML::Node& root, const ParseState& state, Options* opt
   }
   auto parsed = ParseLidarPreset(preset.Scalar());
   if (!parsed.ok()) return InvalidArgumentError(where + "key " + parsed.status().message());
-  ApplyLidarPreset(*parsed, options);
+  ApplyLidarPreset(*parsed, &options->system);
   return OkStatus();
 }
 
@@ -222,7 +239,7 @@ Status ApplyConfigText(const std::string& text, const std::string& file_name, Op
                                 ": origin_latitude_deg, origin_longitude_deg and origin_height_m "
                                 "must be given together (three numbers, or ~ for all three)");
   }
-  if (state.origin_numbers == 0 && state.origin_nulls > 0) options->origin.reset();
+  if (state.origin_numbers == 0 && state.origin_nulls > 0) options->system.origin.reset();
   const Status valid = options->Validate();
   if (!valid.ok()) return InvalidArgumentError(file_name + ": " + valid.message());
   return OkStatus();
@@ -256,5 +273,62 @@ Status WriteConfigFile(const Options& options, const std::filesystem::path& file
 }
 
 std::string OptionsToJson(const Options& options) { return ToJson(Tree(), options).dump(); }
+
+Status RunConfig::Validate() const {
+  SLAM_MMS_RETURN_IF_ERROR(system.Validate());
+  return drive.Validate();
+}
+
+namespace {
+
+// The system-only hosts: the file's drive.* keys must stay at their defaults.
+Status SystemOnly(const RunConfig& config, const std::string& file_name,
+                  MappingSystem::Options* options) {
+  const Json drive = ToJson(Tree(), config)["drive"];
+  const Json defaults = ToJson(Tree(), RunConfig())["drive"];
+  if (drive != defaults) {
+    return InvalidArgumentError(file_name +
+                                ": drive.* keys set the drive runner (slam_mms_run's "
+                                "DriveRunOptions), which this caller does not take; leave them at "
+                                "their defaults here");
+  }
+  *options = config.system;
+  return OkStatus();
+}
+
+}  // namespace
+
+Status ApplyConfigFile(const std::filesystem::path& file, MappingSystem::Options* options) {
+  RunConfig config;
+  config.system = *options;
+  SLAM_MMS_RETURN_IF_ERROR(ApplyConfigFile(file, &config));
+  return SystemOnly(config, file.string(), options);
+}
+
+Status ApplyConfigText(const std::string& text, const std::string& file_name,
+                       MappingSystem::Options* options) {
+  RunConfig config;
+  config.system = *options;
+  SLAM_MMS_RETURN_IF_ERROR(ApplyConfigText(text, file_name, &config));
+  return SystemOnly(config, file_name, options);
+}
+
+std::string OptionsToYaml(const MappingSystem::Options& options) {
+  RunConfig config;
+  config.system = options;
+  return OptionsToYaml(config);
+}
+
+Status WriteConfigFile(const MappingSystem::Options& options, const std::filesystem::path& file) {
+  RunConfig config;
+  config.system = options;
+  return WriteConfigFile(config, file);
+}
+
+std::string OptionsToJson(const MappingSystem::Options& options) {
+  RunConfig config;
+  config.system = options;
+  return OptionsToJson(config);
+}
 
 }  // namespace slam_mms::app

@@ -220,15 +220,15 @@ KeyHandler OriginField(double GeodeticPoint::*member) {
     if (v.IsNull()) return true;
     double x = 0.0;
     if (!ToDouble(v.Scalar(), &x)) return false;
-    if (!o->origin) o->origin = GeodeticPoint();
-    (*o->origin).*member = x;
+    if (!o->system.origin) o->system.origin = GeodeticPoint();
+    (*o->system.origin).*member = x;
     return true;
   };
   h.yaml = [member](const Options& o) {
-    return o.origin ? FormatDouble((*o.origin).*member) : std::string("~");
+    return o.system.origin ? FormatDouble((*o.system.origin).*member) : std::string("~");
   };
   h.json = [member](const Options& o) {
-    return o.origin ? Json((*o.origin).*member) : Json(nullptr);
+    return o.system.origin ? Json((*o.system.origin).*member) : Json(nullptr);
   };
   return h;
 }
@@ -257,140 +257,155 @@ const std::vector<std::pair<std::string, KeyHandler>>& Handlers() {
     h.emplace_back("origin_latitude_deg", OriginField(&GeodeticPoint::latitude_deg));
     h.emplace_back("origin_longitude_deg", OriginField(&GeodeticPoint::longitude_deg));
     h.emplace_back("origin_height_m", OriginField(&GeodeticPoint::height_m));
-    SLAM_MMS_KEY_D("map_max_range_m", o->map_max_range_m);
-    SLAM_MMS_KEY_D("map_voxel_m", o->map_voxel_m);
-    SLAM_MMS_KEY_D("max_pos_jump_m", o->max_pos_jump_m);
-    SLAM_MMS_KEY_D("max_pos_jump_rad", o->max_pos_jump_rad);
-    SLAM_MMS_KEY_I("num_threads", o->num_threads);
+    SLAM_MMS_KEY_D("map_max_range_m", o->system.map_max_range_m);
+    SLAM_MMS_KEY_D("map_voxel_m", o->system.map_voxel_m);
+    SLAM_MMS_KEY_D("max_pos_jump_m", o->system.max_pos_jump_m);
+    SLAM_MMS_KEY_D("max_pos_jump_rad", o->system.max_pos_jump_rad);
+    SLAM_MMS_KEY_I("num_threads", o->system.num_threads);
     // POS (InsFilter).
-    SLAM_MMS_KEY_D("ins.gyro_noise_density", o->ins.gyro_noise_density);
-    SLAM_MMS_KEY_D("ins.accel_noise_density", o->ins.accel_noise_density);
-    SLAM_MMS_KEY_D("ins.gyro_bias_random_walk", o->ins.gyro_bias_random_walk);
-    SLAM_MMS_KEY_D("ins.accel_bias_random_walk", o->ins.accel_bias_random_walk);
-    SLAM_MMS_KEY_D("ins.gravity_mps2", o->ins.gravity_mps2);
-    SLAM_MMS_KEY_D("ins.init_sigma_position_m", o->ins.init_sigma_position_m);
-    SLAM_MMS_KEY_D("ins.init_sigma_velocity_mps", o->ins.init_sigma_velocity_mps);
-    SLAM_MMS_KEY_D("ins.init_sigma_roll_pitch_rad", o->ins.init_sigma_roll_pitch_rad);
-    SLAM_MMS_KEY_D("ins.init_sigma_yaw_rad", o->ins.init_sigma_yaw_rad);
-    SLAM_MMS_KEY_D("ins.init_sigma_accel_bias_mps2", o->ins.init_sigma_accel_bias_mps2);
-    SLAM_MMS_KEY_D("ins.init_sigma_gyro_bias_radps", o->ins.init_sigma_gyro_bias_radps);
-    SLAM_MMS_KEY_D("ins.max_imu_gap_s", o->ins.max_imu_gap_s);
-    SLAM_MMS_KEY_D("ins.max_fix_latency_s", o->ins.max_fix_latency_s);
-    SLAM_MMS_KEY_D("ins.max_extrapolation_s", o->ins.max_extrapolation_s);
-    SLAM_MMS_KEY_D("ins.history_s", o->ins.history_s);
+    SLAM_MMS_KEY_D("ins.gyro_noise_density", o->system.ins.gyro_noise_density);
+    SLAM_MMS_KEY_D("ins.accel_noise_density", o->system.ins.accel_noise_density);
+    SLAM_MMS_KEY_D("ins.gyro_bias_random_walk", o->system.ins.gyro_bias_random_walk);
+    SLAM_MMS_KEY_D("ins.accel_bias_random_walk", o->system.ins.accel_bias_random_walk);
+    SLAM_MMS_KEY_D("ins.gravity_mps2", o->system.ins.gravity_mps2);
+    SLAM_MMS_KEY_D("ins.init_sigma_position_m", o->system.ins.init_sigma_position_m);
+    SLAM_MMS_KEY_D("ins.init_sigma_velocity_mps", o->system.ins.init_sigma_velocity_mps);
+    SLAM_MMS_KEY_D("ins.init_sigma_roll_pitch_rad", o->system.ins.init_sigma_roll_pitch_rad);
+    SLAM_MMS_KEY_D("ins.init_sigma_yaw_rad", o->system.ins.init_sigma_yaw_rad);
+    SLAM_MMS_KEY_D("ins.init_sigma_accel_bias_mps2", o->system.ins.init_sigma_accel_bias_mps2);
+    SLAM_MMS_KEY_D("ins.init_sigma_gyro_bias_radps", o->system.ins.init_sigma_gyro_bias_radps);
+    SLAM_MMS_KEY_D("ins.max_imu_gap_s", o->system.ins.max_imu_gap_s);
+    SLAM_MMS_KEY_D("ins.max_fix_latency_s", o->system.ins.max_fix_latency_s);
+    SLAM_MMS_KEY_D("ins.max_extrapolation_s", o->system.ins.max_extrapolation_s);
+    SLAM_MMS_KEY_D("ins.history_s", o->system.ins.history_s);
     SLAM_MMS_KEY_D("ins.gnss_error_rtk_fixed.correlated_fraction",
-                   o->ins.gnss_error_rtk_fixed.correlated_fraction);
+                   o->system.ins.gnss_error_rtk_fixed.correlated_fraction);
     SLAM_MMS_KEY_D("ins.gnss_error_rtk_fixed.correlation_time_s",
-                   o->ins.gnss_error_rtk_fixed.correlation_time_s);
+                   o->system.ins.gnss_error_rtk_fixed.correlation_time_s);
     SLAM_MMS_KEY_D("ins.gnss_error_rtk_float.correlated_fraction",
-                   o->ins.gnss_error_rtk_float.correlated_fraction);
+                   o->system.ins.gnss_error_rtk_float.correlated_fraction);
     SLAM_MMS_KEY_D("ins.gnss_error_rtk_float.correlation_time_s",
-                   o->ins.gnss_error_rtk_float.correlation_time_s);
+                   o->system.ins.gnss_error_rtk_float.correlation_time_s);
     SLAM_MMS_KEY_D("ins.gnss_error_code.correlated_fraction",
-                   o->ins.gnss_error_code.correlated_fraction);
+                   o->system.ins.gnss_error_code.correlated_fraction);
     SLAM_MMS_KEY_D("ins.gnss_error_code.correlation_time_s",
-                   o->ins.gnss_error_code.correlation_time_s);
-    SLAM_MMS_KEY_B("ins.zupt", o->ins.zupt);
-    SLAM_MMS_KEY_D("ins.zupt_window_s", o->ins.zupt_window_s);
-    SLAM_MMS_KEY_D("ins.zupt_max_gyro_radps", o->ins.zupt_max_gyro_radps);
-    SLAM_MMS_KEY_D("ins.zupt_max_accel_mps2", o->ins.zupt_max_accel_mps2);
-    SLAM_MMS_KEY_D("ins.zupt_max_speed_mps", o->ins.zupt_max_speed_mps);
-    SLAM_MMS_KEY_D("ins.zupt_sigma_mps", o->ins.zupt_sigma_mps);
-    SLAM_MMS_KEY_D("ins.zupt_interval_s", o->ins.zupt_interval_s);
-    SLAM_MMS_KEY_D("ins.nhc_sigma_mps", o->ins.nhc_sigma_mps);
-    SLAM_MMS_KEY_D("ins.nhc_min_speed_mps", o->ins.nhc_min_speed_mps);
+                   o->system.ins.gnss_error_code.correlation_time_s);
+    SLAM_MMS_KEY_B("ins.zupt", o->system.ins.zupt);
+    SLAM_MMS_KEY_D("ins.zupt_window_s", o->system.ins.zupt_window_s);
+    SLAM_MMS_KEY_D("ins.zupt_max_gyro_radps", o->system.ins.zupt_max_gyro_radps);
+    SLAM_MMS_KEY_D("ins.zupt_max_accel_mps2", o->system.ins.zupt_max_accel_mps2);
+    SLAM_MMS_KEY_D("ins.zupt_max_speed_mps", o->system.ins.zupt_max_speed_mps);
+    SLAM_MMS_KEY_D("ins.zupt_sigma_mps", o->system.ins.zupt_sigma_mps);
+    SLAM_MMS_KEY_D("ins.zupt_interval_s", o->system.ins.zupt_interval_s);
+    SLAM_MMS_KEY_D("ins.nhc_sigma_mps", o->system.ins.nhc_sigma_mps);
+    SLAM_MMS_KEY_D("ins.nhc_min_speed_mps", o->system.ins.nhc_min_speed_mps);
     // GNSS (GnssPrior).
     h.emplace_back("ins.gnss.t_body_antenna",
-                   Vector3([](Options* o) { return &o->ins.gnss.t_body_antenna; }));
-    SLAM_MMS_KEY_D("ins.gnss.sigma_floor_horizontal_m", o->ins.gnss.sigma_floor_horizontal_m);
-    SLAM_MMS_KEY_D("ins.gnss.sigma_floor_vertical_m", o->ins.gnss.sigma_floor_vertical_m);
-    SLAM_MMS_KEY_D("ins.gnss.max_sigma_horizontal_m", o->ins.gnss.max_sigma_horizontal_m);
-    h.emplace_back(
-        "ins.gnss.min_fix_type",
-        Enum<GnssFixType>([](Options* o) { return &o->ins.gnss.min_fix_type; }, FixTypeNames()));
-    h.emplace_back("ins.gnss.full_weight_fix_type",
-                   Enum<GnssFixType>([](Options* o) { return &o->ins.gnss.full_weight_fix_type; },
+                   Vector3([](Options* o) { return &o->system.ins.gnss.t_body_antenna; }));
+    SLAM_MMS_KEY_D("ins.gnss.sigma_floor_horizontal_m",
+                   o->system.ins.gnss.sigma_floor_horizontal_m);
+    SLAM_MMS_KEY_D("ins.gnss.sigma_floor_vertical_m", o->system.ins.gnss.sigma_floor_vertical_m);
+    SLAM_MMS_KEY_D("ins.gnss.max_sigma_horizontal_m", o->system.ins.gnss.max_sigma_horizontal_m);
+    h.emplace_back("ins.gnss.min_fix_type",
+                   Enum<GnssFixType>([](Options* o) { return &o->system.ins.gnss.min_fix_type; },
                                      FixTypeNames()));
-    SLAM_MMS_KEY_D("ins.gnss.downweight_variance_factor", o->ins.gnss.downweight_variance_factor);
-    SLAM_MMS_KEY_D("ins.gnss.innovation_downweight_chi2", o->ins.gnss.innovation_downweight_chi2);
-    SLAM_MMS_KEY_D("ins.gnss.innovation_reject_chi2", o->ins.gnss.innovation_reject_chi2);
-    SLAM_MMS_KEY_D("ins.gnss.max_rejection_streak_s", o->ins.gnss.max_rejection_streak_s);
-    SLAM_MMS_KEY_D("ins.gnss.max_speed_mps", o->ins.gnss.max_speed_mps);
-    SLAM_MMS_KEY_D("ins.gnss.outage_timeout_s", o->ins.gnss.outage_timeout_s);
-    // Level 1 (Localizer).
-    SLAM_MMS_KEY_D("localizer.submap_duration_s", o->localizer.submap_duration_s);
-    SLAM_MMS_KEY_D("localizer.model_radius_m", o->localizer.model_radius_m);
-    SLAM_MMS_KEY_F("localizer.min_model_confidence", o->localizer.min_model_confidence);
-    SLAM_MMS_KEY_D("localizer.previous_submap_model_s", o->localizer.previous_submap_model_s);
-    SLAM_MMS_KEY_D("localizer.odom_sigma_rot_rad", o->localizer.odom_sigma_rot_rad);
-    SLAM_MMS_KEY_D("localizer.odom_sigma_trans_m", o->localizer.odom_sigma_trans_m);
-    SLAM_MMS_KEY_D("localizer.cv_sigma_rot_rad", o->localizer.cv_sigma_rot_rad);
-    SLAM_MMS_KEY_D("localizer.cv_sigma_trans_m", o->localizer.cv_sigma_trans_m);
-    SLAM_MMS_KEY_D("localizer.reg_cov_scale", o->localizer.reg_cov_scale);
-    SLAM_MMS_KEY_D("localizer.reg_sigma_floor_rot_rad", o->localizer.reg_sigma_floor_rot_rad);
-    SLAM_MMS_KEY_D("localizer.reg_sigma_floor_trans_m", o->localizer.reg_sigma_floor_trans_m);
-    SLAM_MMS_KEY_D("localizer.min_inlier_ratio", o->localizer.min_inlier_ratio);
-    SLAM_MMS_KEY_D("localizer.registration_voxel_m", o->localizer.registration_voxel_m);
-    SLAM_MMS_KEY_B("localizer.per_submap_surfels", o->localizer.per_submap_surfels);
-    SLAM_MMS_KEY_B("localizer.archive_surfels", o->localizer.archive_surfels);
-    h.emplace_back("localizer.spill_dir", Path([](Options* o) { return &o->localizer.spill_dir; }));
-    SLAM_MMS_KEY_I("localizer.surfels.renderer.projection.cols",
-                   o->localizer.surfels.renderer.projection.cols);
-    h.emplace_back("localizer.renderer",
-                   Enum<SurfelRendererBackend>([](Options* o) { return &o->localizer.renderer; },
-                                               {{"auto", SurfelRendererBackend::kAuto},
-                                                {"cpu", SurfelRendererBackend::kCpu},
-                                                {"egl", SurfelRendererBackend::kEgl}}));
-    SLAM_MMS_KEY_D("localizer.icp.max_distance", o->localizer.icp.max_distance);
-    SLAM_MMS_KEY_D("localizer.icp.max_angle_deg", o->localizer.icp.max_angle_deg);
-    SLAM_MMS_KEY_D("localizer.icp.huber_delta", o->localizer.icp.huber_delta);
-    SLAM_MMS_KEY_I("localizer.icp.max_iterations", o->localizer.icp.max_iterations);
-    SLAM_MMS_KEY_I("localizer.icp.min_correspondences", o->localizer.icp.min_correspondences);
-    SLAM_MMS_KEY_I("localizer.icp.pixel_stride", o->localizer.icp.pixel_stride);
-    SLAM_MMS_KEY_B("localizer.dynamic.enabled", o->localizer.dynamic.enabled);
-    SLAM_MMS_KEY_I("localizer.dynamic.min_object_pixels", o->localizer.dynamic.min_object_pixels);
-    SLAM_MMS_KEY_D("localizer.dynamic.segmentation_angle_deg",
-                   o->localizer.dynamic.segmentation_angle_deg);
-    SLAM_MMS_KEY_D("localizer.dynamic.ground_max_tilt_deg",
-                   o->localizer.dynamic.ground_max_tilt_deg);
-    SLAM_MMS_KEY_D("localizer.dynamic.min_residual_m", o->localizer.dynamic.min_residual_m);
-    SLAM_MMS_KEY_D("localizer.dynamic.residual_sigmas", o->localizer.dynamic.residual_sigmas);
-    SLAM_MMS_KEY_D("localizer.dynamic.min_outlier_fraction",
-                   o->localizer.dynamic.min_outlier_fraction);
-    SLAM_MMS_KEY_D("localizer.surfels.max_distance_m", o->localizer.surfels.max_distance_m);
-    SLAM_MMS_KEY_D("localizer.surfels.active_radius_m", o->localizer.surfels.active_radius_m);
-    SLAM_MMS_KEY_I("localizer.window.window_size", o->localizer.window.window_size);
-    SLAM_MMS_KEY_I("localizer.window.max_iterations", o->localizer.window.max_iterations);
-    SLAM_MMS_KEY_D("localizer.window.max_solve_time_s", o->localizer.window.max_solve_time_s);
-    SLAM_MMS_KEY_D("localizer.window.consistency_gate_chi2",
-                   o->localizer.window.consistency_gate_chi2);
-    // Level 2 (SubmapManager).
-    SLAM_MMS_KEY_B("level2.enabled", o->level2.enabled);
-    SLAM_MMS_KEY_B("level2.use_map_to_map", o->level2.use_map_to_map);
-    SLAM_MMS_KEY_B("level2.use_gnss", o->level2.use_gnss);
-    SLAM_MMS_KEY_B("level2.use_loops", o->level2.use_loops);
-    SLAM_MMS_KEY_D("level2.loop_distance_m", o->level2.loop_distance_m);
-    SLAM_MMS_KEY_I("level2.loop_min_submap_gap", o->level2.loop_min_submap_gap);
-    SLAM_MMS_KEY_D("level2.loop_min_inlier_ratio", o->level2.loop_min_inlier_ratio);
-    SLAM_MMS_KEY_D("level2.loop_max_rms_m", o->level2.loop_max_rms_m);
-    SLAM_MMS_KEY_D("level2.loop_gate_chi2", o->level2.loop_gate_chi2);
-    SLAM_MMS_KEY_D("level2.long_outage_s", o->level2.long_outage_s);
-    SLAM_MMS_KEY_D("level2.reckon_sigma_rot_rad", o->level2.reckon_sigma_rot_rad);
-    SLAM_MMS_KEY_D("level2.reckon_sigma_trans_m", o->level2.reckon_sigma_trans_m);
-    SLAM_MMS_KEY_D("level2.gnss_sigma_scale", o->level2.gnss_sigma_scale);
-    SLAM_MMS_KEY_D("level2.gnss_correlation_s", o->level2.gnss_correlation_s);
-    SLAM_MMS_KEY_D("level2.attitude_prior_sigma_rad", o->level2.attitude_prior_sigma_rad);
-    SLAM_MMS_KEY_I("level2.max_iterations", o->level2.max_iterations);
-    SLAM_MMS_KEY_B("level2.estimate_extrinsics", o->level2.estimate_extrinsics);
     h.emplace_back(
-        "level2.extrinsic_calibration.attitude_reference",
+        "ins.gnss.full_weight_fix_type",
+        Enum<GnssFixType>([](Options* o) { return &o->system.ins.gnss.full_weight_fix_type; },
+                          FixTypeNames()));
+    SLAM_MMS_KEY_D("ins.gnss.downweight_variance_factor",
+                   o->system.ins.gnss.downweight_variance_factor);
+    SLAM_MMS_KEY_D("ins.gnss.innovation_downweight_chi2",
+                   o->system.ins.gnss.innovation_downweight_chi2);
+    SLAM_MMS_KEY_D("ins.gnss.innovation_reject_chi2", o->system.ins.gnss.innovation_reject_chi2);
+    SLAM_MMS_KEY_D("ins.gnss.max_rejection_streak_s", o->system.ins.gnss.max_rejection_streak_s);
+    SLAM_MMS_KEY_D("ins.gnss.max_speed_mps", o->system.ins.gnss.max_speed_mps);
+    SLAM_MMS_KEY_D("ins.gnss.outage_timeout_s", o->system.ins.gnss.outage_timeout_s);
+    // Level 1 (Localizer).
+    SLAM_MMS_KEY_D("localizer.submap_duration_s", o->system.localizer.submap_duration_s);
+    SLAM_MMS_KEY_D("localizer.model_radius_m", o->system.localizer.model_radius_m);
+    SLAM_MMS_KEY_F("localizer.min_model_confidence", o->system.localizer.min_model_confidence);
+    SLAM_MMS_KEY_D("localizer.previous_submap_model_s",
+                   o->system.localizer.previous_submap_model_s);
+    SLAM_MMS_KEY_D("localizer.odom_sigma_rot_rad", o->system.localizer.odom_sigma_rot_rad);
+    SLAM_MMS_KEY_D("localizer.odom_sigma_trans_m", o->system.localizer.odom_sigma_trans_m);
+    SLAM_MMS_KEY_D("localizer.cv_sigma_rot_rad", o->system.localizer.cv_sigma_rot_rad);
+    SLAM_MMS_KEY_D("localizer.cv_sigma_trans_m", o->system.localizer.cv_sigma_trans_m);
+    SLAM_MMS_KEY_D("localizer.reg_cov_scale", o->system.localizer.reg_cov_scale);
+    SLAM_MMS_KEY_D("localizer.reg_sigma_floor_rot_rad",
+                   o->system.localizer.reg_sigma_floor_rot_rad);
+    SLAM_MMS_KEY_D("localizer.reg_sigma_floor_trans_m",
+                   o->system.localizer.reg_sigma_floor_trans_m);
+    SLAM_MMS_KEY_D("localizer.min_inlier_ratio", o->system.localizer.min_inlier_ratio);
+    SLAM_MMS_KEY_D("localizer.registration_voxel_m", o->system.localizer.registration_voxel_m);
+    SLAM_MMS_KEY_B("localizer.per_submap_surfels", o->system.localizer.per_submap_surfels);
+    SLAM_MMS_KEY_B("localizer.archive_surfels", o->system.localizer.archive_surfels);
+    h.emplace_back("localizer.spill_dir",
+                   Path([](Options* o) { return &o->system.localizer.spill_dir; }));
+    SLAM_MMS_KEY_I("localizer.surfels.renderer.projection.cols",
+                   o->system.localizer.surfels.renderer.projection.cols);
+    h.emplace_back(
+        "localizer.renderer",
+        Enum<SurfelRendererBackend>([](Options* o) { return &o->system.localizer.renderer; },
+                                    {{"auto", SurfelRendererBackend::kAuto},
+                                     {"cpu", SurfelRendererBackend::kCpu},
+                                     {"egl", SurfelRendererBackend::kEgl}}));
+    SLAM_MMS_KEY_D("localizer.icp.max_distance", o->system.localizer.icp.max_distance);
+    SLAM_MMS_KEY_D("localizer.icp.max_angle_deg", o->system.localizer.icp.max_angle_deg);
+    SLAM_MMS_KEY_D("localizer.icp.huber_delta", o->system.localizer.icp.huber_delta);
+    SLAM_MMS_KEY_I("localizer.icp.max_iterations", o->system.localizer.icp.max_iterations);
+    SLAM_MMS_KEY_I("localizer.icp.min_correspondences",
+                   o->system.localizer.icp.min_correspondences);
+    SLAM_MMS_KEY_I("localizer.icp.pixel_stride", o->system.localizer.icp.pixel_stride);
+    SLAM_MMS_KEY_B("localizer.dynamic.enabled", o->system.localizer.dynamic.enabled);
+    SLAM_MMS_KEY_I("localizer.dynamic.min_object_pixels",
+                   o->system.localizer.dynamic.min_object_pixels);
+    SLAM_MMS_KEY_D("localizer.dynamic.segmentation_angle_deg",
+                   o->system.localizer.dynamic.segmentation_angle_deg);
+    SLAM_MMS_KEY_D("localizer.dynamic.ground_max_tilt_deg",
+                   o->system.localizer.dynamic.ground_max_tilt_deg);
+    SLAM_MMS_KEY_D("localizer.dynamic.min_residual_m", o->system.localizer.dynamic.min_residual_m);
+    SLAM_MMS_KEY_D("localizer.dynamic.residual_sigmas",
+                   o->system.localizer.dynamic.residual_sigmas);
+    SLAM_MMS_KEY_D("localizer.dynamic.min_outlier_fraction",
+                   o->system.localizer.dynamic.min_outlier_fraction);
+    SLAM_MMS_KEY_D("localizer.surfels.max_distance_m", o->system.localizer.surfels.max_distance_m);
+    SLAM_MMS_KEY_D("localizer.surfels.active_radius_m",
+                   o->system.localizer.surfels.active_radius_m);
+    SLAM_MMS_KEY_I("localizer.window.window_size", o->system.localizer.window.window_size);
+    SLAM_MMS_KEY_I("localizer.window.max_iterations", o->system.localizer.window.max_iterations);
+    SLAM_MMS_KEY_D("localizer.window.max_solve_time_s",
+                   o->system.localizer.window.max_solve_time_s);
+    SLAM_MMS_KEY_D("localizer.window.consistency_gate_chi2",
+                   o->system.localizer.window.consistency_gate_chi2);
+    // Level 2 (SubmapManager).
+    SLAM_MMS_KEY_B("level2.enabled", o->system.level2.enabled);
+    SLAM_MMS_KEY_B("level2.use_map_to_map", o->system.level2.use_map_to_map);
+    SLAM_MMS_KEY_B("level2.use_gnss", o->system.level2.use_gnss);
+    SLAM_MMS_KEY_B("level2.use_loops", o->system.level2.use_loops);
+    SLAM_MMS_KEY_D("level2.loop_distance_m", o->system.level2.loop_distance_m);
+    SLAM_MMS_KEY_I("level2.loop_min_submap_gap", o->system.level2.loop_min_submap_gap);
+    SLAM_MMS_KEY_D("level2.loop_min_inlier_ratio", o->system.level2.loop_min_inlier_ratio);
+    SLAM_MMS_KEY_D("level2.loop_max_rms_m", o->system.level2.loop_max_rms_m);
+    SLAM_MMS_KEY_D("level2.loop_gate_chi2", o->system.level2.loop_gate_chi2);
+    SLAM_MMS_KEY_D("level2.long_outage_s", o->system.level2.long_outage_s);
+    SLAM_MMS_KEY_D("level2.reckon_sigma_rot_rad", o->system.level2.reckon_sigma_rot_rad);
+    SLAM_MMS_KEY_D("level2.reckon_sigma_trans_m", o->system.level2.reckon_sigma_trans_m);
+    SLAM_MMS_KEY_D("level2.gnss_sigma_scale", o->system.level2.gnss_sigma_scale);
+    SLAM_MMS_KEY_D("level2.gnss_correlation_s", o->system.level2.gnss_correlation_s);
+    SLAM_MMS_KEY_D("level2.attitude_prior_sigma_rad", o->system.level2.attitude_prior_sigma_rad);
+    SLAM_MMS_KEY_I("level2.max_iterations", o->system.level2.max_iterations);
+    // The drive runner (RunDrive's passes over the whole drive; DriveRunOptions).
+    SLAM_MMS_KEY_B("drive.estimate_extrinsics", o->drive.estimate_extrinsics);
+    h.emplace_back(
+        "drive.extrinsic_calibration.attitude_reference",
         Enum<ExtrinsicCalibrationOptions::AttitudeReference>(
-            [](Options* o) { return &o->level2.extrinsic_calibration.attitude_reference; },
+            [](Options* o) { return &o->drive.extrinsic_calibration.attitude_reference; },
             {{"pos", ExtrinsicCalibrationOptions::AttitudeReference::kPos},
              {"travel_direction",
               ExtrinsicCalibrationOptions::AttitudeReference::kTravelDirection}}));
-    SLAM_MMS_KEY_I("level2.extrinsic_calibration.max_scans",
-                   o->level2.extrinsic_calibration.max_scans);
+    SLAM_MMS_KEY_I("drive.extrinsic_calibration.max_scans",
+                   o->drive.extrinsic_calibration.max_scans);
 #undef SLAM_MMS_KEY_D
 #undef SLAM_MMS_KEY_F
 #undef SLAM_MMS_KEY_I

@@ -1,6 +1,7 @@
 #pragma once
 // The keys of slam_mms_run's --config file (config_file.hpp): for each option path, how a YAML
-// value sets the MappingSystem::Options field and how the field is written back as YAML and JSON.
+// value sets the RunConfig field (MappingSystem::Options, or DriveRunOptions for drive.*) and how
+// the field is written back as YAML and JSON.
 // Private to the app (config_file.cpp, the Python package's apply_config_file, slam_mms_sweep).
 
 #include <yaml-cpp/yaml.h>
@@ -11,11 +12,11 @@
 #include <utility>
 #include <vector>
 
-#include "slam_mms/pipeline/mapping_system.hpp"
+#include "slam_mms_run/config_file.hpp"
 
 namespace slam_mms::app::config {
 
-using Options = MappingSystem::Options;
+using Options = RunConfig;
 using Json = nlohmann::ordered_json;
 
 // One accepted key: how to parse a YAML value into the options, and how to write the current value

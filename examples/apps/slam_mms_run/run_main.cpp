@@ -368,10 +368,11 @@ int RunMain(int argc, const char* const* argv) {
   // the end, also after a signal), so memory stays flat on long drives. In a config file
   // `localizer.spill_dir: "<out>"` (what --dump-config writes) means that folder, `~` keeps them
   // in memory, any other path is used as given.
-  MappingSystem::Options options;
+  RunConfig config;
+  MappingSystem::Options& options = config.system;
   options.localizer.spill_dir = kSpillToOutDir;
   if (args.list_config_keys) {
-    std::fputs(OptionsToYaml(options).c_str(), stdout);
+    std::fputs(OptionsToYaml(config).c_str(), stdout);
     return 0;
   }
   const bool tty = StdoutIsTerminal();
@@ -379,16 +380,16 @@ int RunMain(int argc, const char* const* argv) {
   // The config file, then the output options, checked before any work.
   if (args.preset) ApplyLidarPreset(*args.preset, &options);
   if (!args.config.empty()) {
-    const Status s = ApplyConfigFile(args.config, &options);
+    const Status s = ApplyConfigFile(args.config, &config);
     if (!s.ok()) return Fail(s, kExitUsage);
   }
   if (!args.dump_config.empty()) {
-    const Status s = WriteConfigFile(options, args.dump_config);
+    const Status s = WriteConfigFile(config, args.dump_config);
     if (!s.ok()) return Fail(s, kExitUsage);
     std::printf("options written to %s (--config reads it back)\n", args.dump_config.c_str());
     return 0;
   }
-  const std::string options_json = OptionsToJson(options);
+  const std::string options_json = OptionsToJson(config);
   if (options.localizer.spill_dir == kSpillToOutDir) options.localizer.spill_dir = args.out_dir;
   GeoOutputOptions geo;
   geo.crs = args.crs;
@@ -459,12 +460,12 @@ int RunMain(int argc, const char* const* argv) {
   // Boresight self-calibration first: every method then runs with the estimate (the antenna and
   // everything else as the input gives them).
   std::string extrinsics_json;
-  if (args.calibrate_extrinsics || options.level2.estimate_extrinsics) {
+  if (args.calibrate_extrinsics || config.drive.estimate_extrinsics) {
     // The clock offset the reader already applies (an --extrinsics file's): its scans' shift.
     const double input_offset_s =
         input->ScanStart(0).SecondsSince(input->Underlying().ScanStart(0));
-    StatusOr<RunCalibration> calibration =
-        CalibrateRunExtrinsics(*input, options, args.out_dir, input_offset_s, &g_stop);
+    StatusOr<RunCalibration> calibration = CalibrateRunExtrinsics(
+        *input, options, config.drive.extrinsic_calibration, args.out_dir, input_offset_s, &g_stop);
     if (!calibration.ok()) {
       return Fail(calibration.status().WithContext("--calibrate-extrinsics"),
                   g_stop.load() ? StopExitCode() : kExitError);

@@ -27,6 +27,12 @@
 // placed with the smoothed POS); kGnssIns is always the forward filter, kLidarOnly uses no POS.
 // An input with its own external POS keeps it (it is a POS solution already) in every workflow.
 //
+// Boresight self-calibration (DriveRunOptions::estimate_extrinsics): before the method, the
+// offline POS of the drive and CalibrateExtrinsics against it (CalibrateDriveExtrinsics), then the
+// run with the estimated T_body_lidar and LiDAR clock offset (the reader's antenna kept); the
+// estimate is in DriveRun::extrinsic_calibration. A streaming MappingSystem has no such pass: it
+// needs the whole drive first.
+//
 // Thread safety: RunDrive may run concurrently with itself on distinct readers (or one reader whose
 // ReadScan is thread-safe); callbacks are called on the calling thread.
 
@@ -40,6 +46,7 @@
 #include "slam_mms/core/point_cloud.hpp"
 #include "slam_mms/core/status.hpp"
 #include "slam_mms/core/trajectory.hpp"
+#include "slam_mms/drive/extrinsic_calibrator.hpp"
 #include "slam_mms/io/drive_reader.hpp"
 #include "slam_mms/pipeline/mapping_system.hpp"
 
@@ -66,7 +73,10 @@ struct DriveRun {
   bool complete = false;      ///< Every scan was fed and Finish() completed (no error, no stop).
   bool smoothed_pos = false;  ///< The scans were placed on (kFull: F_Odom from) a smoothed POS.
   double smoothing_wall_s = 0.0;  ///< Of which the forward-backward pass over the drive [s].
-  Status status;                  ///< The fatal error, if any.
+  /// DriveRunOptions::estimate_extrinsics: what the run was made with (its wall time included in
+  /// wall_s).
+  std::optional<ExtrinsicCalibration> extrinsic_calibration;
+  Status status;  ///< The fatal error, if any.
 };
 
 /// Which POS a run of kFull uses (see the file comment); kGnssIns/kGnssInsSmoothed fix their own.
@@ -76,8 +86,16 @@ const char* PosWorkflowName(PosWorkflow pos);  ///< "forward", "smoothed"
 bool ParsePosWorkflow(const std::string& name, PosWorkflow* pos);
 
 /// Run options that are not MappingSystem options (the streaming API has no offline pass).
+/// Config keys drive.* (slam_mms_run --config).
 struct DriveRunOptions {
   PosWorkflow pos = PosWorkflow::kForward;  ///< For kFull.
+  /// Boresight self-calibration before the run (see the file comment; slam_mms_run
+  /// --calibrate-extrinsics, docs/calibration.md). Off until measured to help.
+  bool estimate_extrinsics = false;
+  /// Its options (its threads are MappingSystem::Options::num_threads).
+  ExtrinsicCalibrationOptions extrinsic_calibration;
+  /// InvalidArgument naming "DriveRunOptions::<field>" (or the calibration's field).
+  [[nodiscard]] Status Validate() const;
 };
 
 struct DriveRunCallbacks {
@@ -110,6 +128,13 @@ struct OfflinePos {
 /// there is no initial attitude or no usable fix).
 [[nodiscard]] StatusOr<OfflinePos> ComputeOfflinePos(const DriveReader& reader,
                                                      const MappingSystem::Options& options);
+
+/// The boresight self-calibration of DriveRunOptions::estimate_extrinsics: ComputeOfflinePos, then
+/// CalibrateExtrinsics from reader.streams().T_body_lidar (time offset 0: the reader's own clock)
+/// with `calibration` and options.num_threads. `stop` is polled between rounds. Errors: theirs.
+[[nodiscard]] StatusOr<ExtrinsicCalibration> CalibrateDriveExtrinsics(
+    const DriveReader& reader, const MappingSystem::Options& options,
+    const ExtrinsicCalibrationOptions& calibration, const std::atomic<bool>* stop = nullptr);
 
 /// The external POS records in world (local ENU about `origin`): positions through WGS-84, the
 /// attitudes rotated from each record's local ENU into world, covariances from the sigmas (else

@@ -39,8 +39,8 @@
 
 #include "slam_mms/core/sensor_data.hpp"
 #include "slam_mms/core/status.hpp"
+#include "slam_mms/drive/extrinsic_calibration_options.hpp"
 #include "slam_mms/io/drive_reader.hpp"
-#include "slam_mms/pipeline/extrinsic_calibration_options.hpp"
 
 namespace slam_mms {
 

@@ -57,6 +57,9 @@ DriveSourceKind DetectDriveSourceKind(const std::filesystem::path& path);
 /// reader owns. Thread safety: as `base`.
 std::unique_ptr<DriveReader> OverrideExtrinsics(std::unique_ptr<DriveReader> base,
                                                 const DriveExtrinsics& extrinsics);
+/// The same over a `base` the caller keeps (it must outlive the returned reader).
+std::unique_ptr<DriveReader> OverrideExtrinsics(const DriveReader& base,
+                                                const DriveExtrinsics& extrinsics);
 
 [[nodiscard]] StatusOr<std::unique_ptr<DriveReader>> OpenDrive(const std::filesystem::path& path,
                                                                const DriveSourceOptions& options);

@@ -7,7 +7,6 @@
 // Thread safety: plain values.
 
 #include "slam_mms/core/status.hpp"
-#include "slam_mms/pipeline/extrinsic_calibration_options.hpp"
 #include "slam_mms/registration/registration_options.hpp"
 
 namespace slam_mms {
@@ -47,14 +46,6 @@ struct Level2Options {
   /// disables the prior.
   double attitude_prior_sigma_rad = 0.0175;
   int max_iterations = 100;  ///< Levenberg-Marquardt iterations of a level-2 solve, > 0.
-  /// Boresight self-calibration before the run (slam_mms_run --calibrate-extrinsics): the
-  /// LiDAR's extrinsic and clock offset estimated against the offline POS (CalibrateExtrinsics,
-  /// docs/calibration.md) and the run made with the estimate. Read by the hosts that own a
-  /// whole drive (slam_mms_run); a streaming MappingSystem cannot make the second pass and
-  /// ignores it. Off until measured to help (docs/calibration.md).
-  bool estimate_extrinsics = false;
-  /// Its options (its threads are the host's num_threads).
-  ExtrinsicCalibrationOptions extrinsic_calibration;
   /// Map-to-map registration and loop verification.
   PointIcpOptions icp;
   /// InvalidArgument naming "SubmapManager::Options::<field>".

@@ -1,4 +1,4 @@
-#include "slam_mms/pipeline/extrinsic_calibration_options.hpp"
+#include "slam_mms/drive/extrinsic_calibration_options.hpp"
 
 #include <string>
 

@@ -1,7 +1,7 @@
 #pragma once
 // ExtrinsicCalibrationOptions: the options of the boresight self-calibration
-// (drive/extrinsic_calibrator.hpp, CalibrateExtrinsics); part of level 2's options
-// (SubmapManager::Options::extrinsic_calibration) so that one config file carries them.
+// (drive/extrinsic_calibrator.hpp, CalibrateExtrinsics); part of the drive runner's options
+// (DriveRunOptions::extrinsic_calibration, config keys drive.extrinsic_calibration.*).
 //
 // Thread safety: a plain value type.
 
@@ -66,7 +66,7 @@ struct ExtrinsicCalibrationOptions {
   /// the vehicle axis and for slip, added in quadrature to the reference's own sigma. kPos is the
   /// default: it makes no assumption, and the estimate is the one that places the scans best on
   /// this POS (on the real KITTI frames kTravelDirection was 1.6 deg off it, docs/calibration.md).
-  /// "pos" / "travel_direction" in config files (level2.extrinsic_calibration.attitude_reference).
+  /// "pos" / "travel_direction" in config files (drive.extrinsic_calibration.attitude_reference).
   enum class AttitudeReference { kPos, kTravelDirection };
   AttitudeReference attitude_reference = AttitudeReference::kPos;
   double travel_min_speed_mps = 3.0;

@@ -177,7 +177,15 @@ struct SlidingWindowGraph::Impl {
   Status Marginalize(State& s) {
     const std::vector<double*> blocks = BlocksOf(s);
     const std::set<ceres::ResidualBlockId> rb_set = ResidualsOf(blocks);
-    const std::vector<ceres::ResidualBlockId> rbs(rb_set.begin(), rb_set.end());
+    // In the order the factors were added, not the set's (their addresses): the marginal prior's
+    // sums, and so every later solve and covariance, must not depend on where the heap put them.
+    std::vector<ceres::ResidualBlockId> rbs;
+    for (const auto& [fid, r] : factors) {
+      if (rb_set.count(r.rb) != 0) rbs.push_back(r.rb);
+    }
+    if (rbs.size() != rb_set.size()) {
+      return InternalError("SlidingWindowGraph: a factor of the leaving state has no record");
+    }
     std::set<double*> removed;
     for (double* p : blocks) {
       if (!problem->IsParameterBlockConstant(p)) removed.insert(p);

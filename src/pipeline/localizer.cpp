@@ -85,16 +85,12 @@ StatusOr<std::unique_ptr<Localizer>> Localizer::Create(const Options& options,
   Impl& m = *loc->impl_;
   m.opt = options;
   m.T_body_lidar = T_body_lidar;
-  m.T_lidar_body = T_body_lidar.inverse();
-  m.use_imu_states = options.mode == MappingMode::kFull;
-  m.motion_prior = internal::MotionPrior(options.imu, m.use_imu_states);
+  m.motion_prior = internal::MotionPrior(options.imu, options.mode == MappingMode::kFull);
   SLAM_MMS_ASSIGN_OR_RETURN(m.projection,
                             RangeProjection::Create(options.surfels.renderer.projection));
   const int threads = options.num_threads;
-  ScanDeskewer::Options deskew;
-  static_cast<DeskewOptions&>(deskew) = options.deskew;
-  deskew.num_threads = threads;
-  SLAM_MMS_ASSIGN_OR_RETURN(m.deskewer, ScanDeskewer::Create(deskew));
+  SLAM_MMS_ASSIGN_OR_RETURN(m.deskew,
+                            internal::DeskewStage::Create(options, m.projection, T_body_lidar));
   SurfelMapOptions surfel_options = options.surfels;
   if (options.per_submap_surfels) surfel_options.integrate_current_submap_only = true;
   SLAM_MMS_ASSIGN_OR_RETURN(m.map, SurfelMap::Create(surfel_options, threads));
@@ -102,15 +98,12 @@ StatusOr<std::unique_ptr<Localizer>> Localizer::Create(const Options& options,
   if (!renderer.ok()) return renderer.status().WithContext("Localizer renderer");
   m.renderer = std::move(renderer).value();
   SLAM_MMS_RETURN_IF_ERROR(m.map.SetRenderer(m.renderer.get()));
-  ProjectiveIcp::Options icp;
-  static_cast<ProjectiveIcpOptions&>(icp) = options.icp;
-  icp.num_threads = threads;
-  SLAM_MMS_ASSIGN_OR_RETURN(m.icp, ProjectiveIcp::Create(m.projection, icp));
-  m.dynamic = internal::DynamicObjectFilter(options.dynamic, m.projection, options.icp.max_distance,
-                                            options.icp.max_angle_deg);
+  m.model = internal::ModelRenderStage(options, T_body_lidar);
+  SLAM_MMS_ASSIGN_OR_RETURN(
+      m.registration, internal::RegistrationStage::Create(options, m.projection, T_body_lidar));
+  m.window = internal::WindowStage(options);
   m.clouds = std::make_unique<internal::SubmapCloudBuilder>(
       options.map_voxel_m, options.registration_voxel_m, /*asynchronous=*/options.num_threads > 1);
-  m.range_image = std::make_unique<internal::ParallelRangeImage>(options.num_threads);
   auto store = internal::SubmapStore::Create(options.spill_dir);
   if (!store.ok()) return store.status().WithContext("Localizer::Options::spill_dir");
   m.store = std::move(store).value();
@@ -139,12 +132,15 @@ StatusOr<LocalizationResult> Localizer::ProcessScan(const Scan& scan,
   ScanStep step = m.BeginScan(scan, motion);
   // 2. predict first: the preintegration de-skew starts from the prediction.
   m.PredictStage(scan, motion, &step, &res);
-  SLAM_MMS_RETURN_IF_ERROR(m.DeskewStage(scan, motion, step, &res));   // 1. de-skew
-  SLAM_MMS_RETURN_IF_ERROR(m.RenderStage(scan, &step, &res));          // 3. render
-  SLAM_MMS_RETURN_IF_ERROR(m.RegisterStage(scan, &step, &res));        // 4. register (eq 15)
-  SLAM_MMS_RETURN_IF_ERROR(m.FactorStage(scan, motion, &step, &res));  // 5. add factors
-  SLAM_MMS_RETURN_IF_ERROR(m.OptimizeStage(scan, &step, &res));        // 6. optimize
-  SLAM_MMS_RETURN_IF_ERROR(m.IntegrateStage(scan, step, &res));        // 7. integrate
+  SLAM_MMS_RETURN_IF_ERROR(  // 1. de-skew
+      m.deskew.Deskew(scan, motion, m.motion_prior, step, m.prev.bias, &m.deskewed, &res));
+  SLAM_MMS_RETURN_IF_ERROR(  // 3. render
+      m.model.Render(scan, m.current(), m.num_processed, &m.map, &step, &res));
+  SLAM_MMS_RETURN_IF_ERROR(  // 4. register (eq 15)
+      m.registration.Register(scan, m.model.model(), &m.deskewed, &m.map, &step, &res));
+  SLAM_MMS_RETURN_IF_ERROR(m.window.AddFactors(scan, motion, m.prev, &step, &res));  // 5. factors
+  SLAM_MMS_RETURN_IF_ERROR(m.window.Optimize(scan, &step, &m.prev, &res));           // 6. optimize
+  SLAM_MMS_RETURN_IF_ERROR(m.IntegrateStage(scan, step, &res));                      // 7. integrate
   m.RecordScan(scan, motion, step, &res);
   // The submap cut every WT: this scan becomes the next submap's reference.
   if (!step.is_reference &&

@@ -1,56 +1,16 @@
-// The submap life cycle of level 1 (Localizer::Impl): a new sliding window per submap, the start
-// of a submap (and the retirement of old surfels), its close (clouds into the SubmapStore), and
-// the cut every WT where a scan becomes the next submap's reference.
-#include <ceres/cost_function.h>
+// The submap life cycle of level 1 (Localizer::Impl): the start of a submap (and the retirement
+// of old surfels), its close (clouds into the SubmapStore), and the cut every WT where a scan
+// becomes the next submap's reference (with a new sliding window, WindowStage::Start).
+#include <utility>  // first: a standard header brings in <features.h>, which defines __GLIBC__
 
 #if defined(__GLIBC__)
 #include <malloc.h>
 #endif
 
-#include <utility>
-
 #include "pipeline/localizer_impl.hpp"
-#include "pipeline/noise_model.hpp"
 #include "slam_mms/core/logging.hpp"
 
 namespace slam_mms {
-
-namespace noise = internal::noise;
-
-using internal::MakeNormalPrior;
-
-Status Localizer::Impl::StartWindow(const Eigen::Vector3d& v_submap, const Vector6d& bias) {
-  SlidingWindowGraph::Options window_options;
-  static_cast<SlidingWindowOptions&>(window_options) = opt.window;
-  window_options.num_threads = opt.num_threads;
-  auto w = SlidingWindowGraph::Create(window_options);
-  if (!w.ok()) return w.status();
-  window = std::make_unique<SlidingWindowGraph>(std::move(w).value());
-  ref_id = next_id++;
-  StateInit init;
-  init.keep = true;
-  if (use_imu_states) {
-    init.v_frame = v_submap;
-    init.imu_bias = bias;
-  }
-  SLAM_MMS_RETURN_IF_ERROR(window->AddState(ref_id, init));
-  SLAM_MMS_RETURN_IF_ERROR(window->SetBlockConstant({ref_id, StateBlock::kPose}, true));
-  if (use_imu_states) {
-    // The reference's velocity and biases carry over from the previous window (or the POS).
-    auto v_prior = MakeNormalPrior(
-        v_submap, Eigen::Vector3d::Constant(noise::kReferenceVelocityPriorSigmaMps));
-    Eigen::VectorXd b_sigma(6);
-    b_sigma << Eigen::Vector3d::Constant(noise::kBiasPriorSigmaAccelMps2),
-        Eigen::Vector3d::Constant(noise::kBiasPriorSigmaGyroRadps);
-    auto b_prior = MakeNormalPrior(bias, b_sigma);
-    SLAM_MMS_RETURN_IF_ERROR(
-        window->AddCostFunction(std::move(v_prior), {{ref_id, StateBlock::kVelocity}}).status());
-    SLAM_MMS_RETURN_IF_ERROR(
-        window->AddCostFunction(std::move(b_prior), {{ref_id, StateBlock::kBias}}).status());
-  }
-  prev_id = ref_id;
-  return OkStatus();
-}
 
 void Localizer::Impl::StartSubmap(const Eigen::Isometry3d& T_world_submap, Timestamp stamp,
                                   int64_t scan_index, const Eigen::Isometry3d& T_prev_this,
@@ -108,9 +68,9 @@ Status Localizer::Impl::CutSubmap(const Scan& scan, const Eigen::Isometry3d& T_w
   motion_prior.Reframe(T_new_old);
   prev.T_submap = Eigen::Isometry3d::Identity();
   prev.v_submap = T_submap_cur.linear().transpose() * prev.v_submap;
-  SLAM_MMS_RETURN_IF_ERROR(StartWindow(prev.v_submap, prev.bias));
-  clouds->Add(deskewed, scan.cloud.time_offsets_s(), scan.stamp_start.nanoseconds(), scan.index,
-              T_body_lidar, opt.map_max_range_m);
+  SLAM_MMS_RETURN_IF_ERROR(window.Start(prev.v_submap, prev.bias));
+  clouds->Add(deskewed.cloud, scan.cloud.time_offsets_s(), scan.stamp_start.nanoseconds(),
+              scan.index, T_body_lidar, opt.map_max_range_m);
   res->new_submap = true;
   res->submap_id = current().id;
   SLAM_MMS_LOG(kDebug) << "Localizer: submap " << current().id << " starts at scan " << scan.index;

@@ -102,11 +102,8 @@ StatusOr<std::unique_ptr<Localizer>> Localizer::Create(const Options& options,
   SLAM_MMS_ASSIGN_OR_RETURN(
       m.registration, internal::RegistrationStage::Create(options, m.projection, T_body_lidar));
   m.window = internal::WindowStage(options);
-  m.clouds = std::make_unique<internal::SubmapCloudBuilder>(
-      options.map_voxel_m, options.registration_voxel_m, /*asynchronous=*/options.num_threads > 1);
-  auto store = internal::SubmapStore::Create(options.spill_dir);
-  if (!store.ok()) return store.status().WithContext("Localizer::Options::spill_dir");
-  m.store = std::move(store).value();
+  SLAM_MMS_ASSIGN_OR_RETURN(m.integration,
+                            internal::IntegrationStage::Create(options, T_body_lidar));
   SLAM_MMS_LOG(kInfo) << "Localizer: mode " << MappingModeName(options.mode) << ", renderer "
                       << m.renderer->Name() << ", WT " << options.submap_duration_s << " s";
   return loc;
@@ -132,20 +129,23 @@ StatusOr<LocalizationResult> Localizer::ProcessScan(const Scan& scan,
   ScanStep step = m.BeginScan(scan, motion);
   // 2. predict first: the preintegration de-skew starts from the prediction.
   m.PredictStage(scan, motion, &step, &res);
-  SLAM_MMS_RETURN_IF_ERROR(  // 1. de-skew
+  // 1. de-skew
+  SLAM_MMS_RETURN_IF_ERROR(
       m.deskew.Deskew(scan, motion, m.motion_prior, step, m.prev.bias, &m.deskewed, &res));
-  SLAM_MMS_RETURN_IF_ERROR(  // 3. render
-      m.model.Render(scan, m.current(), m.num_processed, &m.map, &step, &res));
-  SLAM_MMS_RETURN_IF_ERROR(  // 4. register (eq 15)
+  // 3. render the model at the prediction
+  SLAM_MMS_RETURN_IF_ERROR(m.model.Render(scan, m.current(), m.num_processed, &m.map, &step, &res));
+  // 4. register (eq 15), moving objects masked out first
+  SLAM_MMS_RETURN_IF_ERROR(
       m.registration.Register(scan, m.model.model(), &m.deskewed, &m.map, &step, &res));
-  SLAM_MMS_RETURN_IF_ERROR(m.window.AddFactors(scan, motion, m.prev, &step, &res));  // 5. factors
-  SLAM_MMS_RETURN_IF_ERROR(m.window.Optimize(scan, &step, &m.prev, &res));           // 6. optimize
-  SLAM_MMS_RETURN_IF_ERROR(m.IntegrateStage(scan, step, &res));                      // 7. integrate
+  // 5. add factors (F_Odom / F_Prein / CV, F_Reg eq 16), 6. optimize the window
+  SLAM_MMS_RETURN_IF_ERROR(m.window.AddFactors(scan, motion, m.prev, &step, &res));
+  SLAM_MMS_RETURN_IF_ERROR(m.window.Optimize(scan, &step, &m.prev, &res));
+  // 7. integrate into the surfel map and the submap's clouds
+  SLAM_MMS_RETURN_IF_ERROR(m.integration.Integrate(scan, m.deskewed, step, &m.map, &res));
   m.RecordScan(scan, motion, step, &res);
   // The submap cut every WT: this scan becomes the next submap's reference.
-  if (!step.is_reference &&
-      scan.stamp_start.SecondsSince(m.current().start) >= m.opt.submap_duration_s) {
-    SLAM_MMS_RETURN_IF_ERROR(m.CutSubmap(scan, step.T_world_submap, step.T_submap_cur, &res));
+  if (m.integration.CutDue(scan, step)) {
+    SLAM_MMS_RETURN_IF_ERROR(m.CutSubmap(scan, step, &res));
   } else if (step.is_reference) {
     res.new_submap = true;
   }
@@ -153,50 +153,42 @@ StatusOr<LocalizationResult> Localizer::ProcessScan(const Scan& scan,
   return res;
 }
 
-const std::vector<SubmapRecord>& Localizer::submaps() const { return impl_->store.submaps(); }
+const std::vector<SubmapRecord>& Localizer::submaps() const {
+  return impl_->integration.store().submaps();
+}
 
 Status Localizer::SetSubmapPose(int32_t id, const Eigen::Isometry3d& T_world_submap) {
   if (!T_world_submap.matrix().allFinite()) {
     return InvalidArgumentError("Localizer::SetSubmapPose: non-finite pose for submap " +
                                 std::to_string(id));
   }
-  for (const SubmapRecord& rec : impl_->store.submaps()) {
-    if (rec.id != id) continue;
-    // The surfels follow the submap.
-    const Eigen::Isometry3d T_new_old = T_world_submap * rec.T_world_submap.inverse();
-    impl_->map.TransformSubmap(id, T_new_old);
-    if (auto it = impl_->archived_surfels.find(id); it != impl_->archived_surfels.end()) {
-      const Eigen::Matrix3f R = T_new_old.linear().cast<float>();
-      const Eigen::Vector3f t = T_new_old.translation().cast<float>();
-      for (Surfel& s : it->second) TransformSurfel(R, t, &s);
-    }
-    break;
-  }
-  return impl_->store.SetPose(id, T_world_submap);
+  return impl_->integration.SetSubmapPose(id, T_world_submap, &impl_->map);
 }
 
 void Localizer::ReleaseSubmapClouds(int32_t id, bool keep_registration_cloud) {
-  impl_->store.ReleaseClouds(id, keep_registration_cloud);
+  impl_->integration.store().ReleaseClouds(id, keep_registration_cloud);
 }
 
 StatusOr<PointCloud> Localizer::SubmapCloud(int32_t id, CloudKind kind) const {
-  return impl_->store.SubmapCloud(id, kind);
+  return impl_->integration.store().SubmapCloud(id, kind);
 }
 
 StatusOr<PointCloud> Localizer::SubmapCloud(int32_t id, CloudKind kind,
                                             MapPointStamps* stamps) const {
-  return impl_->store.SubmapCloud(id, kind, stamps);
+  return impl_->integration.store().SubmapCloud(id, kind, stamps);
 }
 
-const std::filesystem::path& Localizer::spill_folder() const { return impl_->store.spill_folder(); }
+const std::filesystem::path& Localizer::spill_folder() const {
+  return impl_->integration.store().spill_folder();
+}
 
-void Localizer::FinishCurrentSubmap() { impl_->CloseCurrentSubmap(); }
+void Localizer::FinishCurrentSubmap() { impl_->integration.CloseCurrentSubmap(); }
 
 const SurfelMap& Localizer::surfel_map() const { return impl_->map; }
 
 std::vector<Surfel> Localizer::AllSurfels() const {
   std::vector<Surfel> all;
-  for (const auto& [id, surfels] : impl_->archived_surfels) {
+  for (const auto& [id, surfels] : impl_->integration.archived_surfels()) {
     all.insert(all.end(), surfels.begin(), surfels.end());
   }
   std::vector<Surfel> live = impl_->map.LiveSurfels();

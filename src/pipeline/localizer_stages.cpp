@@ -1,6 +1,7 @@
 // The glue between the stage objects of Localizer::ProcessScan (localizer.cpp runs them in order;
-// numbers as in localizer.hpp): the input check, the scan's working values (ScanStep), the
-// prediction, the integration and the bookkeeping after the stages.
+// numbers as in localizer.hpp): the input check, the first submap, the scan's working values
+// (ScanStep), the prediction, the bookkeeping after the stages and the submap cut, which hand
+// the state the stages share (the previous scan, the motion prior's poses) from one to the next.
 #include <string>
 
 #include "pipeline/localizer_impl.hpp"
@@ -32,8 +33,9 @@ Status Localizer::Impl::CheckScan(const Scan& scan, const ScanMotionInput& motio
 Status Localizer::Impl::StartFirstSubmap(const Scan& scan, const ScanMotionInput& motion) {
   Eigen::Isometry3d T_world_body0 = initial_T_world_body;
   if (motion.type == MotionFactorType::kOdometry) T_world_body0 = motion.T_world_body_pos_start;
-  StartSubmap(T_world_body0, scan.stamp_start, scan.index, Eigen::Isometry3d::Identity(),
-              Matrix6d::Identity() * noise::kAnchorPoseVariance);
+  integration.StartSubmap(T_world_body0, scan.stamp_start, scan.index,
+                          Eigen::Isometry3d::Identity(),
+                          Matrix6d::Identity() * noise::kAnchorPoseVariance, &map);
   const Eigen::Vector3d v_submap0 = T_world_body0.linear().transpose() * motion.v_world_pos;
   prev.bias = motion.pos_bias;
   SLAM_MMS_RETURN_IF_ERROR(window.Start(v_submap0, prev.bias));
@@ -60,33 +62,10 @@ void Localizer::Impl::PredictStage(const Scan& scan, const ScanMotionInput& moti
   res->timings.predict_ms = MsSince(t0);
 }
 
-Status Localizer::Impl::IntegrateStage(const Scan& scan, const ScanStep& step,
-                                       LocalizationResult* res) {
-  const auto t0 = Clock::now();
-  const Eigen::Isometry3d T_world_lidar = step.T_world_submap * step.T_submap_cur * T_body_lidar;
-  auto stats = map.Integrate(deskewed.vnm, T_world_lidar, scan.stamp_start);
-  if (!stats.ok()) return stats.status().WithContext("Localizer: surfel integration");
-  res->num_surfels = stats->num_surfels;
-  const Eigen::Isometry3d T_submap_lidar = step.T_submap_cur * T_body_lidar;
-  clouds->Add(deskewed.cloud, scan.cloud.time_offsets_s(), scan.stamp_start.nanoseconds(),
-              scan.index, T_submap_lidar, opt.map_max_range_m);
-  res->timings.integrate_ms = MsSince(t0);
-  return OkStatus();
-}
-
 void Localizer::Impl::RecordScan(const Scan& scan, const ScanMotionInput& motion,
                                  const ScanStep& step, LocalizationResult* res) {
   const Eigen::Isometry3d& T_submap_cur = step.T_submap_cur;
-  if (!step.is_reference) {
-    SubmapRecord& rec = current();
-    rec.scan_indices.push_back(scan.index);
-    rec.scan_stamps.push_back(scan.stamp_start);
-    rec.T_submap_scan.push_back(T_submap_cur);
-    rec.cov_submap_scan.push_back(res->cov_T_world_body);
-    rec.end = scan.stamp_start;
-  }
-  res->submap_id = current().id;
-  res->T_world_body = step.T_world_submap * T_submap_cur;
+  integration.Record(scan, step, res);
   ++num_processed;
   motion_prior.Record(scan.stamp_start, T_submap_cur);
   registration.RecordPose(scan.stamp_start.nanoseconds(), res->T_world_body.translation());
@@ -98,6 +77,22 @@ void Localizer::Impl::RecordScan(const Scan& scan, const ScanMotionInput& motion
   if (!window.use_imu_states() && motion.type == MotionFactorType::kOdometry) {
     prev.v_submap = step.T_world_submap.linear().transpose() * motion.v_world_pos;
   }
+}
+
+Status Localizer::Impl::CutSubmap(const Scan& scan, const ScanStep& step, LocalizationResult* res) {
+  const Eigen::Isometry3d& T_submap_cur = step.T_submap_cur;
+  integration.Cut(scan, step, res->cov_T_world_body, &map);
+  // Re-express the level-1 state in the new frame.
+  const Eigen::Isometry3d T_new_old = T_submap_cur.inverse();
+  motion_prior.Reframe(T_new_old);
+  prev.T_submap = Eigen::Isometry3d::Identity();
+  prev.v_submap = T_submap_cur.linear().transpose() * prev.v_submap;
+  SLAM_MMS_RETURN_IF_ERROR(window.Start(prev.v_submap, prev.bias));
+  integration.AddReferenceCloud(scan, deskewed.cloud);
+  res->new_submap = true;
+  res->submap_id = current().id;
+  SLAM_MMS_LOG(kDebug) << "Localizer: submap " << current().id << " starts at scan " << scan.index;
+  return OkStatus();
 }
 
 }  // namespace slam_mms

@@ -90,16 +90,12 @@ StatusOr<std::unique_ptr<Localizer>> Localizer::Create(const Options& options,
   Impl& m = *loc->impl_;
   m.opt = options;
   m.T_body_lidar = T_body_lidar;
-  m.T_lidar_body = T_body_lidar.inverse();
-  m.use_imu_states = options.mode == MappingMode::kFull;
-  m.motion_prior = internal::MotionPrior(options.imu, m.use_imu_states);
+  m.motion_prior = internal::MotionPrior(options.imu, options.mode == MappingMode::kFull);
   SLAM_MMS_ASSIGN_OR_RETURN(m.projection,
                             RangeProjection::Create(options.surfels.renderer.projection));
   const int threads = options.num_threads;
-  ScanDeskewer::Options deskew;
-  static_cast<DeskewOptions&>(deskew) = options.deskew;
-  deskew.num_threads = threads;
-  SLAM_MMS_ASSIGN_OR_RETURN(m.deskewer, ScanDeskewer::Create(deskew));
+  SLAM_MMS_ASSIGN_OR_RETURN(m.deskew,
+                            internal::DeskewStage::Create(options, m.projection, T_body_lidar));
   SurfelMapOptions surfel_options = options.surfels;
   surfel_options.integrate_current_submap_only = options.per_submap_surfels;
   SLAM_MMS_ASSIGN_OR_RETURN(m.map, SurfelMap::Create(surfel_options, threads));
@@ -107,18 +103,12 @@ StatusOr<std::unique_ptr<Localizer>> Localizer::Create(const Options& options,
   if (!renderer.ok()) return renderer.status().WithContext("Localizer renderer");
   m.renderer = std::move(renderer).value();
   SLAM_MMS_RETURN_IF_ERROR(m.map.SetRenderer(m.renderer.get()));
-  ProjectiveIcp::Options icp;
-  static_cast<ProjectiveIcpOptions&>(icp) = options.icp;
-  icp.num_threads = threads;
-  SLAM_MMS_ASSIGN_OR_RETURN(m.icp, ProjectiveIcp::Create(m.projection, icp));
-  m.dynamic = internal::DynamicObjectFilter(options.dynamic, m.projection, options.icp.max_distance,
-                                            options.icp.max_angle_deg);
-  m.clouds = std::make_unique<internal::SubmapCloudBuilder>(
-      options.map_voxel_m, options.registration_voxel_m, /*asynchronous=*/options.num_threads > 1);
-  m.range_image = std::make_unique<internal::ParallelRangeImage>(options.num_threads);
-  auto store = internal::SubmapStore::Create(options.spill_dir);
-  if (!store.ok()) return store.status().WithContext("Localizer::Options::spill_dir");
-  m.store = std::move(store).value();
+  m.model = internal::ModelRenderStage(options, T_body_lidar);
+  SLAM_MMS_ASSIGN_OR_RETURN(
+      m.registration, internal::RegistrationStage::Create(options, m.projection, T_body_lidar));
+  m.window = internal::WindowStage(options);
+  SLAM_MMS_ASSIGN_OR_RETURN(m.integration,
+                            internal::IntegrationStage::Create(options, T_body_lidar));
   SLAM_MMS_LOG(kInfo) << "Localizer: mode " << MappingModeName(options.mode) << ", renderer "
                       << m.renderer->Name() << ", WT " << options.submap_duration_s << " s";
   return loc;
@@ -144,17 +134,23 @@ StatusOr<LocalizationResult> Localizer::ProcessScan(const Scan& scan,
   ScanStep step = m.BeginScan(scan, motion);
   // 2. predict first: the preintegration de-skew starts from the prediction.
   m.PredictStage(scan, motion, &step, &res);
-  SLAM_MMS_RETURN_IF_ERROR(m.DeskewStage(scan, motion, step, &res));   // 1. de-skew
-  SLAM_MMS_RETURN_IF_ERROR(m.RenderStage(scan, &step, &res));          // 3. render
-  SLAM_MMS_RETURN_IF_ERROR(m.RegisterStage(scan, &step, &res));        // 4. register (eq 15)
-  SLAM_MMS_RETURN_IF_ERROR(m.FactorStage(scan, motion, &step, &res));  // 5. add factors
-  SLAM_MMS_RETURN_IF_ERROR(m.OptimizeStage(scan, &step, &res));        // 6. optimize
-  SLAM_MMS_RETURN_IF_ERROR(m.IntegrateStage(scan, step, &res));        // 7. integrate
+  // 1. de-skew
+  SLAM_MMS_RETURN_IF_ERROR(
+      m.deskew.Deskew(scan, motion, m.motion_prior, step, m.prev.bias, &m.deskewed, &res));
+  // 3. render the model at the prediction
+  SLAM_MMS_RETURN_IF_ERROR(m.model.Render(scan, m.current(), m.num_processed, &m.map, &step, &res));
+  // 4. register (eq 15), moving objects masked out first
+  SLAM_MMS_RETURN_IF_ERROR(
+      m.registration.Register(scan, m.model.model(), &m.deskewed, &m.map, &step, &res));
+  // 5. add factors (F_Odom / F_Prein / CV, F_Reg eq 16), 6. optimize the window
+  SLAM_MMS_RETURN_IF_ERROR(m.window.AddFactors(scan, motion, m.prev, &step, &res));
+  SLAM_MMS_RETURN_IF_ERROR(m.window.Optimize(scan, &step, &m.prev, &res));
+  // 7. integrate into the surfel map and the submap's clouds
+  SLAM_MMS_RETURN_IF_ERROR(m.integration.Integrate(scan, m.deskewed, step, &m.map, &res));
   m.RecordScan(scan, motion, step, &res);
   // The submap cut every WT: this scan becomes the next submap's reference.
-  if (!step.is_reference &&
-      scan.stamp_start.SecondsSince(m.current().start) >= m.opt.submap_duration_s) {
-    SLAM_MMS_RETURN_IF_ERROR(m.CutSubmap(scan, step.T_world_submap, step.T_submap_cur, &res));
+  if (m.integration.CutDue(scan, step)) {
+    SLAM_MMS_RETURN_IF_ERROR(m.CutSubmap(scan, step, &res));
   } else if (step.is_reference) {
     res.new_submap = true;
   }
@@ -162,50 +158,42 @@ StatusOr<LocalizationResult> Localizer::ProcessScan(const Scan& scan,
   return res;
 }
 
-const std::vector<SubmapRecord>& Localizer::submaps() const { return impl_->store.submaps(); }
+const std::vector<SubmapRecord>& Localizer::submaps() const {
+  return impl_->integration.store().submaps();
+}
 
 Status Localizer::SetSubmapPose(int32_t id, const Eigen::Isometry3d& T_world_submap) {
   if (!T_world_submap.matrix().allFinite()) {
     return InvalidArgumentError("Localizer::SetSubmapPose: non-finite pose for submap " +
                                 std::to_string(id));
   }
-  for (const SubmapRecord& rec : impl_->store.submaps()) {
-    if (rec.id != id) continue;
-    // The surfels follow the submap.
-    const Eigen::Isometry3d T_new_old = T_world_submap * rec.T_world_submap.inverse();
-    impl_->map.TransformSubmap(id, T_new_old);
-    if (auto it = impl_->archived_surfels.find(id); it != impl_->archived_surfels.end()) {
-      const Eigen::Matrix3f R = T_new_old.linear().cast<float>();
-      const Eigen::Vector3f t = T_new_old.translation().cast<float>();
-      for (Surfel& s : it->second) TransformSurfel(R, t, &s);
-    }
-    break;
-  }
-  return impl_->store.SetPose(id, T_world_submap);
+  return impl_->integration.SetSubmapPose(id, T_world_submap, &impl_->map);
 }
 
 void Localizer::ReleaseSubmapClouds(int32_t id, bool keep_registration_cloud) {
-  impl_->store.ReleaseClouds(id, keep_registration_cloud);
+  impl_->integration.store().ReleaseClouds(id, keep_registration_cloud);
 }
 
 StatusOr<PointCloud> Localizer::SubmapCloud(int32_t id, CloudKind kind) const {
-  return impl_->store.SubmapCloud(id, kind);
+  return impl_->integration.store().SubmapCloud(id, kind);
 }
 
 StatusOr<PointCloud> Localizer::SubmapCloud(int32_t id, CloudKind kind,
                                             MapPointStamps* stamps) const {
-  return impl_->store.SubmapCloud(id, kind, stamps);
+  return impl_->integration.store().SubmapCloud(id, kind, stamps);
 }
 
-const std::filesystem::path& Localizer::spill_folder() const { return impl_->store.spill_folder(); }
+const std::filesystem::path& Localizer::spill_folder() const {
+  return impl_->integration.store().spill_folder();
+}
 
-void Localizer::FinishCurrentSubmap() { impl_->CloseCurrentSubmap(); }
+void Localizer::FinishCurrentSubmap() { impl_->integration.CloseCurrentSubmap(); }
 
 const SurfelMap& Localizer::surfel_map() const { return impl_->map; }
 
 std::vector<Surfel> Localizer::AllSurfels() const {
   std::vector<Surfel> all;
-  for (const auto& [id, surfels] : impl_->archived_surfels) {
+  for (const auto& [id, surfels] : impl_->integration.archived_surfels()) {
     all.insert(all.end(), surfels.begin(), surfels.end());
   }
   std::vector<Surfel> live = impl_->map.LiveSurfels();

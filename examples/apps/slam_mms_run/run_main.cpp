@@ -349,6 +349,107 @@ Status RunMethods(const RunArgs& args, const MappingSystem::Options& options,
 
 }  // namespace
 
+// The options of the run: the app's defaults, the preset, the config file and the output options,
+// all checked before any work. Returns the exit code where the run ends here (--config-keys,
+// --dump-config, an error).
+std::optional<int> PrepareOptions(const RunArgs& args, RunConfig* config, std::string* options_json,
+                                  GeoOutputOptions* geo) {
+  // The app's defaults: finished submaps' clouds go to a private folder inside --out (removed at
+  // the end, also after a signal), so memory stays flat on long drives. In a config file
+  // `localizer.spill_dir: "<out>"` (what --dump-config writes) means that folder, `~` keeps them
+  // in memory, any other path is used as given.
+  MappingSystem::Options& options = config->system;
+  options.localizer.spill_dir = kSpillToOutDir;
+  if (args.list_config_keys) {
+    std::fputs(OptionsToYaml(*config).c_str(), stdout);
+    return 0;
+  }
+  if (args.preset) ApplyLidarPreset(*args.preset, &options);
+  if (!args.config.empty()) {
+    const Status s = ApplyConfigFile(args.config, config);
+    if (!s.ok()) return Fail(s, kExitUsage);
+  }
+  if (!args.dump_config.empty()) {
+    const Status s = WriteConfigFile(*config, args.dump_config);
+    if (!s.ok()) return Fail(s, kExitUsage);
+    std::printf("options written to %s (--config reads it back)\n", args.dump_config.c_str());
+    return 0;
+  }
+  *options_json = OptionsToJson(*config);
+  if (options.localizer.spill_dir == kSpillToOutDir) options.localizer.spill_dir = args.out_dir;
+  geo->crs = args.crs;
+  geo->las_tile_size_m = args.las_tile_size_m;
+  const Status s = CheckGeoOutputOptions(*geo);
+  if (!s.ok()) return Fail(s, kExitUsage);
+  const Status writable = CheckOutputDir(args.out_dir);
+  if (!writable.ok()) return Fail(writable, kExitUsage);
+  return std::nullopt;
+}
+
+// The drive folder: the input's, or the simulated default drive in DIR/sim (a killed run's with
+// --resume). Returns the exit code where the run ends here (a failed or stopped simulation).
+std::optional<int> ObtainDrive(const RunArgs& args, bool tty,
+                               const std::function<void()>& remove_sim, fs::path* drive_dir) {
+  *drive_dir = InputPath(args);
+  if (!drive_dir->empty()) return std::nullopt;
+  const fs::path sim_dir = args.out_dir / "sim";
+  if (args.resume) {
+    // A killed run leaves its simulated drive; scenario.json is the simulator's last file.
+    *drive_dir = CompleteSimulatedDrive(sim_dir);
+    if (!drive_dir->empty()) {
+      std::printf("[sim] --resume: the simulated drive in %s\n", drive_dir->c_str());
+      return std::nullopt;
+    }
+  }
+  bool sim_stopped = false;
+  StatusOr<fs::path> simulated = SimulateDefaultDrive(args, tty, &sim_stopped);
+  if (!simulated.ok()) return Fail(simulated.status(), kExitError);
+  if (sim_stopped) {
+    ProgressReporter::BreakLine();
+    std::fprintf(stderr, "slam_mms_run: %s during the simulation: nothing processed\n",
+                 StopSignalName());
+    remove_sim();
+    return StopExitCode();
+  }
+  *drive_dir = *simulated;
+  return std::nullopt;
+}
+
+// The input opened, the options taken from it (extrinsic, antenna, outages) and checked, and the
+// boresight self-calibrated first where asked: every method then runs with the estimate (the
+// antenna and everything else as the input gives them). Returns the exit code where the run ends.
+std::optional<int> OpenInput(const RunArgs& args, const fs::path& drive_dir, RunConfig* config,
+                             std::unique_ptr<DriveReader>* input, std::string* extrinsics_json) {
+  StatusOr<std::unique_ptr<DriveReader>> opened = OpenRunInput(args, drive_dir);
+  if (!opened.ok()) return Fail(opened.status(), kExitError);
+  *input = std::move(opened).value();
+  if ((*input)->NumScans() == 0) {
+    return Fail(OutOfRangeError((*input)->Describe() + ": no scan in the frame range"), kExitError);
+  }
+  MappingSystem::Options& options = config->system;
+  options.T_body_lidar = (*input)->streams().T_body_lidar;
+  if ((*input)->streams().t_body_antenna_m) {
+    options.ins.gnss.t_body_antenna = *(*input)->streams().t_body_antenna_m;
+  }
+  options.gnss_outages = args.gnss_outages;
+  const Status valid = options.Validate();
+  if (!valid.ok()) return Fail(valid, kExitUsage);
+  if (!args.calibrate_extrinsics && !config->drive.estimate_extrinsics) return std::nullopt;
+  // The clock offset the reader already applies (an --extrinsics file's): its scans' shift.
+  const double input_offset_s =
+      (*input)->ScanStart(0).SecondsSince((*input)->Underlying().ScanStart(0));
+  StatusOr<RunCalibration> calibration = CalibrateRunExtrinsics(
+      **input, options, config->drive.extrinsic_calibration, args.out_dir, input_offset_s, &g_stop);
+  if (!calibration.ok()) {
+    return Fail(calibration.status().WithContext("--calibrate-extrinsics"),
+                g_stop.load() ? StopExitCode() : kExitError);
+  }
+  *input = OverrideExtrinsics(std::move(*input), calibration->extrinsics);
+  options.T_body_lidar = (*input)->streams().T_body_lidar;
+  *extrinsics_json = std::move(calibration->json);
+  return std::nullopt;
+}
+
 int RunMain(int argc, const char* const* argv) {
   const LogSinkGuard log_sink;
   SetMinLogLevel(LogLevel::kWarning);
@@ -364,42 +465,11 @@ int RunMain(int argc, const char* const* argv) {
     std::printf("%s\n", RunVersion().c_str());
     return 0;
   }
-  // The app's defaults: finished submaps' clouds go to a private folder inside --out (removed at
-  // the end, also after a signal), so memory stays flat on long drives. In a config file
-  // `localizer.spill_dir: "<out>"` (what --dump-config writes) means that folder, `~` keeps them
-  // in memory, any other path is used as given.
   RunConfig config;
-  MappingSystem::Options& options = config.system;
-  options.localizer.spill_dir = kSpillToOutDir;
-  if (args.list_config_keys) {
-    std::fputs(OptionsToYaml(config).c_str(), stdout);
-    return 0;
-  }
-  const bool tty = StdoutIsTerminal();
-
-  // The config file, then the output options, checked before any work.
-  if (args.preset) ApplyLidarPreset(*args.preset, &options);
-  if (!args.config.empty()) {
-    const Status s = ApplyConfigFile(args.config, &config);
-    if (!s.ok()) return Fail(s, kExitUsage);
-  }
-  if (!args.dump_config.empty()) {
-    const Status s = WriteConfigFile(config, args.dump_config);
-    if (!s.ok()) return Fail(s, kExitUsage);
-    std::printf("options written to %s (--config reads it back)\n", args.dump_config.c_str());
-    return 0;
-  }
-  const std::string options_json = OptionsToJson(config);
-  if (options.localizer.spill_dir == kSpillToOutDir) options.localizer.spill_dir = args.out_dir;
+  std::string options_json;
   GeoOutputOptions geo;
-  geo.crs = args.crs;
-  geo.las_tile_size_m = args.las_tile_size_m;
-  {
-    const Status s = CheckGeoOutputOptions(geo);
-    if (!s.ok()) return Fail(s, kExitUsage);
-    const Status writable = CheckOutputDir(args.out_dir);
-    if (!writable.ok()) return Fail(writable, kExitUsage);
-  }
+  if (std::optional<int> exit = PrepareOptions(args, &config, &options_json, &geo)) return *exit;
+  const bool tty = StdoutIsTerminal();
   const StopHandlers stop_handlers;
   std::vector<std::string> warnings;  // also in report.json and report.html
   auto warn = [&warnings](const std::string& text) {
@@ -408,13 +478,11 @@ int RunMain(int argc, const char* const* argv) {
     warnings.push_back(text);
   };
 
-  // The drive.
-  fs::path drive_dir = InputPath(args);
-  const bool simulated_input = drive_dir.empty();
-  const fs::path sim_dir = args.out_dir / "sim";
-  // The simulated drive is ~2 MB a scan: removed at the end unless --keep-sim.
+  // The drive; a simulated one (~2 MB a scan) is removed at the end unless --keep-sim.
+  const bool simulated_input = InputPath(args).empty();
   auto remove_sim = [&]() {
     if (!simulated_input || args.keep_sim) return;
+    const fs::path sim_dir = args.out_dir / "sim";
     const auto [bytes, files] = DiskUse(sim_dir);
     std::error_code ec;
     fs::remove_all(sim_dir, ec);
@@ -425,56 +493,15 @@ int RunMain(int argc, const char* const* argv) {
                   files, static_cast<double>(bytes) / 1e6);
     }
   };
-  if (simulated_input && args.resume) {
-    // A killed run leaves its simulated drive; scenario.json is the simulator's last file.
-    drive_dir = CompleteSimulatedDrive(sim_dir);
-    if (!drive_dir.empty())
-      std::printf("[sim] --resume: the simulated drive in %s\n", drive_dir.c_str());
-  }
-  if (simulated_input && drive_dir.empty()) {
-    bool sim_stopped = false;
-    StatusOr<fs::path> simulated = SimulateDefaultDrive(args, tty, &sim_stopped);
-    if (!simulated.ok()) return Fail(simulated.status(), kExitError);
-    if (sim_stopped) {
-      ProgressReporter::BreakLine();
-      std::fprintf(stderr, "slam_mms_run: %s during the simulation: nothing processed\n",
-                   StopSignalName());
-      remove_sim();
-      return StopExitCode();
-    }
-    drive_dir = *simulated;
-  }
-  StatusOr<std::unique_ptr<DriveReader>> opened = OpenRunInput(args, drive_dir);
-  if (!opened.ok()) return Fail(opened.status(), kExitError);
-  std::unique_ptr<DriveReader> input = std::move(opened).value();
-  if (input->NumScans() == 0) {
-    return Fail(OutOfRangeError(input->Describe() + ": no scan in the frame range"), kExitError);
-  }
-  options.T_body_lidar = input->streams().T_body_lidar;
-  if (input->streams().t_body_antenna_m) {
-    options.ins.gnss.t_body_antenna = *input->streams().t_body_antenna_m;
-  }
-  options.gnss_outages = args.gnss_outages;
-  const Status valid = options.Validate();
-  if (!valid.ok()) return Fail(valid, kExitUsage);
-  // Boresight self-calibration first: every method then runs with the estimate (the antenna and
-  // everything else as the input gives them).
+  fs::path drive_dir;
+  if (std::optional<int> exit = ObtainDrive(args, tty, remove_sim, &drive_dir)) return *exit;
+  std::unique_ptr<DriveReader> input;
   std::string extrinsics_json;
-  if (args.calibrate_extrinsics || config.drive.estimate_extrinsics) {
-    // The clock offset the reader already applies (an --extrinsics file's): its scans' shift.
-    const double input_offset_s =
-        input->ScanStart(0).SecondsSince(input->Underlying().ScanStart(0));
-    StatusOr<RunCalibration> calibration = CalibrateRunExtrinsics(
-        *input, options, config.drive.extrinsic_calibration, args.out_dir, input_offset_s, &g_stop);
-    if (!calibration.ok()) {
-      return Fail(calibration.status().WithContext("--calibrate-extrinsics"),
-                  g_stop.load() ? StopExitCode() : kExitError);
-    }
-    input = OverrideExtrinsics(std::move(input), calibration->extrinsics);
-    options.T_body_lidar = input->streams().T_body_lidar;
-    extrinsics_json = std::move(calibration->json);
+  if (std::optional<int> exit = OpenInput(args, drive_dir, &config, &input, &extrinsics_json)) {
+    return *exit;
   }
   const DriveReader& reader = *input;
+  const MappingSystem::Options& options = config.system;
 
   // The checkpoint (checkpoint.hpp): a fresh one, or the killed run's with --resume.
   const RunFingerprint fingerprint =

@@ -9,15 +9,17 @@
 //     k = floor((c - origin) / size)
 // of the double values (c - origin is rounded to double first; with the default zero origin it is
 // exact). Equivalently, in exact arithmetic, origin + k * size <= c < origin + (k + 1) * size: a
-// point exactly on a cell face belongs to the cell above the face. The quotient is computed by one
-// division and corrected by one fused multiply-add only where the division rounded up to an
-// integer (the only way floor of a correctly rounded quotient can be off, and then by one). Note
+// point exactly on a cell face belongs to the cell above the face. It costs one multiplication by
+// 1 / size where the product is clearly inside a cell; only within 2^-50 (relative) of a face a
+// division, corrected by one fused multiply-add where the division rounded up onto an integer
+// (the only way the floor of a correctly rounded quotient can be off, and then by one). Note
 // that a decimal voxel size is not a double: with size 0.1 (= 0.1000000000000000055...) the face
 // of cell 30 lies 1.7e-16 m above 3.0, so the point x = 3.0 is in cell 29.
 //
-// Range. Indices are limited to [-kMaxIndex, kMaxIndex] (2^30 - 1: 1e8 km at 0.1 m), so that
-// neighbour arithmetic (k +- 1, hi - lo + 1) never overflows int32. CellOf fails (returns false)
-// for a non-finite coordinate and for one outside that range; ClampedCellOf saturates instead.
+// Range. Indices are limited to [-kMaxIndex, kMaxIndex] (2^30 - 1: 1.07e8 m, a hundred thousand km,
+// at 0.1 m), so that neighbour arithmetic (k +- 1, hi - lo + 1) never overflows int32. CellOf fails
+// (returns false) for a non-finite coordinate and for one outside that range; ClampedCellOf
+// saturates instead.
 //
 // Keys. A VoxelCell (three int32) is the exact key of a cell; HashVoxelCell mixes all 96 bits into
 // 64 for hash tables (tables compare the full cell, so hash collisions cost time, never merge
@@ -114,6 +116,7 @@ class VoxelGrid {
   /// size_m must be finite and > 0 (ValidSize); with any other size every CellOf fails.
   explicit VoxelGrid(double size_m, const Eigen::Vector3d& origin = Eigen::Vector3d::Zero())
       : size_(ValidSize(size_m) ? size_m : std::numeric_limits<double>::quiet_NaN()),
+        inv_(1.0 / size_),
         origin_(origin) {}
 
   [[nodiscard]] static bool ValidSize(double size_m) {
@@ -126,10 +129,38 @@ class VoxelGrid {
   /// Index along `axis` of coordinate c: floor((c - origin[axis]) / size), exact; false where c
   /// is not finite or the index is outside [-kMaxIndex, kMaxIndex].
   [[nodiscard]] bool AxisIndex(double c, int axis, int32_t* index) const {
-    return FloorQuotient(c - origin_[axis], size_, index);
+    const double d = c - origin_[axis];
+    // Fast path: d * (1 / size) is within 2.3e-16 |q| of the real quotient (two roundings), so
+    // where it lies farther than 2^-50 |q| from every integer its floor is the exact one. Near a
+    // face (and for |q| below DBL_MIN, where products lose relative precision) the exact path.
+    const double q = d * inv_;
+    if (!(q > -kFastLimit && q < kFastLimit)) return FloorQuotient(d, size_, index);  // NaN, range
+    const double k = Floor(q);
+    const double frac = q - k;  // exact: q and k share their exponent range
+    const double tol = std::abs(q) * 0x1p-50 + std::numeric_limits<double>::min();
+    if (frac < tol || frac > 1.0 - tol) return FloorQuotient(d, size_, index);
+    *index = static_cast<int32_t>(k);
+    return true;
   }
 
   [[nodiscard]] bool CellOf(const Eigen::Vector3d& p, VoxelCell* cell) const {
+    // AxisIndex's fast path on the three axes without branches, then one test; any axis near a
+    // face, out of range or NaN sends the point through AxisIndex (the same result, slower).
+    double k[3];
+    bool fast = true;
+    for (int a = 0; a < 3; ++a) {
+      const double q = (p[a] - origin_[a]) * inv_;
+      const bool in_range = q > -kFastLimit && q < kFastLimit;
+      const double qr = in_range ? q : 0.0;
+      k[a] = Floor(qr);
+      const double frac = qr - k[a];
+      const double tol = std::abs(qr) * 0x1p-50 + std::numeric_limits<double>::min();
+      fast &= in_range & (frac >= tol) & (frac <= 1.0 - tol);
+    }
+    if (fast) {
+      *cell = {static_cast<int32_t>(k[0]), static_cast<int32_t>(k[1]), static_cast<int32_t>(k[2])};
+      return true;
+    }
     return AxisIndex(p.x(), 0, &cell->x) && AxisIndex(p.y(), 1, &cell->y) &&
            AxisIndex(p.z(), 2, &cell->z);
   }
@@ -168,11 +199,8 @@ class VoxelGrid {
   /// outside [-kMaxIndex, kMaxIndex]. Public for the tests.
   [[nodiscard]] static bool FloorQuotient(double c, double s, int32_t* index) {
     const double q = c / s;
-    // Also rejects NaN (every comparison with NaN is false).
-    if (!(q > -static_cast<double>(kMaxIndex) - 2.0 && q < static_cast<double>(kMaxIndex) + 2.0)) {
-      return false;
-    }
-    double k = std::floor(q);
+    if (!(q > -kLimit && q < kLimit)) return false;  // also NaN: every comparison with it is false
+    double k = Floor(q);
     // A correctly rounded quotient is >= the exact one's floor and below floor + 1 unless it
     // rounded up onto an integer; only then check the sign of the exact c - k * s (one rounding:
     // the sign survives it).
@@ -183,7 +211,18 @@ class VoxelGrid {
   }
 
  private:
+  /// floor(q) for |q| < kLimit by truncation (std::floor is a library call on baseline x86-64).
+  static double Floor(double q) {
+    const double t = static_cast<double>(static_cast<int32_t>(q));
+    return q < t ? t - 1.0 : t;
+  }
+  /// |quotients| at or beyond this are out of range (kMaxIndex + 2: the floor decides the rest).
+  static constexpr double kLimit = static_cast<double>(kMaxIndex) + 2.0;
+  /// The fast paths take |q| < kMaxIndex only (their floor is then in range without a check).
+  static constexpr double kFastLimit = static_cast<double>(kMaxIndex);
+
   double size_ = 1.0;
+  double inv_ = 1.0;
   Eigen::Vector3d origin_ = Eigen::Vector3d::Zero();
 };
 

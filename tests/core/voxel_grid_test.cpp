@@ -51,9 +51,16 @@ bool IsExactFloor(double c, double s, int32_t k) {
   return lo >= 0 && hi < 0;
 }
 
+// The grid's index (the multiplication fast path where it is safe) and FloorQuotient (the
+// division): they must agree everywhere.
 int32_t Index(double c, double s) {
-  int32_t k = 0;
+  int32_t k = 0, fast = 0;
   EXPECT_TRUE(VoxelGrid::FloorQuotient(c, s, &k)) << c << " / " << s;
+  EXPECT_TRUE(VoxelGrid(s).AxisIndex(c, 0, &fast)) << c << " / " << s;
+  EXPECT_EQ(fast, k) << c << " / " << s;
+  VoxelCell cell;  // the three-axis path, with c on one axis and easy values on the others
+  EXPECT_TRUE(VoxelGrid(s).CellOf(Eigen::Vector3d(0.37 * s, c, -2.5 * s), &cell));
+  EXPECT_EQ(cell, (VoxelCell{0, k, -3})) << c << " / " << s;
   return k;
 }
 
@@ -119,6 +126,10 @@ TEST(VoxelGridTest, HugeAndNonFiniteCoordinatesAreRejected) {
   int32_t k = 0;
   EXPECT_TRUE(VoxelGrid::FloorQuotient(kMax, 1.0, &k));
   EXPECT_EQ(k, VoxelGrid::kMaxIndex);
+  EXPECT_EQ(Index(kMax, 1.0), VoxelGrid::kMaxIndex);
+  EXPECT_EQ(Index(-kMax, 1.0), -VoxelGrid::kMaxIndex);
+  EXPECT_FALSE(VoxelGrid(1.0).AxisIndex(kMax + 1.0, 0, &k));
+  EXPECT_FALSE(VoxelGrid(1.0).AxisIndex(-kMax - 0.5, 0, &k));
   EXPECT_TRUE(VoxelGrid::FloorQuotient(kMax + 0.5, 1.0, &k));
   EXPECT_EQ(k, VoxelGrid::kMaxIndex);
   EXPECT_FALSE(VoxelGrid::FloorQuotient(kMax + 1.0, 1.0, &k));
@@ -128,6 +139,7 @@ TEST(VoxelGridTest, HugeAndNonFiniteCoordinatesAreRejected) {
   k = 7;
   for (double c : {1e300, -1e300, 1.1e8, -1.1e8, kInf, -kInf, kNaN}) {
     EXPECT_FALSE(VoxelGrid::FloorQuotient(c, 0.1, &k)) << c;
+    EXPECT_FALSE(VoxelGrid(0.1).AxisIndex(c, 0, &k)) << c;
   }
   EXPECT_EQ(k, 7) << "a failed call must leave the index alone";
   // 1e8 m at 0.1 m is in range (index 1e9 < 2^30 - 1): no overflow far from the origin.

@@ -8,57 +8,45 @@
 #include <utility>
 #include <vector>
 
+#include "core/voxel_grid.hpp"
+
 namespace slam_mms {
 namespace {
 
+using internal::VoxelCell;
+
 struct VoxelKey {
-  int32_t ix, iy, iz;
+  VoxelCell cell;
   uint32_t index;  // input point
 };
 
-// Sorts by (ix, iy, iz, index): the voxels in key order, each voxel's points in input order (a
-// deterministic summation order). Where the indices span < 2^21 per axis (200 km at 0.1 m) they
-// are packed into one 64-bit key in the same order, and (key, index) pairs are sorted: a third
-// of the time of the three-way comparison.
+// Sorts by (cell, index): the voxels in cell order, each voxel's points in input order (a
+// deterministic summation order). Where the cells span < 2^21 per axis (200 km at 0.1 m) they
+// are packed relative to the lowest cell (PackVoxelCell: the same order) and (key, index) pairs
+// are sorted: a third of the time of the three-way comparison.
 void SortVoxelKeys(std::vector<VoxelKey>* keys) {
   if (keys->empty()) return;
-  int32_t lo[3] = {keys->front().ix, keys->front().iy, keys->front().iz};
-  int32_t hi[3] = {lo[0], lo[1], lo[2]};
+  VoxelCell lo = keys->front().cell;
   for (const VoxelKey& k : *keys) {
-    const int32_t v[3] = {k.ix, k.iy, k.iz};
-    for (int a = 0; a < 3; ++a) {
-      lo[a] = std::min(lo[a], v[a]);
-      hi[a] = std::max(hi[a], v[a]);
-    }
-  }
-  constexpr int64_t kSpan = int64_t{1} << 21;
-  for (int a = 0; a < 3; ++a) {
-    if (static_cast<int64_t>(hi[a]) - lo[a] >= kSpan) {
-      std::sort(keys->begin(), keys->end(), [](const VoxelKey& x, const VoxelKey& y) {
-        if (x.ix != y.ix) return x.ix < y.ix;
-        if (x.iy != y.iy) return x.iy < y.iy;
-        if (x.iz != y.iz) return x.iz < y.iz;
-        return x.index < y.index;
-      });
-      return;
-    }
+    lo.x = std::min(lo.x, k.cell.x);
+    lo.y = std::min(lo.y, k.cell.y);
+    lo.z = std::min(lo.z, k.cell.z);
   }
   std::vector<std::pair<uint64_t, uint32_t>> packed(keys->size());
   for (size_t i = 0; i < keys->size(); ++i) {
     const VoxelKey& k = (*keys)[i];
-    packed[i] = {(static_cast<uint64_t>(static_cast<int64_t>(k.ix) - lo[0]) << 42) |
-                     (static_cast<uint64_t>(static_cast<int64_t>(k.iy) - lo[1]) << 21) |
-                     static_cast<uint64_t>(static_cast<int64_t>(k.iz) - lo[2]),
-                 k.index};
+    if (!internal::PackVoxelCell(k.cell, lo, &packed[i].first)) {
+      std::sort(keys->begin(), keys->end(), [](const VoxelKey& x, const VoxelKey& y) {
+        if (x.cell != y.cell) return x.cell < y.cell;
+        return x.index < y.index;
+      });
+      return;
+    }
+    packed[i].second = k.index;
   }
   std::sort(packed.begin(), packed.end());
   for (size_t i = 0; i < packed.size(); ++i) {
-    const uint64_t key = packed[i].first;
-    VoxelKey& k = (*keys)[i];
-    k.ix = static_cast<int32_t>(static_cast<int64_t>(key >> 42) + lo[0]);
-    k.iy = static_cast<int32_t>(static_cast<int64_t>((key >> 21) & (kSpan - 1)) + lo[1]);
-    k.iz = static_cast<int32_t>(static_cast<int64_t>(key & (kSpan - 1)) + lo[2]);
-    k.index = packed[i].second;
+    (*keys)[i] = {internal::UnpackVoxelCell(packed[i].first, lo), packed[i].second};
   }
 }
 
@@ -73,33 +61,28 @@ StatusOr<PointCloud> VoxelDownsample(const PointCloudView& cloud, double voxel_s
     return InvalidArgumentError("VoxelDownsample: " + std::to_string(cloud.size) +
                                 " points; at most 2^32 - 1 are supported");
   }
-  const double inv = 1.0 / voxel_size_m;
-  constexpr double kMaxIndex = 2147483000.0;
+  const internal::VoxelGrid grid(voxel_size_m);
   std::vector<VoxelKey> keys;
   keys.reserve(cloud.size);
   for (size_t i = 0; i < cloud.size; ++i) {
     const Eigen::Vector3f p = cloud.Point(i);
     if (!p.allFinite()) continue;
-    const double fx = std::floor(p.x() * inv);
-    const double fy = std::floor(p.y() * inv);
-    const double fz = std::floor(p.z() * inv);
-    if (std::abs(fx) > kMaxIndex || std::abs(fy) > kMaxIndex || std::abs(fz) > kMaxIndex) {
-      return InvalidArgumentError("VoxelDownsample: point " + std::to_string(i) +
-                                  " is too far from the origin for voxel_size_m = " +
-                                  std::to_string(voxel_size_m) + " (voxel index overflows int32)");
+    VoxelKey k;
+    if (!grid.CellOf(p, &k.cell)) {
+      return InvalidArgumentError(
+          "VoxelDownsample: point " + std::to_string(i) +
+          " is too far from the origin for voxel_size_m = " + std::to_string(voxel_size_m) +
+          " (voxel index beyond +-" + std::to_string(internal::VoxelGrid::kMaxIndex) + ")");
     }
-    keys.push_back({static_cast<int32_t>(fx), static_cast<int32_t>(fy), static_cast<int32_t>(fz),
-                    static_cast<uint32_t>(i)});
+    k.index = static_cast<uint32_t>(i);
+    keys.push_back(k);
   }
   SortVoxelKeys(&keys);
   PointCloud out;
   size_t begin = 0;
   while (begin < keys.size()) {
     size_t end = begin + 1;
-    while (end < keys.size() && keys[end].ix == keys[begin].ix && keys[end].iy == keys[begin].iy &&
-           keys[end].iz == keys[begin].iz) {
-      ++end;
-    }
+    while (end < keys.size() && keys[end].cell == keys[begin].cell) ++end;
     Eigen::Vector3d sum_p = Eigen::Vector3d::Zero();
     double sum_i = 0.0;
     double sum_t = 0.0;

@@ -6,28 +6,25 @@
 #include <cmath>
 #include <unordered_set>
 
+#include "core/voxel_grid.hpp"
 #include "registration/point_to_plane.hpp"
 #include "slam_mms/core/lie.hpp"
 
 namespace slam_mms::calib_internal {
 
 void Subsample(const Scan& scan, const ExtrinsicCalibrationOptions& o, CalScan* out) {
-  std::unordered_set<uint64_t> seen;
+  std::unordered_set<internal::VoxelCell, internal::VoxelCellHash> seen;
   const auto& pts = scan.cloud.points();
   const auto& tau = scan.cloud.time_offsets_s();
   const bool have_tau = tau.size() == pts.size();
-  const double inv = 1.0 / o.voxel_m;
+  const internal::VoxelGrid grid(o.voxel_m);
   std::vector<size_t> keep;
   for (size_t i = 0; i < pts.size(); ++i) {
     const Eigen::Vector3f& p = pts[i];
     const double r = p.norm();
     if (!(r >= o.min_range_m && r <= o.max_range_m)) continue;
-    const auto key = [&](int d) {
-      return static_cast<uint64_t>(static_cast<int64_t>(std::floor(p[d] * inv)) + (1 << 20)) &
-             0x1FFFFF;
-    };
-    const uint64_t k = key(0) | (key(1) << 21) | (key(2) << 42);
-    if (seen.insert(k).second) keep.push_back(i);
+    internal::VoxelCell cell;  // the first point of each voxel (in range: r <= max_range_m)
+    if (grid.CellOf(p, &cell) && seen.insert(cell).second) keep.push_back(i);
   }
   const size_t m = static_cast<size_t>(o.max_points_per_scan);
   const double step = keep.size() > m ? static_cast<double>(keep.size()) / m : 1.0;

@@ -10,6 +10,7 @@
 #include <thread>
 #include <vector>
 
+#include "core/voxel_grid.hpp"
 #include "eval/points_kdtree.hpp"
 #include "slam_mms/core/voxel_downsample.hpp"
 
@@ -63,11 +64,18 @@ class NeighbourGrid {
         return;
       }
     }
-    lo_ = lo.cast<double>();
-    inv_ = inv;
+    // Cells of slam_mms::internal::VoxelGrid with a corner at the lowest point; keys packed
+    // relative to kBase (kReach + 1 spare cells below cell 0), which the span check above keeps
+    // exact.
+    grid_ = slam_mms::internal::VoxelGrid(cell_, lo.cast<double>());
     std::vector<std::pair<uint64_t, uint32_t>> keyed(points.size());
     for (size_t i = 0; i < points.size(); ++i) {
-      keyed[i] = {KeyOf(points[i]), static_cast<uint32_t>(i)};
+      slam_mms::internal::VoxelCell c;
+      if (!grid_.CellOf(points[i], &c) ||
+          !slam_mms::internal::PackVoxelCell(c, kBase, &keyed[i].first)) {
+        return;
+      }
+      keyed[i].second = static_cast<uint32_t>(i);
     }
     std::sort(keyed.begin(), keyed.end());  // by cell, then by input index: deterministic
     points_.resize(points.size());
@@ -99,50 +107,37 @@ class NeighbourGrid {
   }
   // The non-empty columns of the block around `cell`; returns how many.
   int Columns(size_t cell, Block* out) const {
-    const uint64_t key = keys_[cell];
-    const int64_t ix = static_cast<int64_t>((key >> 42) & kMask);
-    const int64_t iy = static_cast<int64_t>((key >> 21) & kMask);
-    const int64_t iz = static_cast<int64_t>(key & kMask);
+    const slam_mms::internal::VoxelCell c = slam_mms::internal::UnpackVoxelCell(keys_[cell], kBase);
     int n = 0;
-    for (int64_t x = ix - kReach; x <= ix + kReach; ++x) {
-      for (int64_t y = iy - kReach; y <= iy + kReach; ++y) {
+    for (int32_t x = c.x - kReach; x <= c.x + kReach; ++x) {
+      for (int32_t y = c.y - kReach; y <= c.y + kReach; ++y) {
         uint32_t first = kNone, last = kNone;
-        for (int64_t z = iz - kReach; z <= iz + kReach; ++z) {
-          const uint32_t c = Find(Key(x, y, z));
-          if (c == kNone) continue;
-          if (first == kNone) first = c;
-          last = c;
+        for (int32_t z = c.z - kReach; z <= c.z + kReach; ++z) {
+          uint64_t key = 0;
+          if (!slam_mms::internal::PackVoxelCell({x, y, z}, kBase, &key)) continue;
+          const uint32_t found = Find(key);
+          if (found == kNone) continue;
+          if (first == kNone) first = found;
+          last = found;
         }
         if (first == kNone) continue;
         Column& col = (*out)[static_cast<size_t>(n++)];
         col.begin = begin_[first];
         col.end = begin_[last + 1];
-        col.x0 = static_cast<float>(lo_.x() + static_cast<double>(x - kReach - 1) * cell_);
-        col.x1 = static_cast<float>(lo_.x() + static_cast<double>(x - kReach) * cell_);
-        col.y0 = static_cast<float>(lo_.y() + static_cast<double>(y - kReach - 1) * cell_);
-        col.y1 = static_cast<float>(lo_.y() + static_cast<double>(y - kReach) * cell_);
+        col.x0 = static_cast<float>(grid_.Lower(x, 0));
+        col.x1 = static_cast<float>(grid_.Lower(x + 1, 0));
+        col.y0 = static_cast<float>(grid_.Lower(y, 1));
+        col.y1 = static_cast<float>(grid_.Lower(y + 1, 1));
       }
     }
     return n;
   }
 
  private:
-  static constexpr uint64_t kMask = (uint64_t{1} << 21) - 1;
+  static constexpr uint64_t kMask = slam_mms::internal::kVoxelPackSpan - 1;
   static constexpr uint32_t kNone = std::numeric_limits<uint32_t>::max();
+  static constexpr slam_mms::internal::VoxelCell kBase{-(kReach + 1), -(kReach + 1), -(kReach + 1)};
 
-  static uint64_t Key(int64_t x, int64_t y, int64_t z) {
-    return (static_cast<uint64_t>(x) << 42) | (static_cast<uint64_t>(y) << 21) |
-           static_cast<uint64_t>(z);
-  }
-  uint64_t KeyOf(const Eigen::Vector3f& p) const {
-    int64_t i[3];
-    for (int a = 0; a < 3; ++a) {
-      // Offset by kReach + 1 cells: the block's cells of the border cells have indices >= 0.
-      i[a] = static_cast<int64_t>(std::floor((static_cast<double>(p[a]) - lo_[a]) * inv_)) +
-             kReach + 1;
-    }
-    return Key(i[0], i[1], i[2]);
-  }
   size_t Slot(uint64_t key) const {
     return static_cast<size_t>((key * 0x9E3779B97F4A7C15ull) >> (64 - bits_));
   }
@@ -156,8 +151,7 @@ class NeighbourGrid {
 
   bool ok_ = false;
   double cell_ = 1.0;
-  Eigen::Vector3d lo_ = Eigen::Vector3d::Zero();
-  double inv_ = 1.0;
+  slam_mms::internal::VoxelGrid grid_;
   int bits_ = 4;
   std::vector<Eigen::Vector3f> points_;  // sorted by cell
   std::vector<uint64_t> keys_;           // per occupied cell, ascending

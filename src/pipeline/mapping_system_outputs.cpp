@@ -6,6 +6,7 @@
 #include <thread>
 #include <utility>
 
+#include "core/voxel_grid.hpp"
 #include "pipeline/mapping_system_impl.hpp"
 #include "slam_mms/core/logging.hpp"
 #include "slam_mms/core/voxel_downsample.hpp"
@@ -39,37 +40,36 @@ PointCloud MappingSystem::FinalMap() const { return FinalMap(nullptr); }
 
 namespace {
 
-// Per voxel of VoxelDownsample(cloud, voxel_m), in its output order (voxels sorted by
-// integer key, the same floor(p / voxel) of the float point): the stamps of the voxel's earliest
-// point. Empty when `in` does not match `cloud`.
+// Per voxel of VoxelDownsample(cloud, voxel_m), in its output order (voxels sorted by cell, the
+// same internal::VoxelGrid cell of the float point): the stamps of the voxel's earliest point.
+// Empty when `in` does not match `cloud`.
 MapPointStamps EarliestPerVoxel(const PointCloud& cloud, const MapPointStamps& in, double voxel_m) {
   MapPointStamps out;
   if (in.size() != cloud.size() || in.scan_index.size() != cloud.size()) return out;
   struct Key {
-    int32_t ix, iy, iz;
+    internal::VoxelCell cell;
     uint32_t index;
   };
-  const double inv = 1.0 / voxel_m;
+  const internal::VoxelGrid grid(voxel_m);
   std::vector<Key> keys;
   keys.reserve(cloud.size());
   for (size_t i = 0; i < cloud.size(); ++i) {
     const Eigen::Vector3f& p = cloud.points()[i];
-    if (!p.allFinite()) continue;
-    keys.push_back({static_cast<int32_t>(std::floor(p.x() * inv)),
-                    static_cast<int32_t>(std::floor(p.y() * inv)),
-                    static_cast<int32_t>(std::floor(p.z() * inv)), static_cast<uint32_t>(i)});
+    Key k;
+    // VoxelDownsample drops non-finite points and fails on out-of-range ones (then the caller
+    // has no downsampled cloud to match).
+    if (!grid.CellOf(p, &k.cell)) continue;
+    k.index = static_cast<uint32_t>(i);
+    keys.push_back(k);
   }
   std::sort(keys.begin(), keys.end(), [](const Key& a, const Key& b) {
-    if (a.ix != b.ix) return a.ix < b.ix;
-    if (a.iy != b.iy) return a.iy < b.iy;
-    if (a.iz != b.iz) return a.iz < b.iz;
+    if (a.cell != b.cell) return a.cell < b.cell;
     return a.index < b.index;
   });
   for (size_t begin = 0; begin < keys.size();) {
     size_t end = begin + 1;
     size_t best = keys[begin].index;
-    while (end < keys.size() && keys[end].ix == keys[begin].ix && keys[end].iy == keys[begin].iy &&
-           keys[end].iz == keys[begin].iz) {
+    while (end < keys.size() && keys[end].cell == keys[begin].cell) {
       if (in.time_ns[keys[end].index] < in.time_ns[best]) best = keys[end].index;
       ++end;
     }

@@ -7,6 +7,7 @@
 #include <unordered_set>
 
 #include "core/option_error.hpp"
+#include "core/voxel_grid.hpp"
 #include "core/worker_pool.hpp"
 #include "registration/cloud_kdtree.hpp"
 #include "registration/gauss_newton.hpp"
@@ -46,8 +47,8 @@ Status PointIcpOptions::Validate() const {
     return FieldError("translation_eps", translation_eps, "must be > 0");
   if (!(degeneracy_threshold > 0.0 && degeneracy_threshold < 1.0))
     return FieldError("degeneracy_threshold", degeneracy_threshold, "must be in (0, 1)");
-  if (!(source_voxel_size >= 0.0))
-    return FieldError("source_voxel_size", source_voxel_size, "must be >= 0");
+  if (!(source_voxel_size >= 0.0) || !std::isfinite(source_voxel_size))
+    return FieldError("source_voxel_size", source_voxel_size, "must be finite and >= 0");
   return OkStatus();
 }
 
@@ -179,16 +180,16 @@ StatusOr<RegistrationResult> PointIcp::Align(const PointCloudView& source,
   m.source.reserve(source.size);
   const double voxel = m.options.source_voxel_size;
   if (voxel > 0.0) {
-    std::unordered_set<uint64_t> occupied;
+    // The first point of each cell; a finite point beyond the grid's range (2^30 - 1 voxels)
+    // is kept as its own cell.
+    const internal::VoxelGrid grid(voxel);
+    std::unordered_set<internal::VoxelCell, internal::VoxelCellHash> occupied;
     occupied.reserve(source.size);
     for (size_t i = 0; i < source.size; ++i) {
       const Eigen::Vector3f p = source.Point(i);
       if (!p.allFinite()) continue;
-      const auto key = [&](float c) {
-        return static_cast<uint64_t>(static_cast<int64_t>(std::floor(c / voxel)) & 0x1FFFFF);
-      };
-      const uint64_t h = key(p.x()) | (key(p.y()) << 21) | (key(p.z()) << 42);
-      if (occupied.insert(h).second) m.source.push_back(p);
+      internal::VoxelCell cell;
+      if (!grid.CellOf(p, &cell) || occupied.insert(cell).second) m.source.push_back(p);
     }
   } else {
     for (size_t i = 0; i < source.size; ++i) {

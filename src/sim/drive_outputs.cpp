@@ -52,24 +52,22 @@ Status GroundTruthLog::WriteCsv(const std::filesystem::path& dir) const {
 void SceneCloudAccumulator::Add(const std::vector<Eigen::Vector3f>& p,
                                 const std::vector<float>& inten) {
   for (size_t i = 0; i < p.size(); ++i) {
-    const int64_t x = static_cast<int64_t>(std::floor(p[i].x() * inv_voxel_)) + (1 << 20);
-    const int64_t y = static_cast<int64_t>(std::floor(p[i].y() * inv_voxel_)) + (1 << 20);
-    const int64_t z = static_cast<int64_t>(std::floor(p[i].z() * inv_voxel_)) + (1 << 20);
-    const uint64_t key = (static_cast<uint64_t>(x & 0x1FFFFF) << 42) |
-                         (static_cast<uint64_t>(y & 0x1FFFFF) << 21) |
-                         static_cast<uint64_t>(z & 0x1FFFFF);
-    // Consecutive returns of a ring often share a voxel: skipping repeats of the previous key keeps
-    // the result (the first point of each voxel) and saves most hash lookups.
-    if (i > 0 && key == last_key_) continue;
-    last_key_ = key;
+    internal::VoxelCell cell;
+    if (!grid_.CellOf(p[i], &cell)) continue;
+    // Consecutive returns of a ring often share a voxel: skipping repeats of the previous cell
+    // keeps the result (the first point of each voxel) and saves most hash lookups.
+    if (have_last_ && cell == last_cell_) continue;
+    last_cell_ = cell;
+    have_last_ = true;
     if (index_.empty()) index_.reserve(1 << 20);
-    auto [it, inserted] = index_.emplace(key, static_cast<uint32_t>(map_.cloud.size()));
+    auto [it, inserted] = index_.emplace(cell, static_cast<uint32_t>(map_.cloud.size()));
     if (inserted) map_.cloud.Add(p[i], i < inten.size() ? inten[i] : 0.f);
   }
 }
 
 MapCloud SceneCloudAccumulator::Take() {
   index_.clear();
+  have_last_ = false;
   return std::move(map_);
 }
 

@@ -4,6 +4,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "core/voxel_grid.hpp"
 #include "slam_mms/core/trajectory.hpp"
 #include "slam_mms/io/map_io.hpp"
 #include "slam_mms/sim/drive_simulator.hpp"
@@ -27,14 +28,17 @@ struct GroundTruthLog {
 /// Keeps the first point falling into each voxel.
 class SceneCloudAccumulator {
  public:
-  explicit SceneCloudAccumulator(double voxel_m) : inv_voxel_(1.0 / voxel_m) {}
+  explicit SceneCloudAccumulator(double voxel_m) : grid_(voxel_m) {}
+  /// Keeps the first point of each voxel (internal::VoxelGrid cells); non-finite points and
+  /// points beyond the grid's range are dropped.
   void Add(const std::vector<Eigen::Vector3f>& p_world, const std::vector<float>& intensity);
   MapCloud Take();
 
  private:
-  double inv_voxel_;
-  std::unordered_map<uint64_t, uint32_t> index_;
-  uint64_t last_key_ = ~0ULL;
+  internal::VoxelGrid grid_;
+  std::unordered_map<internal::VoxelCell, uint32_t, internal::VoxelCellHash> index_;
+  internal::VoxelCell last_cell_;
+  bool have_last_ = false;
   MapCloud map_;
 };
 

@@ -1,18 +1,13 @@
 #include "surfel/voxel_index.hpp"
 
 #include <cmath>
+#include <limits>
 
 namespace slam_mms::internal {
 
 void VoxelIndex::Clear() {
   cells_.clear();
   where_.clear();
-}
-
-VoxelIndex::Key VoxelIndex::KeyOf(const Eigen::Vector3f& p) const {
-  return {static_cast<int32_t>(std::floor(p.x() / cell_size_)),
-          static_cast<int32_t>(std::floor(p.y() / cell_size_)),
-          static_cast<int32_t>(std::floor(p.z() / cell_size_))};
 }
 
 void VoxelIndex::EnsureSlot(uint32_t id) {
@@ -51,18 +46,20 @@ void VoxelIndex::CandidatesInSphere(const Eigen::Vector3f& center, float radius,
                                     std::vector<uint32_t>* ids) const {
   const Key lo = KeyOf(center - Eigen::Vector3f::Constant(radius));
   const Key hi = KeyOf(center + Eigen::Vector3f::Constant(radius));
-  const float r2 = radius * radius;
+  const double r2 = static_cast<double>(radius) * radius;
   const long long span = static_cast<long long>(hi.x - lo.x + 1) * (hi.y - lo.y + 1) *
                          static_cast<long long>(hi.z - lo.z + 1);
+  constexpr double kInf = std::numeric_limits<double>::infinity();
   auto visit = [&](const Key& key, const std::vector<uint32_t>& cell) {
-    // Squared distance from the centre to the cell's box.
-    float d2 = 0.0f;
-    const int32_t k[3] = {key.x, key.y, key.z};
+    // Squared distance from the centre to the cell's box (in double: the box contains every
+    // position filed in the cell; the outermost cells hold everything beyond them).
+    double d2 = 0.0;
     for (int a = 0; a < 3; ++a) {
-      const float lo_a = static_cast<float>(k[a]) * cell_size_;
-      const float hi_a = lo_a + cell_size_;
-      const float c = center[a];
-      const float d = c < lo_a ? lo_a - c : (c > hi_a ? c - hi_a : 0.0f);
+      const int32_t k = key[a];
+      const double lo_a = k == -VoxelGrid::kMaxIndex ? -kInf : grid_.Lower(k, a);
+      const double hi_a = k == VoxelGrid::kMaxIndex ? kInf : grid_.Lower(k + 1, a);
+      const double c = center[a];
+      const double d = c < lo_a ? lo_a - c : (c > hi_a ? c - hi_a : 0.0);
       d2 += d * d;
     }
     if (d2 <= r2) ids->insert(ids->end(), cell.begin(), cell.end());

@@ -1,6 +1,9 @@
 #pragma once
 // VoxelIndex: a hash of cubic cells holding surfel ids, with O(1) insert, erase and move (each id
 // remembers its cell and its slot in that cell), and sphere queries. Private to the surfel module.
+// Cells are internal::VoxelGrid's (exact floor(p / cell_size), hashed by HashVoxelCell); a
+// position beyond the grid's range (2^30 - 1 cells) is filed in the outermost cell, whose box
+// then extends to infinity, and a NaN coordinate in cell 0 of that axis.
 // Thread safety: not thread-safe for writes; concurrent const queries are safe.
 
 #include <Eigen/Core>
@@ -8,11 +11,13 @@
 #include <unordered_map>
 #include <vector>
 
+#include "core/voxel_grid.hpp"
+
 namespace slam_mms::internal {
 
 class VoxelIndex {
  public:
-  explicit VoxelIndex(float cell_size_m = 10.0f) : cell_size_(cell_size_m) {}
+  explicit VoxelIndex(float cell_size_m = 10.0f) : cell_size_(cell_size_m), grid_(cell_size_m) {}
 
   void Clear();
   /// Reserves room for ids 0 .. num_ids-1 (avoids regrowth while bulk-inserting).
@@ -36,27 +41,18 @@ class VoxelIndex {
   float cell_size() const { return cell_size_; }
 
  private:
-  struct Key {
-    int32_t x, y, z;
-    bool operator==(const Key& o) const { return x == o.x && y == o.y && z == o.z; }
-  };
-  struct KeyHash {
-    size_t operator()(const Key& k) const {
-      return (static_cast<size_t>(static_cast<uint32_t>(k.x)) * 73856093u) ^
-             (static_cast<size_t>(static_cast<uint32_t>(k.y)) * 19349663u) ^
-             (static_cast<size_t>(static_cast<uint32_t>(k.z)) * 83492791u);
-    }
-  };
+  using Key = VoxelCell;
   struct Where {
-    Key key{0, 0, 0};
+    Key key;
     uint32_t slot = 0;
     bool present = false;
   };
-  Key KeyOf(const Eigen::Vector3f& p) const;
+  Key KeyOf(const Eigen::Vector3f& p) const { return grid_.ClampedCellOf(p); }
   void EnsureSlot(uint32_t id);
 
   float cell_size_;
-  std::unordered_map<Key, std::vector<uint32_t>, KeyHash> cells_;
+  VoxelGrid grid_;
+  std::unordered_map<Key, std::vector<uint32_t>, VoxelCellHash> cells_;
   std::vector<Where> where_;  // by id
 };
 

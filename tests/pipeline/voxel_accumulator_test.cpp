@@ -7,6 +7,8 @@
 #include <random>
 #include <tuple>
 
+#include "slam_mms/core/voxel_downsample.hpp"
+
 namespace slam_mms::internal {
 namespace {
 
@@ -125,6 +127,58 @@ TEST(VoxelAccumulatorTest, TracksTheFirstObservationWithoutChangingCentroids) {
   // Untracked: no stamps.
   plain.Cloud(&time_ns, &scan);
   EXPECT_TRUE(time_ns.empty());
+}
+
+// Far from the origin (150 km at 0.1 m: beyond the old 21-bit keys, which wrapped the voxel's
+// corner 209.7 km away) the centroids stay where their points are.
+TEST(VoxelAccumulatorTest, KeepsVoxelsFarFromTheOrigin) {
+  PointCloud cloud;
+  cloud.Add(Eigen::Vector3f(0.01f, 0.02f, 0.03f), 1.0f);
+  cloud.Add(Eigen::Vector3f(0.03f, 0.04f, 0.05f), 3.0f);
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.translation() = Eigen::Vector3d(150000.0, -150000.0, 20.0);
+  VoxelAccumulator acc(0.1);
+  acc.Add(cloud, T, 100.0);
+  acc.Add(cloud, Eigen::Isometry3d::Identity(), 100.0);
+  ASSERT_EQ(acc.size(), 2u);
+  EXPECT_EQ(acc.num_out_of_range(), 0u);
+  const PointCloud out = acc.Cloud();  // cell order: the one at x = 0 first
+  ASSERT_EQ(out.size(), 2u);
+  EXPECT_NEAR(out.points()[0].x(), 0.02f, 1e-6f);
+  EXPECT_NEAR(out.points()[1].x(), 150000.02f, 0.02f);
+  EXPECT_NEAR(out.points()[1].y(), -149999.97f, 0.02f);
+  EXPECT_NEAR(out.intensities()[1], 2.0f, 1e-6f);
+  // Beyond the grid's range (2^30 - 1 voxels): dropped and counted, not wrapped.
+  VoxelAccumulator tiny(1e-6);
+  T.translation() = Eigen::Vector3d(2000.0, 0.0, 0.0);
+  tiny.Add(cloud, T, 100.0);
+  EXPECT_EQ(tiny.size(), 0u);
+  EXPECT_EQ(tiny.num_out_of_range(), 2u);
+}
+
+// Points on and next to voxel faces (decimal faces such as 0.3 and 3.0, where p * (1 / voxel) and
+// p / voxel disagree, and negative ones): the accumulator and VoxelDownsample put them in the same
+// voxels, the one cell arithmetic of core/voxel_grid.hpp.
+TEST(VoxelAccumulatorTest, AgreesWithVoxelDownsampleOnVoxelFaces) {
+  PointCloud cloud;
+  for (int k = -40; k <= 40; ++k) {
+    const float face = static_cast<float>(k) * 0.1f;
+    for (float x : {face, std::nextafter(face, 1e9f), std::nextafter(face, -1e9f)}) {
+      cloud.Add(Eigen::Vector3f(x, 0.05f, -x), 1.0f);
+      cloud.Add(Eigen::Vector3f(0.3f, x, 3.0f), 1.0f);
+    }
+  }
+  for (double voxel : {0.1, 0.3, 0.25}) {
+    VoxelAccumulator acc(voxel);
+    acc.Add(cloud, Eigen::Isometry3d::Identity(), 100.0);
+    const StatusOr<PointCloud> down = VoxelDownsample(cloud, voxel);
+    ASSERT_TRUE(down.ok());
+    const PointCloud out = acc.Cloud();
+    ASSERT_EQ(out.size(), down->size()) << voxel;
+    for (size_t i = 0; i < out.size(); ++i) {  // both in cell order
+      EXPECT_LT((out.points()[i] - down->points()[i]).norm(), 1e-5f) << voxel << " voxel " << i;
+    }
+  }
 }
 
 }  // namespace

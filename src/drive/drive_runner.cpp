@@ -261,25 +261,24 @@ DriveRun RunMethod(const DriveReader& reader, const MappingSystem::Options& base
 
 DriveRun RunDrive(const DriveReader& reader, const MappingSystem::Options& base_options,
                   const DriveRunCallbacks& callbacks, const DriveRunOptions& run_options) {
-  const Status valid = run_options.Validate();
-  if (!valid.ok() || !run_options.estimate_extrinsics) {
-    if (valid.ok()) return RunMethod(reader, base_options, callbacks, run_options);
-    DriveRun failed;
-    failed.mode = base_options.mode;
-    failed.scans_total = reader.NumScans();
-    failed.status = valid;
-    return failed;
+  // What a run that stops before the method returns: its counts and the error.
+  auto failed = [&](const Status& status) {
+    DriveRun run;
+    run.mode = base_options.mode;
+    run.scans_total = reader.NumScans();
+    run.status = status;
+    return run;
+  };
+  if (const Status valid = run_options.Validate(); !valid.ok()) return failed(valid);
+  if (!run_options.estimate_extrinsics) {
+    return RunMethod(reader, base_options, callbacks, run_options);
   }
   // The boresight self-calibration first, then the method with its estimate (file comment).
   const auto t0 = std::chrono::steady_clock::now();
   StatusOr<ExtrinsicCalibration> calibration = CalibrateDriveExtrinsics(
       reader, base_options, run_options.extrinsic_calibration, callbacks.stop);
   if (!calibration.ok()) {
-    DriveRun failed;
-    failed.mode = base_options.mode;
-    failed.scans_total = reader.NumScans();
-    failed.status = calibration.status().WithContext("boresight self-calibration");
-    return failed;
+    return failed(calibration.status().WithContext("boresight self-calibration"));
   }
   DriveExtrinsics extrinsics;
   extrinsics.T_body_lidar = calibration->T_body_lidar_estimated;

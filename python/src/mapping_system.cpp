@@ -383,13 +383,10 @@ void RegisterMappingSystem(py::module_& m) {
             d["T_body_lidar_initial"] = IsometryToArray(c.T_body_lidar_initial);
             d["T_body_lidar_estimated"] = IsometryToArray(c.T_body_lidar_estimated);
             d["time_offset_s"] = c.time_offset_s;
-            d["correction_rpy_rad"] =
-                std::vector<double>(c.correction_rpy_rad.data(), c.correction_rpy_rad.data() + 3);
-            d["correction_xyz_m"] =
-                std::vector<double>(c.correction_xyz_m.data(), c.correction_xyz_m.data() + 3);
-            d["sigma_rpy_rad"] =
-                std::vector<double>(c.sigma_rpy_rad.data(), c.sigma_rpy_rad.data() + 3);
-            d["sigma_xyz_m"] = std::vector<double>(c.sigma_xyz_m.data(), c.sigma_xyz_m.data() + 3);
+            d["correction_rpy_rad"] = c.correction_rpy_rad;
+            d["correction_xyz_m"] = c.correction_xyz_m;
+            d["sigma_rpy_rad"] = c.sigma_rpy_rad;
+            d["sigma_xyz_m"] = c.sigma_xyz_m;
             d["sigma_time_s"] = c.sigma_time_s;
             py::dict observable;
             for (int i = 0; i < 7; ++i) observable[ExtrinsicParameterName(i)] = c.observable[i];

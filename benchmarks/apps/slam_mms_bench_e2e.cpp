@@ -8,6 +8,7 @@
 //   slam_mms_bench_e2e --folder DIR | --rosbag FILE.bag [--extrinsics FILE.yaml] [--frames A:B]
 //                                                    a plain drive folder or a ROS 1 bag
 //   common: [--mode full|gnss_ins|lidar_only] [--out FILE.json] [--rss-samples N]
+//           [--threads N] [--renderer auto|cpu|egl]
 //   slam_mms_bench_e2e --version | --help        (values: `--flag value` or `--flag=value`)
 //
 // The simulated drive is written to --sim-dir (kept, and reused when it already holds the same
@@ -66,6 +67,8 @@ struct Args {
   fs::path sim_dir;
   int rss_samples = 40;
   fs::path spill_dir = fs::temp_directory_path();  // empty: submap clouds stay in memory
+  int threads = MappingSystem::Options().num_threads;
+  slam_mms::SurfelRendererBackend renderer = slam_mms::SurfelRendererBackend::kAuto;
 };
 
 constexpr const char* kUsage =
@@ -75,7 +78,9 @@ constexpr const char* kUsage =
     "       slam_mms_bench_e2e --folder DIR | --rosbag FILE.bag [--extrinsics FILE.yaml]\n"
     "                          [--frames A:B]\n"
     "  common: [--mode full|gnss_ins|lidar_only] [--out FILE.json] [--rss-samples N]\n"
-    "          [--spill-dir DIR|none]   finished submaps' clouds (default: the temp folder)\n";
+    "          [--spill-dir DIR|none]   finished submaps' clouds (default: the temp folder)\n"
+    "          [--threads N]            MappingSystem::Options::num_threads (default 2)\n"
+    "          [--renderer auto|cpu|egl] the surfel renderer (default auto: EGL on a GPU)\n";
 
 // The command line (CLI11: `--flag value` and `--flag=value`); values are checked here so that the
 // messages say what was expected. --help prints the usage and exits 0, --version the version.
@@ -84,6 +89,7 @@ bool ParseArgs(int argc, char** argv, Args* a, std::string* error) {
   app.set_help_flag();
   bool help = false, version = false;
   std::string duration, seed, mode, kitti_raw, folder, rosbag, frames, spill_dir, rss_samples;
+  std::string threads, renderer;
   app.add_flag("-h,--help", help);
   app.add_flag("--version", version);
   app.add_option("--duration-s", duration);
@@ -99,6 +105,8 @@ bool ParseArgs(int argc, char** argv, Args* a, std::string* error) {
   app.add_option("--spill-dir", spill_dir);
   app.add_option("--sim-dir", a->sim_dir);
   app.add_option("--rss-samples", rss_samples);
+  app.add_option("--threads", threads);
+  app.add_option("--renderer", renderer);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -169,6 +177,25 @@ bool ParseArgs(int argc, char** argv, Args* a, std::string* error) {
     a->rss_samples = static_cast<int>(std::strtol(rss_samples.c_str(), &end, 10));
     if (rss_samples.empty() || *end != '\0' || a->rss_samples < 2) {
       *error = "--rss-samples " + rss_samples + ": must be an integer >= 2";
+      return false;
+    }
+  }
+  if (given("--threads")) {
+    a->threads = static_cast<int>(std::strtol(threads.c_str(), &end, 10));
+    if (threads.empty() || *end != '\0' || a->threads < 1 || a->threads > 64) {
+      *error = "--threads " + threads + ": must be an integer in 1..64";
+      return false;
+    }
+  }
+  if (given("--renderer")) {
+    if (renderer == "auto") {
+      a->renderer = slam_mms::SurfelRendererBackend::kAuto;
+    } else if (renderer == "cpu") {
+      a->renderer = slam_mms::SurfelRendererBackend::kCpu;
+    } else if (renderer == "egl") {
+      a->renderer = slam_mms::SurfelRendererBackend::kEgl;
+    } else {
+      *error = "--renderer " + renderer + ": must be auto, cpu or egl";
       return false;
     }
   }
@@ -254,6 +281,8 @@ struct RssSample {
 
 struct Report {
   std::string input, mode;
+  int threads = 0;
+  std::string renderer;  // the renderer the Localizer names in its log line ("cpu", an EGL one)
   size_t scans_total = 0, scans_processed = 0;
   int scans_skipped = 0;
   double drive_s = 0.0;
@@ -271,6 +300,7 @@ struct Report {
 
 void PrintTable(const Report& r) {
   std::printf("\n== slam_mms_bench_e2e: %s, mode %s ==\n", r.input.c_str(), r.mode.c_str());
+  std::printf("threads %d, surfel renderer %s\n", r.threads, r.renderer.c_str());
   std::printf(
       "scans %zu of %zu (%d skipped), drive %.1f s, wall %.2f s (reading scans %.2f s, "
       "Finish %.2f s)\n",
@@ -308,6 +338,8 @@ bool WriteJson(const Report& r, const fs::path& path) {
   j["version"] = SLAM_MMS_VERSION_STRING;
   j["input"] = r.input;
   j["mode"] = r.mode;
+  j["threads"] = r.threads;
+  j["renderer"] = r.renderer;
   j["scans_total"] = r.scans_total;
   j["scans_processed"] = r.scans_processed;
   j["scans_skipped"] = r.scans_skipped;
@@ -349,12 +381,13 @@ bool WriteJson(const Report& r, const fs::path& path) {
 
 // Feeds the drive in time order (a scan once IMU and GNSS reached its end, as a sensor delivers
 // it), timing every call.
-Status FeedDrive(const slam_mms::DriveReader& reader, MappingMode mode, int rss_samples,
-                 const fs::path& spill_dir, Report* r) {
+Status FeedDrive(const slam_mms::DriveReader& reader, MappingMode mode, const Args& a, Report* r) {
   const slam_mms::DriveStreams& in = reader.streams();
   MappingSystem::Options options;
   options.mode = mode;
-  options.localizer.spill_dir = spill_dir;
+  options.num_threads = a.threads;
+  options.localizer.renderer = a.renderer;
+  options.localizer.spill_dir = a.spill_dir;
   options.T_body_lidar = in.T_body_lidar;
   if (in.t_body_antenna_m) options.ins.gnss.t_body_antenna = *in.t_body_antenna_m;
   std::vector<slam_mms::InsState> pos;
@@ -367,7 +400,7 @@ Status FeedDrive(const slam_mms::DriveReader& reader, MappingMode mode, int rss_
 
   std::vector<slam_mms::LocalizationResult> results;
   const size_t n_scans = reader.NumScans();
-  const size_t every = std::max<size_t>(1, n_scans / static_cast<size_t>(rss_samples));
+  const size_t every = std::max<size_t>(1, n_scans / static_cast<size_t>(a.rss_samples));
   const auto t_start = Clock::now();
   system->SetResultCallback([&](const slam_mms::LocalizationResult& res) {
     results.push_back(res);
@@ -456,8 +489,23 @@ Status FeedDrive(const slam_mms::DriveReader& reader, MappingMode mode, int rss_
 }  // namespace
 
 int main(int argc, char** argv) {
-  slam_mms::SetLogSink(slam_mms::StderrLogSink());
-  slam_mms::SetMinLogLevel(slam_mms::LogLevel::kWarning);
+  // Warnings and errors go to stderr; of the info lines only the Localizer's, which names the
+  // surfel renderer it runs on, is read (for the report).
+  Report report;
+  slam_mms::SetLogSink([stderr_sink = slam_mms::StderrLogSink(), &report](
+                           slam_mms::LogLevel level, const std::string& message) {
+    static const std::string kTag = ", renderer ";
+    if (level >= slam_mms::LogLevel::kWarning) {
+      stderr_sink(level, message);
+    } else if (message.rfind("Localizer: ", 0) == 0) {
+      const size_t at = message.find(kTag);
+      if (at != std::string::npos) {
+        const size_t from = at + kTag.size();
+        report.renderer = message.substr(from, message.find(", WT ", from) - from);
+      }
+    }
+  });
+  slam_mms::SetMinLogLevel(slam_mms::LogLevel::kInfo);
   Args args;
   std::string error;
   if (!ParseArgs(argc, argv, &args, &error)) {
@@ -467,8 +515,8 @@ int main(int argc, char** argv) {
   MappingMode mode = MappingMode::kFull;
   slam_mms::ParseMappingMode(args.mode, &mode);
 
-  Report report;
   report.mode = args.mode;
+  report.threads = args.threads;
   fs::path drive = args.input;
   fs::path temp_dir;
   if (drive.empty()) {
@@ -522,7 +570,7 @@ int main(int argc, char** argv) {
       report.drive_s =
           drive_reader.ScanEnd(report.scans_total - 1).SecondsSince(drive_reader.ScanStart(0));
     }
-    const Status s = FeedDrive(drive_reader, mode, args.rss_samples, args.spill_dir, &report);
+    const Status s = FeedDrive(drive_reader, mode, args, &report);
     if (!s.ok()) {
       std::fprintf(stderr, "slam_mms_bench_e2e: run failed: %s\n", s.ToString().c_str());
       rc = 1;

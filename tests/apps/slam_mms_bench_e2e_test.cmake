@@ -1,5 +1,6 @@
 # Smoke test of slam_mms_bench_e2e (ctest label apps): runs it and checks its JSON report.
-#   cmake -DAPP=<exe> -DOUT=<json> "-DARGS=<arguments separated by |>" -P slam_mms_bench_e2e_test.cmake
+#   cmake -DAPP=<exe> -DOUT=<json> "-DARGS=<arguments separated by |>" [-DEXPECT_THREADS=N]
+#         [-DEXPECT_RENDERER=cpu] -P slam_mms_bench_e2e_test.cmake
 # Fails on a non-zero exit, a missing field, no processed scan, or implausible numbers; exit 77 of
 # the app (the --kitti-raw folder is absent) is passed on so ctest reports the test as skipped.
 string(REPLACE "|" ";" ARGS "${ARGS}")
@@ -29,5 +30,14 @@ if(NOT rate GREATER 0 OR NOT rss GREATER 10 OR n_samples LESS 3)
 endif()
 if(NOT total_max GREATER 0 OR integrate_median LESS 0)
   message(FATAL_ERROR "implausible stage timings: total max ${total_max}, integrate median ${integrate_median}")
+endif()
+# The thread count and the renderer the Localizer reported, where the test names them.
+string(JSON threads GET "${json}" threads)
+string(JSON renderer GET "${json}" renderer)
+if(DEFINED EXPECT_THREADS AND NOT threads EQUAL EXPECT_THREADS)
+  message(FATAL_ERROR "threads ${threads}, expected ${EXPECT_THREADS}")
+endif()
+if(DEFINED EXPECT_RENDERER AND NOT renderer STREQUAL EXPECT_RENDERER)
+  message(FATAL_ERROR "renderer '${renderer}', expected '${EXPECT_RENDERER}'")
 endif()
 message("slam_mms_bench_e2e smoke: ${done} scans, ${rate} scans/s, peak RSS ${rss} MiB")

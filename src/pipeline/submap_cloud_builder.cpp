@@ -83,8 +83,9 @@ SubmapCloudBuilder::Clouds SubmapCloudBuilder::Build() {
 
 void SubmapCloudBuilder::Clear() {
   Wait();
-  map_.Clear();
-  registration_.Clear();
+  // The next submap needs about as many voxels: the tables are kept (see VoxelAccumulator::Reset).
+  map_.Reset();
+  registration_.Reset();
 }
 
 void SubmapCloudBuilder::WorkerLoop() {

@@ -44,7 +44,7 @@ class SubmapCloudBuilder {
            double max_range_m);
   /// The clouds of everything added since the last Clear (waits for pending scans).
   Clouds Build();
-  /// Empties both grids (waits for pending scans) and gives their memory back.
+  /// Empties both grids (waits for pending scans); their tables are kept for the next submap.
   void Clear();
 
  private:

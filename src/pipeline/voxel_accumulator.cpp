@@ -25,6 +25,15 @@ void VoxelAccumulator::Clear() {
   first_scan_ = std::vector<int64_t>();
 }
 
+void VoxelAccumulator::Reset() {
+  // order_[slot] is written whenever a slot takes a voxel, and read only for taken slots.
+  std::fill(table_.begin(), table_.end(), Entry());
+  size_ = 0;
+  out_of_range_ = 0;
+  first_time_ns_.clear();
+  first_scan_.clear();
+}
+
 void VoxelAccumulator::Reserve(size_t voxels) {
   if (2 * voxels <= table_.size()) return;
   size_t capacity = table_.empty() ? size_t{1} << 16 : table_.size();

@@ -48,6 +48,12 @@ class VoxelAccumulator {
   }
   /// Empties the grid and gives its memory back.
   void Clear();
+  /// Empties the grid and keeps its memory (the table's size, the stamp capacity) for the next
+  /// run of Adds: a submap after a submap then fills a table of the size the last one needed
+  /// instead of growing one by doubling from fresh pages (page faults were ~30 % of the pipeline's
+  /// faults). The clouds are the same either way (they are sorted by cell, and each voxel sums
+  /// its points in Add order).
+  void Reset();
 
  private:
   /// One slot of an open-addressing table (linear probing, power-of-two size, load <= 1/2, slot

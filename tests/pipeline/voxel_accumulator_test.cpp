@@ -131,6 +131,46 @@ TEST(VoxelAccumulatorTest, TracksTheFirstObservationWithoutChangingCentroids) {
 
 // Far from the origin (150 km at 0.1 m: beyond the old 21-bit keys, which wrapped the voxel's
 // corner 209.7 km away) the centroids stay where their points are.
+// Reset keeps the table (sized by a large first submap) for the next one: a smaller submap
+// accumulated after it gives the same bits (centroids, intensities, first observations) as a
+// fresh accumulator, and nothing of the first submap is left.
+TEST(VoxelAccumulatorTest, ResetKeepsTheTableAndGivesTheSameCloudsAsANewGrid) {
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<float> u(-20.0f, 20.0f);
+  PointCloud big, small;
+  for (int i = 0; i < 200000; ++i) big.Add(Eigen::Vector3f(u(rng), u(rng), u(rng)), 1.0f, 0.0f);
+  for (int i = 0; i < 30000; ++i) {
+    small.Add(Eigen::Vector3f(0.5f * u(rng), u(rng), 0.1f * u(rng)), 0.5f, 1e-6f * i);
+  }
+  const ScanStamp stamp_big{1317042651000000000, &big.time_offsets_s(), 7};
+  const ScanStamp stamp_small{1317042652000000000, &small.time_offsets_s(), 8};
+  const double voxel = 0.2;
+  VoxelAccumulator reused(voxel, true), fresh(voxel, true);
+  reused.Add(big, Eigen::Isometry3d::Identity(), 100.0, &stamp_big);
+  const size_t capacity = reused.MemoryBytes();
+  reused.Reset();
+  EXPECT_EQ(reused.size(), 0u);
+  EXPECT_EQ(reused.Cloud().size(), 0u);
+  EXPECT_EQ(reused.MemoryBytes(), capacity);
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.translation() = Eigen::Vector3d(1.0, -2.0, 0.3);
+  reused.Add(small, T, 100.0, &stamp_small);
+  fresh.Add(small, T, 100.0, &stamp_small);
+  EXPECT_EQ(reused.MemoryBytes(), capacity);  // no growth: the kept table was large enough
+  std::vector<int64_t> t_reused, s_reused, t_fresh, s_fresh;
+  const PointCloud a = reused.Cloud(&t_reused, &s_reused);
+  const PointCloud b = fresh.Cloud(&t_fresh, &s_fresh);
+  ASSERT_GT(b.size(), 1000u);
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t k = 0; k < a.size(); ++k) {
+    ASSERT_EQ(a.points()[k], b.points()[k]) << k;
+    ASSERT_EQ(a.intensities()[k], b.intensities()[k]) << k;
+  }
+  EXPECT_EQ(t_reused, t_fresh);
+  EXPECT_EQ(s_reused, s_fresh);
+  EXPECT_EQ(s_reused.front(), 8);
+}
+
 TEST(VoxelAccumulatorTest, KeepsVoxelsFarFromTheOrigin) {
   PointCloud cloud;
   cloud.Add(Eigen::Vector3f(0.01f, 0.02f, 0.03f), 1.0f);

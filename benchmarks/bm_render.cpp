@@ -63,7 +63,9 @@ void BM_RenderEgl(benchmark::State& state) {
   for (auto _ : state) {
   }
 #else
-  auto renderer = slam_mms::EglSurfelRenderer::Create(slam_mms::SurfelRendererOptions());
+  // range(1): the renderer's host threads (gather and unpack; BM_RenderCpu runs on 2).
+  auto renderer = slam_mms::EglSurfelRenderer::Create(slam_mms::SurfelRendererOptions(),
+                                                      static_cast<int>(state.range(1)));
   if (!renderer.ok()) {
     state.SkipWithError(renderer.status().ToString().c_str());
     for (auto _ : state) {
@@ -83,7 +85,10 @@ void BM_RenderEgl(benchmark::State& state) {
   state.SetLabel((*renderer)->gl_renderer());
 #endif
 }
-BENCHMARK(BM_RenderEgl)->Arg(100000)->Arg(1000000)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_RenderEgl)
+    ->ArgsProduct({{100000, 1000000}, {1, 2, 16}})
+    ->ArgNames({"surfels", "threads"})
+    ->Unit(benchmark::kMillisecond);
 
 // A street: ground, two facades, an end wall and boxes (parked cars, poles).
 double CastStreet(const Eigen::Vector3d& o, const Eigen::Vector3d& d) {

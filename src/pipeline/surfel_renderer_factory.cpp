@@ -66,7 +66,7 @@ StatusOr<std::unique_ptr<SurfelRenderer>> MakeSurfelRenderer(const SurfelRendere
     }
   }
   if (backend == SurfelRendererBackend::kEgl || backend == SurfelRendererBackend::kAuto) {
-    auto egl = EglSurfelRenderer::Create(options);
+    auto egl = EglSurfelRenderer::Create(options, num_threads);
     if (backend == SurfelRendererBackend::kEgl) {
       if (!egl.ok()) return egl.status();
       return std::unique_ptr<SurfelRenderer>(std::move(egl).value());

@@ -11,7 +11,8 @@
 //   Unavailable in a build without the render_egl module, SLAM_MMS_WITH_EGL=OFF, where kAuto is
 //   always the CPU renderer).
 //
-// num_threads: the CPU renderer's threads (the calling thread included); EGL ignores it.
+// num_threads: the renderer's host threads (the calling thread included): the CPU renderer's
+// cull and raster, the EGL renderer's surfel gather and image unpack.
 // Thread safety: the function is thread-safe; the renderer it returns is not (see each class).
 
 #include <memory>

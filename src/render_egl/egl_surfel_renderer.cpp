@@ -6,9 +6,11 @@
 #include <cmath>
 #include <cstring>
 #include <sstream>
+#include <string>
 #include <utility>
 #include <vector>
 
+#include "core/worker_pool.hpp"
 #include "render_egl/egl_context.hpp"
 #include "render_egl/surfel_shaders.hpp"
 
@@ -22,6 +24,23 @@ struct GpuSurfel {
   int32_t id;
 };
 static_assert(sizeof(GpuSurfel) == 32, "GpuSurfel layout");
+
+// The draw-order surfels [begin, end) of `input` into `out` (out[0] is surfel `begin`).
+void PackSurfels(const SurfelRenderInput& input, size_t begin, size_t end, GpuSurfel* out) {
+  for (size_t k = begin; k < end; ++k) {
+    const size_t id = input.ids != nullptr ? input.ids[k] : k;
+    const Surfel& s = input.surfels[id];
+    GpuSurfel& g = out[k - begin];
+    g.pos_radius[0] = s.position.x();
+    g.pos_radius[1] = s.position.y();
+    g.pos_radius[2] = s.position.z();
+    g.pos_radius[3] = s.radius;
+    g.normal[0] = s.normal.x();
+    g.normal[1] = s.normal.y();
+    g.normal[2] = s.normal.z();
+    g.id = static_cast<int32_t>(id);
+  }
+}
 
 Status GlError(const char* what) {
   const GLenum e = glGetError();
@@ -49,8 +68,8 @@ StatusOr<GLuint> CompileShader(GLenum type, const char* source) {
 }  // namespace
 
 struct EglSurfelRenderer::Impl {
-  explicit Impl(const SurfelRendererOptions& o)
-      : options(o), projection(*RangeProjection::Create(o.projection)) {}
+  Impl(const SurfelRendererOptions& o, int num_threads)
+      : options(o), projection(*RangeProjection::Create(o.projection)), pool(num_threads) {}
   ~Impl() { Release(); }
 
   Status Init();
@@ -64,7 +83,10 @@ struct EglSurfelRenderer::Impl {
   GLuint depth_rb = 0;
   GLint loc_R = -1, loc_t = -1;
   size_t vbo_capacity = 0;
-  std::vector<GpuSurfel> staging;
+  // The host side of a render (gathering the surfels, unpacking the read-back images) is split
+  // over these threads; GL is called from the calling thread only.
+  internal::WorkerPool pool;
+  std::vector<GpuSurfel> staging;  // only where the buffer cannot be mapped
   std::vector<float> read_vertex, read_normal;
   std::vector<int32_t> read_index;
 };
@@ -213,9 +235,13 @@ EglSurfelRenderer::EglSurfelRenderer(std::unique_ptr<Impl> impl) : impl_(std::mo
 EglSurfelRenderer::~EglSurfelRenderer() = default;
 
 StatusOr<std::unique_ptr<EglSurfelRenderer>> EglSurfelRenderer::Create(
-    const SurfelRendererOptions& options) {
+    const SurfelRendererOptions& options, int num_threads) {
   SLAM_MMS_RETURN_IF_ERROR(options.Validate());
-  auto impl = std::make_unique<Impl>(options);
+  if (num_threads < 1 || num_threads > 64) {
+    return InvalidArgumentError("EglSurfelRenderer: num_threads = " + std::to_string(num_threads) +
+                                "; must be in [1, 64]");
+  }
+  auto impl = std::make_unique<Impl>(options, num_threads);
   SLAM_MMS_RETURN_IF_ERROR(impl->Init());
   return std::unique_ptr<EglSurfelRenderer>(new EglSurfelRenderer(std::move(impl)));
 }
@@ -244,22 +270,10 @@ Status EglSurfelRenderer::Render(const SurfelRenderInput& input,
   const int cols = m.projection.cols();
   const size_t num_pixels = static_cast<size_t>(rows) * cols;
 
-  // Upload the surfels in draw order.
+  // Upload the surfels in draw order: gathered by the pool's threads straight into the mapped
+  // buffer (the old buffer storage is invalidated: the last render's read-back has finished with
+  // it); where the driver cannot map it, through a staging copy and glBufferSubData.
   const size_t n = input.count();
-  m.staging.resize(n);
-  for (size_t k = 0; k < n; ++k) {
-    const size_t id = input.ids != nullptr ? input.ids[k] : k;
-    const Surfel& s = input.surfels[id];
-    GpuSurfel& g = m.staging[k];
-    g.pos_radius[0] = s.position.x();
-    g.pos_radius[1] = s.position.y();
-    g.pos_radius[2] = s.position.z();
-    g.pos_radius[3] = s.radius;
-    g.normal[0] = s.normal.x();
-    g.normal[1] = s.normal.y();
-    g.normal[2] = s.normal.z();
-    g.id = static_cast<int32_t>(id);
-  }
   glUseProgram(m.program);
   glBindVertexArray(m.vao);
   glBindBuffer(GL_ARRAY_BUFFER, m.vbo);
@@ -268,8 +282,28 @@ Status EglSurfelRenderer::Render(const SurfelRenderInput& input,
     m.vbo_capacity = bytes + bytes / 4;
     glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(m.vbo_capacity), nullptr, GL_STREAM_DRAW);
   }
+  auto pack_into = [&](GpuSurfel* out) {
+    m.pool.Run([&](int i) {
+      size_t begin = 0, end = 0;
+      m.pool.Range(i, n, &begin, &end);
+      PackSurfels(input, begin, end, out + begin);
+    });
+  };
   if (bytes > 0) {
-    glBufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(bytes), m.staging.data());
+    void* mapped = glMapBufferRange(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(bytes),
+                                    GL_MAP_WRITE_BIT | GL_MAP_INVALIDATE_BUFFER_BIT);
+    bool uploaded = false;
+    if (mapped != nullptr) {
+      pack_into(static_cast<GpuSurfel*>(mapped));
+      // GL_FALSE: the store was lost while mapped (e.g. a display mode change); upload again.
+      uploaded = glUnmapBuffer(GL_ARRAY_BUFFER) == GL_TRUE;
+    }
+    if (!uploaded) {
+      glGetError();  // a failed map's error is answered by the fallback below
+      m.staging.resize(n);
+      pack_into(m.staging.data());
+      glBufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(bytes), m.staging.data());
+    }
   }
   const Eigen::Isometry3d T_sensor_world = T_world_sensor.inverse();
   const Eigen::Matrix3f R = T_sensor_world.linear().cast<float>();  // column-major
@@ -302,22 +336,26 @@ Status EglSurfelRenderer::Render(const SurfelRenderInput& input,
   if (out->rows != rows || out->cols != cols || out->range.size() != num_pixels) {
     out->Reset(rows, cols);
   }
-  for (size_t i = 0; i < num_pixels; ++i) {
-    const int32_t idx = m.read_index[i];
-    if (idx < 0) {
-      out->vertex[i].setZero();
-      out->normal[i].setZero();
-      out->range[i] = 0.0f;
-      out->index[i] = -1;
-      continue;
+  m.pool.Run([&](int t) {
+    size_t begin = 0, end = 0;
+    m.pool.Range(t, num_pixels, &begin, &end);
+    for (size_t i = begin; i < end; ++i) {
+      const int32_t idx = m.read_index[i];
+      if (idx < 0) {
+        out->vertex[i].setZero();
+        out->normal[i].setZero();
+        out->range[i] = 0.0f;
+        out->index[i] = -1;
+        continue;
+      }
+      const float* v = &m.read_vertex[4 * i];
+      const float* nn = &m.read_normal[4 * i];
+      out->vertex[i] = Eigen::Vector3f(v[0], v[1], v[2]);
+      out->range[i] = v[3];
+      out->normal[i] = Eigen::Vector3f(nn[0], nn[1], nn[2]);
+      out->index[i] = idx;
     }
-    const float* v = &m.read_vertex[4 * i];
-    const float* nn = &m.read_normal[4 * i];
-    out->vertex[i] = Eigen::Vector3f(v[0], v[1], v[2]);
-    out->range[i] = v[3];
-    out->normal[i] = Eigen::Vector3f(nn[0], nn[1], nn[2]);
-    out->index[i] = idx;
-  }
+  });
   return OkStatus();
 }
 

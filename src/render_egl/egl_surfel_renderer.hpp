@@ -26,8 +26,12 @@ namespace slam_mms {
 
 class EglSurfelRenderer final : public SurfelRenderer {
  public:
-  /// Unavailable when no EGL display/context/FBO can be made; InvalidArgument for bad options.
-  static StatusOr<std::unique_ptr<EglSurfelRenderer>> Create(const SurfelRendererOptions& options);
+  /// Unavailable when no EGL display/context/FBO can be made; InvalidArgument for bad options or
+  /// num_threads outside [1, 64]. num_threads (the calling thread included) share the host side of
+  /// each render: gathering the surfels into the mapped vertex buffer and unpacking the read-back
+  /// images (the image does not depend on it).
+  static StatusOr<std::unique_ptr<EglSurfelRenderer>> Create(const SurfelRendererOptions& options,
+                                                             int num_threads = 1);
   ~EglSurfelRenderer() override;
   EglSurfelRenderer(const EglSurfelRenderer&) = delete;
   EglSurfelRenderer& operator=(const EglSurfelRenderer&) = delete;

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "slam_mms/surfel/surfel_map.hpp"
 #include "surfel/cpu_surfel_renderer.hpp"
@@ -118,6 +120,39 @@ TEST(EglSurfelRendererTest, SubsetIdsAndRearSeamMatchCpu) {
   // Empty input: an all-invalid image.
   ASSERT_TRUE(egl->Render(SurfelRenderInput{}, T, &b).ok());
   EXPECT_EQ(b.CountVertices(), 0);
+}
+
+// The host side split over threads (surfels gathered into the mapped buffer, images unpacked)
+// gives the same image, bit for bit, as one thread, for a subset with ids and for all surfels,
+// also when the buffer grows between renders; a thread count outside [1, 64] is refused.
+TEST(EglSurfelRendererTest, SameImageForAnyThreadCount) {
+  const SurfelRendererOptions options;
+  REQUIRE_EGL(one, options);
+  auto three = EglSurfelRenderer::Create(options, 3);
+  ASSERT_TRUE(three.ok()) << three.status().ToString();
+  const auto surfels = internal::MakeStreetSurfels(60000, 7);
+  std::vector<uint32_t> ids;
+  for (uint32_t i = 0; i < surfels.size(); i += 2) ids.push_back(i);
+  for (const SurfelRenderInput& input :
+       {SurfelRenderInput::Subset(surfels, ids), SurfelRenderInput::All(surfels)}) {
+    VertexNormalMap a, b;
+    ASSERT_TRUE(one->Render(input, TestPose(), &a).ok());
+    ASSERT_TRUE((*three)->Render(input, TestPose(), &b).ok());
+    ASSERT_GT(a.CountVertices(), a.size() / 10);
+    ASSERT_EQ(a.size(), b.size());
+    for (int i = 0; i < a.size(); ++i) {
+      ASSERT_EQ(a.index[i], b.index[i]) << i;
+      ASSERT_EQ(a.range[i], b.range[i]) << i;
+      ASSERT_EQ(a.vertex[i], b.vertex[i]) << i;
+      ASSERT_EQ(a.normal[i], b.normal[i]) << i;
+    }
+  }
+  for (int bad : {0, 65}) {
+    auto r = EglSurfelRenderer::Create(options, bad);
+    ASSERT_FALSE(r.ok());
+    EXPECT_EQ(r.status().code(), StatusCode::kInvalidArgument);
+    EXPECT_NE(r.status().message().find("num_threads"), std::string::npos);
+  }
 }
 
 TEST(EglSurfelRendererTest, ImpossibleImageSizeIsAStatusNotACrash) {

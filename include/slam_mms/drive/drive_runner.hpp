@@ -16,16 +16,18 @@
 // options.origin, else at the first record) and fed with AddInsPose instead of IMU + GNSS.
 //
 // Two POS workflows (ARCHITECTURE.md): streaming (DriveRunOptions::pos = kForward, the default,
-// as a host calling MappingSystem live gets) and offline (kSmoothed, slam_mms_run's default for
-// full): PosSmoother runs the forward EKF over the whole IMU/GNSS stream with options.ins and the
-// outage windows (relative to scan 0's start), then a Rauch-Tung-Striebel backward pass; the
-// smoothed states (one per IMU sample and fix) are fed with AddInsPose, and the IMU samples and
-// GNSS fixes are fed too: the IMU for the POS-jump check and preintegration, the raw fixes as
-// level-2 GNSS factors (decided against the smoothed POS, withheld in the outage windows). Level 1
-// then takes F_Odom from the smoothed POS also inside outages (its relative motion there is the
-// IMU's, with biases estimated from both ends). Mode kGnssInsSmoothed always runs offline (scans
-// placed with the smoothed POS); kGnssIns is always the forward filter, kLidarOnly uses no POS.
-// An input with its own external POS keeps it (it is a POS solution already) in every workflow.
+// as a host calling MappingSystem live gets) and offline (kSmoothed, `slam_mms_run --pos smoothed`;
+// not its default: on the demo drive and the real KITTI frames `full` is less accurate on today's
+// smoothed POS, whose attitude is worse than the forward filter's, docs/results.md): PosSmoother
+// runs the forward EKF over the whole IMU/GNSS stream with options.ins and the outage windows
+// (relative to scan 0's start), then a Rauch-Tung-Striebel backward pass; the smoothed states (one
+// per IMU sample and fix) are fed with AddInsPose, and the IMU samples and GNSS fixes are fed too:
+// the IMU for the POS-jump check and preintegration, the raw fixes as level-2 GNSS factors (decided
+// against the smoothed POS, withheld in the outage windows). Level 1 then takes F_Odom from the
+// smoothed POS also inside outages (its relative motion there is the IMU's, with biases estimated
+// from both ends). Mode kGnssInsSmoothed always runs offline (scans placed with the smoothed POS);
+// kGnssIns is always the forward filter, kLidarOnly uses no POS. An input with its own external POS
+// keeps it (it is a POS solution already) in every workflow.
 //
 // Boresight self-calibration (DriveRunOptions::estimate_extrinsics): before the method, the
 // offline POS of the drive and CalibrateExtrinsics against it (CalibrateDriveExtrinsics), then the

@@ -16,15 +16,6 @@ size_t Slot(const VoxelCell& cell, size_t mask) {
 
 }  // namespace
 
-void VoxelAccumulator::Clear() {
-  table_ = std::vector<Entry>();
-  order_ = std::vector<uint32_t>();
-  size_ = 0;
-  out_of_range_ = 0;
-  first_time_ns_ = std::vector<int64_t>();
-  first_scan_ = std::vector<int64_t>();
-}
-
 void VoxelAccumulator::Reset() {
   // order_[slot] is written whenever a slot takes a voxel, and read only for taken slots.
   std::fill(table_.begin(), table_.end(), Entry());

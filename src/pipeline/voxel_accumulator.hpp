@@ -46,8 +46,6 @@ class VoxelAccumulator {
   size_t MemoryBytes() const {
     return table_.capacity() * sizeof(Entry) + order_.capacity() * sizeof(uint32_t);
   }
-  /// Empties the grid and gives its memory back.
-  void Clear();
   /// Empties the grid and keeps its memory (the table's size, the stamp capacity) for the next
   /// run of Adds: a submap after a submap then fills a table of the size the last one needed
   /// instead of growing one by doubling from fresh pages (page faults were ~30 % of the pipeline's

@@ -71,7 +71,7 @@ TEST(VoxelAccumulatorTest, MatchesReferenceGrid) {
     EXPECT_NEAR(p.z(), s.z / s.n, 1e-4);
     EXPECT_NEAR(out.intensities()[it->second], s.i / s.n, 1e-4);
   }
-  acc.Clear();
+  acc.Reset();
   EXPECT_EQ(acc.size(), 0u);
   EXPECT_EQ(acc.Cloud().size(), 0u);
 }

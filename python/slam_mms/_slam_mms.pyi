@@ -293,6 +293,9 @@ class DriveStreams:
     def initial_state_source(self) -> str:
         ...
     @property
+    def initial_attitude_sigma_rpy_rad(self) -> Optional[numpy.ndarray]:
+        """(3,) 1-sigma roll, pitch, yaw [rad] of initial_state's attitude as its source states it, or None (the filter's init sigmas)."""
+    @property
     def T_body_lidar(self) -> numpy.ndarray:
         ...
     @property
@@ -730,6 +733,11 @@ class InsOptions:
         """[rad/s]"""
     @init_sigma_gyro_bias_radps.setter
     def init_sigma_gyro_bias_radps(self, value: float) -> None: ...
+    @property
+    def use_stated_attitude_sigma(self) -> bool:
+        """start from the initial attitude's stated accuracy where its source gives one"""
+    @use_stated_attitude_sigma.setter
+    def use_stated_attitude_sigma(self, value: bool) -> None: ...
     @property
     def max_imu_gap_s(self) -> float:
         """[s]"""
@@ -1348,8 +1356,8 @@ class MappingSystem:
     @typing.overload
     def add_scan(self: MappingSystem, points: object, stamp_start_ns: int, stamp_end_ns: int, times: object = None, intensities: object = None, index: int = -1, source: str = '') -> None:
         ...
-    def initialize_pos(self: MappingSystem, state: InsState) -> None:
-        """Initial attitude and velocity of the POS at state.stamp_ns."""
+    def initialize_pos(self: MappingSystem, state: InsState, sigma_rpy_rad: Optional[numpy.ndarray] = None) -> None:
+        """Initial attitude and velocity of the POS at state.stamp_ns; sigma_rpy_rad: the attitude's stated 1-sigma roll, pitch, yaw [rad] (DriveStreams.initial_attitude_sigma_rpy_rad), None: the filter's init sigmas."""
     def add_ins_pose(self: MappingSystem, state: InsState) -> None:
         """An external POS pose instead of IMU + GNSS."""
     def finish(self: MappingSystem) -> None:

@@ -249,10 +249,14 @@ void RegisterMappingSystem(py::module_& m) {
           "per-point time offsets from stamp_start [s] (N,) and intensities (N,).")
       .def(
           "initialize_pos",
-          [](PyMappingSystem& self, const InsState& s) {
-            self.Call([&](MappingSystem& sys) { return sys.InitializePos(s); });
+          [](PyMappingSystem& self, const InsState& s,
+             const std::optional<Eigen::Vector3d>& sigma_rpy_rad) {
+            self.Call([&](MappingSystem& sys) { return sys.InitializePos(s, sigma_rpy_rad); });
           },
-          py::arg("state"), "Initial attitude and velocity of the POS at state.stamp_ns.")
+          py::arg("state"), py::arg("sigma_rpy_rad") = py::none(),
+          "Initial attitude and velocity of the POS at state.stamp_ns; sigma_rpy_rad: the "
+          "attitude's stated 1-sigma roll, pitch, yaw [rad] (DriveStreams."
+          "initial_attitude_sigma_rpy_rad), None: the filter's init sigmas.")
       .def(
           "add_ins_pose",
           [](PyMappingSystem& self, const InsState& s) {

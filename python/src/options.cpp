@@ -144,6 +144,8 @@ void RegisterOptions(py::module_& m) {
       .Field("init_sigma_yaw_rad", &IO::init_sigma_yaw_rad, "[rad]")
       .Field("init_sigma_accel_bias_mps2", &IO::init_sigma_accel_bias_mps2, "[m/s^2]")
       .Field("init_sigma_gyro_bias_radps", &IO::init_sigma_gyro_bias_radps, "[rad/s]")
+      .Field("use_stated_attitude_sigma", &IO::use_stated_attitude_sigma,
+             "start from the initial attitude's stated accuracy where its source gives one")
       .Field("max_imu_gap_s", &IO::max_imu_gap_s, "[s]")
       .Field("max_fix_latency_s", &IO::max_fix_latency_s, "[s]")
       .Field("max_extrapolation_s", &IO::max_extrapolation_s, "[s]")

@@ -153,6 +153,9 @@ void RegisterReaders(py::module_& m) {
       .def_readonly("pos_source", &DS::pos_source)
       .def_readonly("initial_state", &DS::initial_state, "InsState or None.")
       .def_readonly("initial_state_source", &DS::initial_state_source)
+      .def_readonly("initial_attitude_sigma_rpy_rad", &DS::initial_attitude_sigma_rpy_rad,
+                    "(3,) 1-sigma roll, pitch, yaw [rad] of initial_state's attitude as its "
+                    "source states it, or None (the filter's init sigmas).")
       .def_property_readonly("T_body_lidar",
                              [](const DS& s) { return IsometryToArray(s.T_body_lidar); })
       .def_readonly("t_body_antenna_m", &DS::t_body_antenna_m, "(3,) or None.");

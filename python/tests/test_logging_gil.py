@@ -113,7 +113,7 @@ def test_gil_released_during_finish_and_callbacks_run(sim_drive):
     seen = []
     system.set_result_callback(lambda r: seen.append((r.scan_index, threading.get_ident())))
     streams = reader.streams
-    system.initialize_pos(streams.initial_state)
+    system.initialize_pos(streams.initial_state, streams.initial_attitude_sigma_rpy_rad)
     # All streams first: the scans are queued until the POS covers them and processed in finish()
     # only where they are not yet; feed IMU/GNSS up to the first scan, then every scan, so that
     # finish() has the whole drive to process.

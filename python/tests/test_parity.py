@@ -54,7 +54,7 @@ def test_manual_feed_equals_run_drive(sim_drive):
     options.T_body_lidar = reader.T_body_lidar
     system = slam_mms.MappingSystem(options)
     streams = reader.streams
-    system.initialize_pos(streams.initial_state)
+    system.initialize_pos(streams.initial_state, streams.initial_attitude_sigma_rpy_rad)
     imu, gnss = streams.imu_samples, streams.gnss_fixes
     i = g = 0
     for k in range(len(reader)):

@@ -13,6 +13,9 @@
 #   scripts/experiments/paper_experiments.sh kitti [--out DIR]
 #       The real KITTI frames in ../shared/data (OXTS as ground truth), without and with an
 #       injected 3 s outage.
+#   Every experiment also takes --config FILE (passed to every slam_mms_run) and --sim-dir DIR
+#   (simulated drives are read from / written to DIR instead of the experiment's own folder, so
+#   that two configurations run on the same drives).
 #
 # Needs a build (BUILD_DIR, default build) with the apps, python3, and ../shared/data (read only;
 # it is CC BY-NC-SA: never copy it into the repository). Results: DIR/<experiment>/..., and a
@@ -25,6 +28,8 @@ DATA=${SLAM_MMS_DATA:-$ROOT/../shared/data}
 EXP=${1:-}
 shift || true
 OUT=experiments_out
+CONFIG=()
+SIM_DIR=""
 DURATION=""
 OUTAGE_START=20
 LENGTHS="5 10 15 20 25 30 40 50 60"
@@ -36,6 +41,8 @@ while [ $# -gt 0 ]; do
     --outage-start) OUTAGE_START=$2; shift 2 ;;
     --lengths) LENGTHS=$2; shift 2 ;;
     --sequences) SEQUENCES=$2; shift 2 ;;
+    --config) CONFIG=(--config "$2"); shift 2 ;;
+    --sim-dir) SIM_DIR=$2; shift 2 ;;
     *) echo "unknown argument: $1" >&2; exit 2 ;;
   esac
 done
@@ -69,20 +76,21 @@ case "$EXP" in
   table1)
     D=${DURATION:-40}
     for seq in $SEQUENCES; do
-      drive=$(simulate "$seq" "$D" "$OUT/table1/seq$seq/sim")
+      drive=$(simulate "$seq" "$D" "${SIM_DIR:-$OUT/table1}/seq$seq/sim")
       echo "== sequence $seq: slam_mms_run --mode all"
-      "$RUN" --kitti-raw "$drive" --out "$OUT/table1/seq$seq/run" --mode all || true
+      "$RUN" --kitti-raw "$drive" --out "$OUT/table1/seq$seq/run" --mode all "${CONFIG[@]}" || true
     done
     $SUMMARIZE table1 "$OUT/table1" > "$OUT/table1.md"
     cat "$OUT/table1.md"
     ;;
   table2)
     D=${DURATION:-100}
-    drive=$(simulate 07 "$D" "$OUT/table2/sim" --no-scene-cloud)
+    drive=$(simulate 07 "$D" "${SIM_DIR:-$OUT/table2}/sim" --no-scene-cloud)
     for L in $LENGTHS; do
       dir="$OUT/table2/outage_$L"
       echo "== sequence 07, GNSS outage ${OUTAGE_START}:$L"
-      "$RUN" --kitti-raw "$drive" --out "$dir" --mode full --gnss-outage "$OUTAGE_START:$L" || true
+      "$RUN" --kitti-raw "$drive" --out "$dir" --mode full --gnss-outage "$OUTAGE_START:$L" \
+        "${CONFIG[@]}" || true
       "$EVAL" --gt "$dir/ground_truth.tum" --est "level1=$dir/full_level1.tum" \
         --est "level2=$dir/full.tum" --outage "$OUTAGE_START:$L" --segments short \
         --json "$dir/before_after.json" > "$dir/before_after.txt" || true
@@ -93,8 +101,9 @@ case "$EXP" in
   kitti)
     drive="$DATA/kitti_raw/2011_09_26/2011_09_26_drive_0013_sync"
     [ -d "$drive" ] || { echo "no $drive" >&2; exit 1; }
-    "$RUN" --kitti-raw "$drive" --out "$OUT/kitti/no_outage" --mode all || true
-    "$RUN" --kitti-raw "$drive" --out "$OUT/kitti/outage_1_3" --mode all --gnss-outage 1:3 || true
+    "$RUN" --kitti-raw "$drive" --out "$OUT/kitti/no_outage" --mode all "${CONFIG[@]}" || true
+    "$RUN" --kitti-raw "$drive" --out "$OUT/kitti/outage_1_3" --mode all --gnss-outage 1:3 \
+      "${CONFIG[@]}" || true
     $SUMMARIZE kitti "$OUT/kitti" > "$OUT/kitti.md"
     cat "$OUT/kitti.md"
     ;;

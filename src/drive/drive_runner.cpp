@@ -82,6 +82,7 @@ StatusOr<OfflinePos> ComputeOfflinePos(const DriveReader& reader,
     so.origin = options.origin;
     so.gnss_outages = options.gnss_outages;
     if (reader.NumScans() > 0) so.outage_reference = reader.ScanStart(0);
+    so.initial_sigma_rpy_rad = in.initial_attitude_sigma_rpy_rad;
     StatusOr<PosSmoother::Result> smoothed =
         PosSmoother::Run(so, in.imu, in.gnss, in.initial_state);
     if (!smoothed.ok()) return smoothed.status().WithContext(reader.Describe());
@@ -160,7 +161,8 @@ DriveRun RunMethod(const DriveReader& reader, const MappingSystem::Options& base
 
   Status status;
   if (pos.empty() && in.initial_state) {
-    status = system->InitializePos(*in.initial_state).WithContext(in.initial_state_source);
+    status = system->InitializePos(*in.initial_state, in.initial_attitude_sigma_rpy_rad)
+                 .WithContext(in.initial_state_source);
   }
   // An input's external POS replaces IMU + GNSS; a smoothed one comes with them (see the header).
   const bool imu_gnss = pos.empty() || run.smoothed_pos;

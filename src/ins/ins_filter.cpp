@@ -134,12 +134,22 @@ Status InsFilter::Initialize(const InsState& state) {
 
 Status InsFilter::InitializeAttitude(const Eigen::Quaterniond& q_world_body,
                                      const Eigen::Vector3d& v_world_mps,
-                                     std::optional<Timestamp> stamp) {
+                                     std::optional<Timestamp> stamp,
+                                     const std::optional<Eigen::Vector3d>& sigma_rpy_rad) {
   if (impl_->mode == Mode::kExternal)
     return FailedPreconditionError("InsFilter: external POS mode");
   if (!q_world_body.coeffs().allFinite() || q_world_body.norm() < 0.5 || !v_world_mps.allFinite()) {
     return InvalidArgumentError("InsFilter::InitializeAttitude: invalid attitude or velocity");
   }
+  if (sigma_rpy_rad && !(sigma_rpy_rad->allFinite() && sigma_rpy_rad->minCoeff() > 0.0)) {
+    return InvalidArgumentError(
+        "InsFilter::InitializeAttitude: sigma_rpy_rad must be finite and > 0, got (" +
+        std::to_string((*sigma_rpy_rad)(0)) + ", " + std::to_string((*sigma_rpy_rad)(1)) + ", " +
+        std::to_string((*sigma_rpy_rad)(2)) + ")");
+  }
+  impl_->pending_sigma_rpy =
+      impl_->options.use_stated_attitude_sigma ? sigma_rpy_rad : std::nullopt;
+  impl_->pending_from = stamp;
   impl_->pending_q = q_world_body.normalized();
   impl_->pending_v = v_world_mps;
   impl_->pending_bg.setZero();
@@ -263,7 +273,15 @@ StatusOr<GnssDecisionResult> InsFilter::AddGnss(const GnssFix& fix) {
       im.bias_model = model;
       im.bias_tau_s = em.correlation_time_s;
       im.last_used_fix = fix.stamp;
-      im.InitCovariance(std::sqrt(C(0, 0)), std::sqrt(C(2, 2)));
+      // A stated attitude sigma grows while the IMU carried it to this fix: by the gyro bias
+      // the filter has not yet observed (init_sigma_gyro_bias_radps) over the carry.
+      std::optional<Eigen::Vector3d> sigma_rpy = im.pending_sigma_rpy;
+      if (sigma_rpy && im.pending_from && fix.stamp > *im.pending_from) {
+        const double drift =
+            im.options.init_sigma_gyro_bias_radps * fix.stamp.SecondsSince(*im.pending_from);
+        *sigma_rpy = (sigma_rpy->cwiseAbs2().array() + drift * drift).sqrt().matrix();
+      }
+      im.InitCovariance(std::sqrt(C(0, 0)), std::sqrt(C(2, 2)), sigma_rpy);
       im.P.block<3, 3>(kP, kP) = C;
       if (em.correlated_fraction > 0.0) {
         im.P.block<3, 3>(kP, kBn) = -im.bias_cov;

@@ -78,6 +78,10 @@ struct InsFilter::Impl {
   Eigen::Vector3d pending_v = Eigen::Vector3d::Zero();
   Eigen::Vector3d pending_bg = Eigen::Vector3d::Zero();
   std::optional<Timestamp> pending_stamp;  // when pending_q / pending_v hold (carried by the IMU)
+  // The stated 1-sigma roll, pitch, yaw of pending_q at pending_from (InitializeAttitude's
+  // sigma_rpy_rad); empty: the options' init sigmas.
+  std::optional<Eigen::Vector3d> pending_sigma_rpy;
+  std::optional<Timestamp> pending_from;
   Nominal x;
   InsErrorMatrix P = InsErrorMatrix::Zero();
   std::optional<ImuSample> last_imu;
@@ -147,7 +151,9 @@ struct InsFilter::Impl {
     return Eigen::Vector3d(0.0, 0.0, -gm);
   }
 
-  void InitCovariance(double sigma_p_h, double sigma_p_v) {
+  /// `sigma_rpy`: the attitude's stated roll, pitch, yaw sigmas [rad] (else the options').
+  void InitCovariance(double sigma_p_h, double sigma_p_v,
+                      const std::optional<Eigen::Vector3d>& sigma_rpy = std::nullopt) {
     P.setZero();
     P.block<3, 3>(kP, kP).diagonal() << sigma_p_h * sigma_p_h, sigma_p_h * sigma_p_h,
         sigma_p_v * sigma_p_v;
@@ -156,7 +162,8 @@ struct InsFilter::Impl {
     // uncertainty is about world z, i.e. R^T z in body.
     const Eigen::Matrix3d R = x.q.toRotationMatrix();
     const double srp = options.init_sigma_roll_pitch_rad, sy = options.init_sigma_yaw_rad;
-    const Eigen::Matrix3d cov_world = Eigen::Vector3d(srp * srp, srp * srp, sy * sy).asDiagonal();
+    const Eigen::Vector3d s = sigma_rpy.value_or(Eigen::Vector3d(srp, srp, sy));
+    const Eigen::Matrix3d cov_world = s.cwiseAbs2().asDiagonal();
     P.block<3, 3>(kTh, kTh) = R.transpose() * cov_world * R;
     P.block<3, 3>(kBa, kBa).diagonal().setConstant(std::pow(options.init_sigma_accel_bias_mps2, 2));
     P.block<3, 3>(kBg, kBg).diagonal().setConstant(std::pow(options.init_sigma_gyro_bias_radps, 2));

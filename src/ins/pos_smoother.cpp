@@ -149,7 +149,8 @@ StatusOr<PosSmoother::Result> PosSmoother::Run(const Options& options,
     SLAM_MMS_RETURN_IF_ERROR(prior.AddOutageWindow(start, duration));
   }
   SLAM_MMS_RETURN_IF_ERROR(filter.InitializeAttitude(
-      Eigen::Quaterniond(initial->T_world_body.linear()), initial->v_world_mps, initial->stamp));
+      Eigen::Quaterniond(initial->T_world_body.linear()), initial->v_world_mps, initial->stamp,
+      options.initial_sigma_rpy_rad));
   // Time-ordered merge, IMU first at equal stamps (as RunDrive feeds MappingSystem).
   size_t i = 0, j = 0;
   while (i < imu.size() || j < gnss.size()) {

@@ -42,6 +42,9 @@ class PosSmoother {
     std::vector<std::pair<double, double>> gnss_outages;
     /// Reference time of the outage windows (the first scan's start); empty = the first fix.
     std::optional<Timestamp> outage_reference;
+    /// The initial attitude's stated 1-sigma roll, pitch, yaw [rad] (InsFilter::
+    /// InitializeAttitude); empty: ins.init_sigma_roll_pitch_rad / init_sigma_yaw_rad.
+    std::optional<Eigen::Vector3d> initial_sigma_rpy_rad;
     [[nodiscard]] Status Validate() const;
   };
 

@@ -77,7 +77,7 @@ const CsvSchema& GnssCsvSchema() {
 const CsvSchema& InitialStateCsvSchema() {
   static const CsvSchema s{
       {"stamp_ns", "roll_deg", "pitch_deg", "yaw_deg", "v_east_mps", "v_north_mps", "v_up_mps"},
-      {}};
+      {"sigma_roll_deg", "sigma_pitch_deg", "sigma_yaw_deg"}};
   return s;
 }
 const CsvSchema& PosCsvSchema() {
@@ -225,12 +225,27 @@ Status ParseGnssCsv(std::string_view bytes, const std::string& file, std::vector
 }
 
 Status ParseInitialStateCsv(std::string_view bytes, const std::string& file,
-                            std::optional<InsState>* state, std::string* source) {
+                            std::optional<InsState>* state, std::string* source,
+                            std::optional<Eigen::Vector3d>* sigma_rpy_rad) {
   SLAM_MMS_ASSIGN_OR_RETURN(const CsvTable t,
                             CsvTable::Parse(bytes, file, InitialStateCsvSchema()));
   state->reset();
   source->clear();
+  sigma_rpy_rad->reset();
   if (t.num_rows() == 0) return OkStatus();
+  bool has_sigmas = false;
+  SLAM_MMS_RETURN_IF_ERROR(
+      GroupComplete(t, {"sigma_roll_deg", "sigma_pitch_deg", "sigma_yaw_deg"}, &has_sigmas));
+  if (has_sigmas) {
+    double sg[3];
+    SLAM_MMS_RETURN_IF_ERROR(
+        Doubles(t, 0, {"sigma_roll_deg", "sigma_pitch_deg", "sigma_yaw_deg"}, sg));
+    for (int k = 0; k < 3; ++k) {
+      SLAM_MMS_RETURN_IF_ERROR(
+          CheckRange(t, 0, InitialStateCsvSchema().optional[k].c_str(), sg[k], 1e-9, 180.0));
+    }
+    *sigma_rpy_rad = Eigen::Vector3d(sg[0], sg[1], sg[2]) * kDegToRad;
+  }
   InsState s;
   SLAM_MMS_RETURN_IF_ERROR(t.Stamp(0, "stamp_ns", &s.stamp));
   double v[6];

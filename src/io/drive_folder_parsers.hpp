@@ -45,9 +45,11 @@ Status ParseImuCsv(std::string_view bytes, const std::string& file, std::vector<
 /// sigma_n, else sqrt((e^2 + n^2) / 2); sigma_vertical = sigma_u).
 Status ParseGnssCsv(std::string_view bytes, const std::string& file, std::vector<GnssFix>* gnss,
                     std::vector<std::string>* sources);
-/// initial_state.csv: the first data row (none: `state` left empty).
+/// initial_state.csv: the first data row (none: `state` left empty); the optional
+/// sigma_roll_deg, sigma_pitch_deg, sigma_yaw_deg group (all three or none) into `sigma_rpy_rad`.
 Status ParseInitialStateCsv(std::string_view bytes, const std::string& file,
-                            std::optional<InsState>* state, std::string* source);
+                            std::optional<InsState>* state, std::string* source,
+                            std::optional<Eigen::Vector3d>* sigma_rpy_rad);
 /// pos.csv (optional sigma columns in groups of three).
 Status ParsePosCsv(std::string_view bytes, const std::string& file, std::vector<PosRecord>* pos,
                    std::vector<std::string>* sources);

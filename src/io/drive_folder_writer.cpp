@@ -104,11 +104,19 @@ Status WriteStreams(const DriveStreams& s, const fs::path& dir, const FolderWrit
     const InsState& x = *s.initial_state;
     double rpy[3];
     RpyDeg(x.T_world_body.linear(), rpy);
+    std::vector<std::string> row = {Ns(x.stamp),
+                                    FormatDouble(rpy[0]),
+                                    FormatDouble(rpy[1]),
+                                    FormatDouble(rpy[2]),
+                                    FormatDouble(x.v_world_mps.x()),
+                                    FormatDouble(x.v_world_mps.y()),
+                                    FormatDouble(x.v_world_mps.z())};
+    const std::optional<Eigen::Vector3d>& sigma = s.initial_attitude_sigma_rpy_rad;
+    if (sigma) {
+      for (int k = 0; k < 3; ++k) row.push_back(FormatDouble((*sigma)[k] * kRadToDeg));
+    }
     const std::string text =
-        Header(io_internal::InitialStateCsvSchema(), 0) +
-        CsvLine({Ns(x.stamp), FormatDouble(rpy[0]), FormatDouble(rpy[1]), FormatDouble(rpy[2]),
-                 FormatDouble(x.v_world_mps.x()), FormatDouble(x.v_world_mps.y()),
-                 FormatDouble(x.v_world_mps.z())});
+        Header(io_internal::InitialStateCsvSchema(), sigma ? 3 : 0) + CsvLine(row);
     SLAM_MMS_RETURN_IF_ERROR(io_internal::WriteFileBytes(dir / "initial_state.csv", text));
   }
 

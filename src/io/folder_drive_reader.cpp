@@ -219,7 +219,8 @@ Status FolderDriveReader::LoadStreams() {
   if (Exists(initial_csv)) {
     SLAM_MMS_ASSIGN_OR_RETURN(const std::string b, io_internal::ReadFileBytes(initial_csv));
     SLAM_MMS_RETURN_IF_ERROR(io_internal::ParseInitialStateCsv(
-        b, initial_csv.string(), &s.initial_state, &s.initial_state_source));
+        b, initial_csv.string(), &s.initial_state, &s.initial_state_source,
+        &s.initial_attitude_sigma_rpy_rad));
   }
   if (Exists(extrinsics)) {
     SLAM_MMS_ASSIGN_OR_RETURN(const DriveExtrinsics e, ReadExtrinsicsYaml(extrinsics));

@@ -1,11 +1,17 @@
 #include "slam_mms/io/kitti_drive_reader.hpp"
 
+#include <cmath>
 #include <cstdio>
 
 #include "slam_mms/io/oxts_record.hpp"
 
 namespace slam_mms {
 namespace {
+
+// The accuracy of an OXTS RT3003 attitude (KITTI's POS): 0.03 deg roll and pitch, 0.1 deg heading
+// (1 sigma; the RT3000 datasheet's figures, and KITTI's "0.1 deg" (Geiger et al. 2013); see
+// ../shared/SENSORS_AND_METRICS.md). The POS starts from the first record with it.
+const Eigen::Vector3d kOxtsAttitudeSigmaRpyRad = Eigen::Vector3d(0.03, 0.03, 0.1) * (M_PI / 180.0);
 
 std::string NumberedFile(const std::filesystem::path& drive_dir, const char* folder, int64_t index,
                          const char* extension) {
@@ -51,6 +57,7 @@ KittiDriveReader::KittiDriveReader(KittiRawReader reader) : reader_(std::move(re
     state.v_world_mps = OxtsVelocityEnu(first->record);
     s.initial_state = state;
     s.initial_state_source = NumberedFile(dir, first_folder, first->index, ".txt");
+    s.initial_attitude_sigma_rpy_rad = kOxtsAttitudeSigmaRpyRad;
   }
   s.T_body_lidar = reader_.T_body_lidar();
 }

@@ -134,14 +134,15 @@ Status MappingSystem::AddGnss(const GnssFix& fix) {
   return m.ProcessQueued();
 }
 
-Status MappingSystem::InitializePos(const InsState& state) {
+Status MappingSystem::InitializePos(const InsState& state,
+                                    const std::optional<Eigen::Vector3d>& sigma_rpy_rad) {
   Impl& m = *impl_;
   if (!state.T_world_body.matrix().allFinite() || !state.v_world_mps.allFinite()) {
     return InvalidArgumentError("MappingSystem::InitializePos: non-finite state");
   }
   // The stamp lets the IMU carry the attitude to the first usable fix (which may come later).
   return m.ins.InitializeAttitude(Eigen::Quaterniond(state.T_world_body.linear()),
-                                  state.v_world_mps, state.stamp);
+                                  state.v_world_mps, state.stamp, sigma_rpy_rad);
 }
 
 Status MappingSystem::AddInsPose(const InsState& state) {

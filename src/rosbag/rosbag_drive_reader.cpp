@@ -12,6 +12,7 @@
 #include <cmath>
 #include <map>
 #include <mutex>
+#include <optional>
 
 #include "core/option_error.hpp"
 #include "rosbag/point_cloud2_codec.hpp"
@@ -120,6 +121,9 @@ struct RosbagDriveReader::Impl {
     int64_t ns;
     Eigen::Quaterniond q_enu_body;
     std::string source;
+    /// From orientation_covariance's diagonal (about the fixed x, y, z axes) where all three are
+    /// > 0; ROS's all-zero "unknown" leaves it empty.
+    std::optional<Eigen::Vector3d> sigma_rpy_rad;
   };
   struct Velocity {
     int64_t ns;
@@ -236,7 +240,11 @@ Status RosbagDriveReader::Impl::OnImu(const rosbag::MessageInstance& m) {
     const Eigen::Quaterniond q(msg->orientation.w, msg->orientation.x, msg->orientation.y,
                                msg->orientation.z);
     if (q.coeffs().allFinite() && std::abs(q.norm() - 1.0) < 1e-3) {
-      attitudes.push_back({ns, q.normalized(), source});
+      const Eigen::Vector3d var(msg->orientation_covariance[0], msg->orientation_covariance[4],
+                                msg->orientation_covariance[8]);
+      std::optional<Eigen::Vector3d> sigma;
+      if (var.allFinite() && var.minCoeff() > 0.0) sigma = var.cwiseSqrt();
+      attitudes.push_back({ns, q.normalized(), source, sigma});
     }
   }
   streams.imu.push_back(s);
@@ -409,6 +417,7 @@ void RosbagDriveReader::Impl::ChooseInitialState() {
   state.stamp = Timestamp::FromNanoseconds(a->ns);
   state.T_world_body.linear() = a->q_enu_body.toRotationMatrix();
   streams.initial_state_source = a->source;
+  streams.initial_attitude_sigma_rpy_rad = a->sigma_rpy_rad;
   const Velocity* best = nullptr;
   for (const Velocity& v : velocities) {
     if (best == nullptr || std::abs(v.ns - a->ns) < std::abs(best->ns - a->ns)) best = &v;

@@ -53,6 +53,9 @@ Status WriteStreams(const DriveStreams& s, const RosbagWriteOptions& o, rosbag::
       msg.orientation.y = q.y();
       msg.orientation.z = q.z();
       msg.orientation_covariance.fill(0.0);  // known orientation, unknown covariance
+      if (const auto& sigma = s.initial_attitude_sigma_rpy_rad) {
+        for (int i = 0; i < 3; ++i) msg.orientation_covariance[4 * i] = (*sigma)[i] * (*sigma)[i];
+      }
     } else {
       msg.orientation.w = 1.0;
       msg.orientation_covariance.fill(0.0);

@@ -95,7 +95,11 @@ TEST_F(DriveRunnerTest, GivesExactlyWhatAHandFedSystemGives) {
   ASSERT_TRUE(system.ok());
   const DriveStreams& in = reader->streams();
   ASSERT_TRUE(in.initial_state.has_value());
-  ASSERT_TRUE((*system)->InitializePos(*in.initial_state).ok());
+  // A KITTI drive's POS record states the OXTS RT3003's attitude accuracy (0.03 / 0.03 / 0.1 deg).
+  ASSERT_TRUE(in.initial_attitude_sigma_rpy_rad.has_value());
+  EXPECT_TRUE(in.initial_attitude_sigma_rpy_rad->isApprox(
+      Eigen::Vector3d(0.03, 0.03, 0.1) * (M_PI / 180.0), 1e-12));
+  ASSERT_TRUE((*system)->InitializePos(*in.initial_state, in.initial_attitude_sigma_rpy_rad).ok());
   size_t i_imu = 0, i_gnss = 0;
   for (size_t k = 0; k < reader->NumScans(); ++k) {
     ASSERT_TRUE(testing::FeedStreamsUpTo(system->get(), in.imu, in.gnss, reader->ScanEnd(k), &i_imu,

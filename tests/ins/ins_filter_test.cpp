@@ -407,6 +407,61 @@ TEST(InsFilterTest, InitializeFromOxtsRecord) {
   EXPECT_NEAR(InsFilter::NormalGravity(0.0, 0.0), 9.7803253359, 1e-9);
 }
 
+// An initial attitude of stated accuracy (an OXTS record: KittiDriveReader) starts the filter
+// with that accuracy, grown by the unobserved gyro bias over the IMU carry to the first fix;
+// without it the options' init sigmas hold. Roll, pitch, yaw about the world axes.
+TEST(InsFilterTest, StatedInitialAttitudeSigma) {
+  OxtsRecord rec;
+  rec.lat_deg = 49.011;
+  rec.lon_deg = 8.4165;
+  rec.alt_m = 112.0;
+  rec.yaw_rad = 0.7;
+  rec.pos_accuracy_m = 0.05;
+  rec.navstat = kOxtsNavstatLocked;
+  rec.posmode = 6;
+  const Eigen::Matrix3d R = OxtsAttitude(rec);
+  const Eigen::Vector3d stated = Eigen::Vector3d(0.03, 0.03, 0.1) * (M_PI / 180.0);
+  const InsFilter::Options o;
+  // carry_s: the first fix that long after the attitude's stamp, the vehicle standing meanwhile.
+  auto world_sigmas = [&](std::optional<Eigen::Vector3d> sigma, double carry_s) {
+    InsFilter filter = InsFilter::Create(o).value();
+    EXPECT_TRUE(
+        filter.InitializeAttitude(Eigen::Quaterniond(R), Eigen::Vector3d::Zero(), kT0, sigma).ok());
+    for (double t = 0.01; t < carry_s - 1e-9; t += 0.01) {
+      ImuSample imu;
+      imu.stamp = kT0.PlusSeconds(t);
+      imu.accel_mps2 = R.transpose() * Eigen::Vector3d(0.0, 0.0, 9.8095);
+      EXPECT_TRUE(filter.AddImu(imu).ok());
+    }
+    EXPECT_TRUE(filter.AddGnss(ToGnssFix(rec, kT0.PlusSeconds(carry_s))).ok());
+    EXPECT_TRUE(filter.initialized());
+    const Eigen::Matrix3d C_body =
+        filter.CurrentState().value().cov_T_world_body.topLeftCorner<3, 3>();
+    return Eigen::Vector3d((R * C_body * R.transpose()).diagonal().cwiseSqrt());
+  };
+  const Eigen::Vector3d at_once = world_sigmas(stated, 0.0);
+  EXPECT_LT((at_once - stated).cwiseAbs().maxCoeff(), 1e-9) << at_once.transpose();
+  const Eigen::Vector3d carried = world_sigmas(stated, 1.0);
+  const double drift = o.init_sigma_gyro_bias_radps * 1.0;
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_NEAR(carried[k], std::hypot(stated[k], drift), 1e-5 * stated[k]) << k;
+  }
+  const Eigen::Vector3d unknown = world_sigmas(std::nullopt, 0.0);
+  EXPECT_NEAR(unknown[0], o.init_sigma_roll_pitch_rad, 1e-12);
+  EXPECT_NEAR(unknown[1], o.init_sigma_roll_pitch_rad, 1e-12);
+  EXPECT_NEAR(unknown[2], o.init_sigma_yaw_rad, 1e-12);
+  // A sigma that is not finite and positive is refused, naming it.
+  InsFilter filter;
+  for (const Eigen::Vector3d& bad :
+       {Eigen::Vector3d(0.0, 1e-3, 1e-3), Eigen::Vector3d(1e-3, -1e-3, 1e-3),
+        Eigen::Vector3d(1e-3, 1e-3, std::nan(""))}) {
+    const Status s =
+        filter.InitializeAttitude(Eigen::Quaterniond(R), Eigen::Vector3d::Zero(), kT0, bad);
+    EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+    EXPECT_NE(s.message().find("sigma_rpy_rad"), std::string::npos) << s.message();
+  }
+}
+
 TEST(InsFilterTest, OptionsAreValidated) {
   InsFilter::Options o;
   o.accel_noise_density = 0.0;

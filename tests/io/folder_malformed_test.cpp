@@ -250,11 +250,31 @@ TEST_F(FolderMalformedTest, GnssAndInitialStateCsv) {
   EXPECT_THAT(OpenStatus().message(), HasSubstr(":2: field 'lat_deg': 91 outside [-90, 90]"));
   ReplaceLine("gnss.csv", 2, "1317042651106324297,49,8,100,-1,1,1,sps,5");
   EXPECT_THAT(OpenStatus().message(), HasSubstr(":2: field 'sigma_e_m': -1 is negative"));
-  ReplaceLine("initial_state.csv", 2, "1317042651106324297,0,0,x,0,0,0");
+  // The KITTI source states its attitude's accuracy: the three sigma columns are written.
+  EXPECT_EQ(Line("initial_state.csv", 1),
+            "stamp_ns,roll_deg,pitch_deg,yaw_deg,v_east_mps,v_north_mps,v_up_mps,sigma_roll_deg,"
+            "sigma_pitch_deg,sigma_yaw_deg");
+  ReplaceLine("initial_state.csv", 2, "1317042651106324297,0,0,x,0,0,0,0.03,0.03,0.1");
   EXPECT_THAT(OpenStatus().message(), HasSubstr(Path("gnss.csv") + ":2"));  // gnss comes first
   fs::remove(dir_ / "gnss.csv");
   EXPECT_THAT(OpenStatus().message(),
               HasSubstr(Path("initial_state.csv") + ":2: field 'yaw_deg': 'x' is not a number"));
+  ReplaceLine("initial_state.csv", 2, "1317042651106324297,0,0,0,0,0,0,0.03,-0.03,0.1");
+  EXPECT_THAT(OpenStatus().message(),
+              HasSubstr(Path("initial_state.csv") + ":2: field 'sigma_pitch_deg': -0.0"));
+  EXPECT_THAT(OpenStatus().message(), HasSubstr("outside [1"));
+  ReplaceLine("initial_state.csv", 1,
+              "stamp_ns,roll_deg,pitch_deg,yaw_deg,v_east_mps,v_north_mps,v_up_mps,sigma_roll_deg");
+  ReplaceLine("initial_state.csv", 2, "1317042651106324297,0,0,0,0,0,0,0.03");
+  EXPECT_THAT(OpenStatus().message(), HasSubstr("sigma_roll_deg,sigma_pitch_deg,sigma_yaw_deg"));
+  // Without the sigma columns the attitude is of unknown accuracy (the filter's init sigmas).
+  ReplaceLine("initial_state.csv", 1,
+              "stamp_ns,roll_deg,pitch_deg,yaw_deg,v_east_mps,v_north_mps,v_up_mps");
+  ReplaceLine("initial_state.csv", 2, "1317042651106324297,0,0,0,0,0,0");
+  auto reader = FolderDriveReader::Open(dir_, FolderDriveReader::Options());
+  ASSERT_TRUE(reader.ok()) << reader.status().ToString();
+  EXPECT_TRUE((*reader)->streams().initial_state.has_value());
+  EXPECT_FALSE((*reader)->streams().initial_attitude_sigma_rpy_rad.has_value());
 }
 
 // ---- NMEA ----------------------------------------------------------------------------------

@@ -174,6 +174,14 @@ inline void ExpectSameCalibrationAndInitialState(const DriveStreams& a, const Dr
     EXPECT_LT(so3::Log(dR).norm(), 1e-12);
     EXPECT_EQ(a.initial_state->v_world_mps, b.initial_state->v_world_mps);
   }
+  ASSERT_EQ(a.initial_attitude_sigma_rpy_rad.has_value(),
+            b.initial_attitude_sigma_rpy_rad.has_value());
+  if (a.initial_attitude_sigma_rpy_rad) {
+    EXPECT_TRUE(
+        a.initial_attitude_sigma_rpy_rad->isApprox(*b.initial_attitude_sigma_rpy_rad, 1e-12))
+        << a.initial_attitude_sigma_rpy_rad->transpose() << " vs "
+        << b.initial_attitude_sigma_rpy_rad->transpose();
+  }
 }
 
 }  // namespace slam_mms::testing

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 #include <sensor_msgs/NavSatStatus.h>
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -89,6 +90,13 @@ void ExpectSameDrive(const DriveReader& in, const RosbagDriveReader& out) {
     EXPECT_TRUE(s.initial_state->T_world_body.linear().isApprox(
         t.initial_state->T_world_body.linear(), 1e-9));
     EXPECT_LE((s.initial_state->v_world_mps - t.initial_state->v_world_mps).norm(), 1e-9);
+  }
+  // The attitude's stated sigmas travel as orientation_covariance's diagonal.
+  ASSERT_EQ(s.initial_attitude_sigma_rpy_rad.has_value(),
+            t.initial_attitude_sigma_rpy_rad.has_value());
+  if (s.initial_attitude_sigma_rpy_rad) {
+    EXPECT_TRUE(
+        s.initial_attitude_sigma_rpy_rad->isApprox(*t.initial_attitude_sigma_rpy_rad, 1e-12));
   }
   EXPECT_TRUE(t.T_body_lidar.isApprox(s.T_body_lidar, 0.0));
 }
@@ -284,7 +292,13 @@ TEST_F(SimulatedRoundTrip, PythonRosbagReadsTheWrittenBag) {
   // The attitude is on the IMU message at the initial state's stamp (the first here).
   ASSERT_TRUE(s.initial_state.has_value());
   ASSERT_EQ(s.initial_state->stamp, s.imu.front().stamp);
-  EXPECT_EQ(lines["imu_orientation_cov0"].at(0), "0.0 -1.0");
+  // Its covariance: the stated roll sigma squared (a KITTI record: 0.03 deg); the next: none.
+  ASSERT_TRUE(s.initial_attitude_sigma_rpy_rad.has_value());
+  std::istringstream cov_line(lines["imu_orientation_cov0"].at(0));
+  double cov0 = 0.0, cov1 = 0.0;
+  cov_line >> cov0 >> cov1;
+  EXPECT_DOUBLE_EQ(cov0, std::pow((*s.initial_attitude_sigma_rpy_rad)(0), 2));
+  EXPECT_EQ(cov1, -1.0);
   std::istringstream f0(lines["fix0"].at(0));
   int status = 0, cov_type = 0;
   double lat, lon, alt, c0, c8;

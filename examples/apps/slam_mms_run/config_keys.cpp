@@ -274,6 +274,7 @@ const std::vector<std::pair<std::string, KeyHandler>>& Handlers() {
     SLAM_MMS_KEY_D("ins.init_sigma_yaw_rad", o->system.ins.init_sigma_yaw_rad);
     SLAM_MMS_KEY_D("ins.init_sigma_accel_bias_mps2", o->system.ins.init_sigma_accel_bias_mps2);
     SLAM_MMS_KEY_D("ins.init_sigma_gyro_bias_radps", o->system.ins.init_sigma_gyro_bias_radps);
+    SLAM_MMS_KEY_B("ins.use_stated_attitude_sigma", o->system.ins.use_stated_attitude_sigma);
     SLAM_MMS_KEY_D("ins.max_imu_gap_s", o->system.ins.max_imu_gap_s);
     SLAM_MMS_KEY_D("ins.max_fix_latency_s", o->system.ins.max_fix_latency_s);
     SLAM_MMS_KEY_D("ins.max_extrapolation_s", o->system.ins.max_extrapolation_s);

@@ -93,6 +93,10 @@ class InsFilter {
     double init_sigma_yaw_rad = 0.035;          ///< 2 deg.
     double init_sigma_accel_bias_mps2 = 0.05;
     double init_sigma_gyro_bias_radps = 1.0e-3;
+    /// Start from the initial attitude's stated accuracy where its source gives one
+    /// (InitializeAttitude's sigma_rpy_rad: a KITTI OXTS record, initial_state.csv's sigma
+    /// columns, a bag's orientation_covariance); false: always the init sigmas above.
+    bool use_stated_attitude_sigma = true;
     double max_imu_gap_s = 0.6;         ///< Longer IMU gaps are bridged but logged [s].
     double max_fix_latency_s = 0.25;    ///< Older fixes (than the state) are rejected [s].
     double max_extrapolation_s = 0.25;  ///< StateAt beyond the last state by at most this [s].
@@ -145,9 +149,14 @@ class InsFilter {
   /// With `stamp` (the time the attitude and velocity hold at), IMU samples after it carry them
   /// forward until that fix: a vehicle turning at 20 deg/s would otherwise start with 20 deg of
   /// heading error when the first usable fix comes 1 s later.
-  [[nodiscard]] Status InitializeAttitude(const Eigen::Quaterniond& q_world_body,
-                                          const Eigen::Vector3d& v_world_mps,
-                                          std::optional<Timestamp> stamp = std::nullopt);
+  /// `sigma_rpy_rad`: the attitude's 1-sigma roll, pitch and yaw (about the world axes) [rad] as
+  /// its source states it (e.g. an OXTS record: KittiDriveReader); the filter starts with it,
+  /// grown by init_sigma_gyro_bias_radps over the carry to the first fix. Empty: the options'
+  /// init_sigma_roll_pitch_rad / init_sigma_yaw_rad (an attitude of unknown quality).
+  [[nodiscard]] Status InitializeAttitude(
+      const Eigen::Quaterniond& q_world_body, const Eigen::Vector3d& v_world_mps,
+      std::optional<Timestamp> stamp = std::nullopt,
+      const std::optional<Eigen::Vector3d>& sigma_rpy_rad = std::nullopt);
   /// Static alignment: roll and pitch from the mean specific force, gyro bias from the mean rate,
   /// yaw given (ENU, 0 = east, counter-clockwise); velocity zero; position from the next usable
   /// fix.

@@ -60,6 +60,10 @@ struct DriveStreams {
   /// the filter aligns itself. Only the rotation of T_world_body and v_world_mps are meaningful.
   std::optional<InsState> initial_state;
   std::string initial_state_source;
+  /// The 1-sigma roll, pitch, yaw [rad] of initial_state's attitude where its source states them
+  /// (KITTI: the OXTS RT3003's specification; a folder: initial_state.csv's sigma columns); the
+  /// POS starts with them (MappingSystem::InitializePos). Empty: the filter's init sigmas.
+  std::optional<Eigen::Vector3d> initial_attitude_sigma_rpy_rad;
   Eigen::Isometry3d T_body_lidar = Eigen::Isometry3d::Identity();
   /// GNSS antenna lever arm in body [m] where the input gives one.
   std::optional<Eigen::Vector3d> t_body_antenna_m;

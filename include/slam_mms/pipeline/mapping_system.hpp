@@ -94,8 +94,11 @@ class MappingSystem {
   [[nodiscard]] Status AddGnss(const GnssFix& fix);
   /// Initial attitude and velocity from a POS record (KITTI OXTS) at state.stamp; optional, else
   /// the filter aligns from the first records it gets (see InsFilter). IMU samples after the stamp
-  /// carry the attitude to the first usable GNSS fix, which sets the position.
-  [[nodiscard]] Status InitializePos(const InsState& state);
+  /// carry the attitude to the first usable GNSS fix, which sets the position. `sigma_rpy_rad`:
+  /// the record's stated 1-sigma roll, pitch, yaw [rad] (InsFilter::InitializeAttitude); empty:
+  /// options.ins.init_sigma_roll_pitch_rad / init_sigma_yaw_rad.
+  [[nodiscard]] Status InitializePos(
+      const InsState& state, const std::optional<Eigen::Vector3d>& sigma_rpy_rad = std::nullopt);
   /// An external POS solution instead of IMU + GNSS (AddImu/AddGnss then unused for the POS), e.g.
   /// a commercial INS's output or a post-processed smoothed POS (PosSmoother, RunDrive with
   /// DriveRunOptions::pos = kSmoothed). It is taken as valid also inside GNSS outages: level 1 uses

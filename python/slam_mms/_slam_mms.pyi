@@ -1243,6 +1243,11 @@ class LocalizerOptions:
     @per_submap_surfels.setter
     def per_submap_surfels(self, value: bool) -> None: ...
     @property
+    def lidar_only_initial_velocity(self) -> bool:
+        """lidar_only starts from the POS's velocity as well as its pose"""
+    @lidar_only_initial_velocity.setter
+    def lidar_only_initial_velocity(self, value: bool) -> None: ...
+    @property
     def archive_surfels(self) -> bool:
         ...
     @archive_surfels.setter

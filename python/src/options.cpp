@@ -311,6 +311,8 @@ void RegisterOptions(py::module_& m) {
       .Field("min_inlier_ratio", &LO::min_inlier_ratio, "")
       .Field("registration_voxel_m", &LO::registration_voxel_m, "[m]")
       .Field("per_submap_surfels", &LO::per_submap_surfels, "")
+      .Field("lidar_only_initial_velocity", &LO::lidar_only_initial_velocity,
+             "lidar_only starts from the POS's velocity as well as its pose")
       .Field("archive_surfels", &LO::archive_surfels, "")
       .Field("spill_dir", &LO::spill_dir, "Finished submaps' clouds go here; '' = memory.")
       .Validated()

@@ -37,6 +37,13 @@ Status Localizer::Impl::StartFirstSubmap(const Scan& scan, const ScanMotionInput
                           Eigen::Isometry3d::Identity(),
                           Matrix6d::Identity() * noise::kAnchorPoseVariance, &map);
   const Eigen::Vector3d v_submap0 = T_world_body0.linear().transpose() * motion.v_world_pos;
+  if (opt.mode == MappingMode::kLidarOnly && motion.type == MotionFactorType::kConstantVelocity &&
+      v_submap0.allFinite() && v_submap0.squaredNorm() > 0.0) {
+    // lidar_only started at the POS's velocity (Level1Options::lidar_only_initial_velocity), over
+    // intervals of one scan's duration (a spinning LiDAR's scans follow each other).
+    const double interval_s = scan.DurationSeconds() > 1e-3 ? scan.DurationSeconds() : 0.1;
+    motion_prior.SeedVelocity(scan.stamp_start, v_submap0, interval_s);
+  }
   prev.bias = motion.pos_bias;
   SLAM_MMS_RETURN_IF_ERROR(window.Start(v_submap0, prev.bias));
   started = true;

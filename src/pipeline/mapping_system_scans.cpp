@@ -105,6 +105,10 @@ ScanMotionInput MappingSystem::Impl::MotionInput(const Scan& scan, const StatusO
     if (!external_pos || have_gnss_fed) UpdateOutageState(gnss_available, scan.stamp_start);
   }
   context.imu_from = have_scan ? last_scan_start : scan.stamp_start;
+  if (context.lidar_only && results.empty() && s0.ok() &&
+      opt.localizer.lidar_only_initial_velocity && s0->v_world_mps.allFinite()) {
+    context.lidar_only_initial_v_world = s0->v_world_mps;
+  }
   ScanMotionInput motion = motion_builder.Build(scan, s0, s1, context, input);
   // Where level 1 does not start from the POS pose (F_Odom does), the first scan is anchored at
   // it, as SuMa is started at a known pose.

@@ -49,6 +49,8 @@ ScanMotionInput MotionInputBuilder::Build(const Scan& scan, const StatusOr<InsSt
   motion.g_world = context.g_world;
   if (context.lidar_only) {
     motion.type = MotionFactorType::kConstantVelocity;
+    if (context.lidar_only_initial_v_world)
+      motion.v_world_pos = *context.lidar_only_initial_v_world;
     return motion;
   }
   if (context.gnss_valid && s0.ok() && s1.ok() && !PosJumped(scan, *s0, *s1, imu, context.g_pos)) {

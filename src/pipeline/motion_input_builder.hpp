@@ -36,6 +36,9 @@ class MotionInputBuilder {
     Eigen::Vector3d g_pos = Eigen::Vector3d(0.0, 0.0, -9.80665);
     /// Start of the preintegration window: the previous processed scan's start (or this one's).
     Timestamp imu_from;
+    /// lidar_only's first scan: the POS velocity it starts from (Level1Options::
+    /// lidar_only_initial_velocity); empty: none.
+    std::optional<Eigen::Vector3d> lidar_only_initial_v_world;
   };
 
   MotionInputBuilder() = default;

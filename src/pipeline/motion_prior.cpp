@@ -95,6 +95,17 @@ void MotionPrior::Record(Timestamp stamp, const Eigen::Isometry3d& T_submap_body
   while (recent_.size() > kDeskewVelocityIntervals + 1) recent_.pop_front();
 }
 
+void MotionPrior::SeedVelocity(Timestamp stamp, const Eigen::Vector3d& v_submap,
+                               double interval_s) {
+  recent_.clear();
+  for (size_t k = kDeskewVelocityIntervals; k >= 1; --k) {
+    const double t = static_cast<double>(k) * interval_s;
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.translation() = -t * v_submap;
+    recent_.emplace_back(stamp.PlusSeconds(-t), T);
+  }
+}
+
 void MotionPrior::Reframe(const Eigen::Isometry3d& T_new_old) {
   for (auto& [stamp, T] : recent_) T = T_new_old * T;
 }

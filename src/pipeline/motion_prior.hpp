@@ -78,6 +78,11 @@ class MotionPrior {
 
   /// The optimized pose of a processed scan (keeps the last kDeskewVelocityIntervals + 1).
   void Record(Timestamp stamp, const Eigen::Isometry3d& T_submap_body);
+  /// Before the first scan (at `stamp`, at the submap origin): the poses it would have had at
+  /// the constant body velocity `v_submap` over the kDeskewVelocityIntervals intervals of
+  /// `interval_s` before it, so that the first scans are de-skewed and predicted at it (lidar_only
+  /// started from the POS's velocity). Replaces whatever was kept.
+  void SeedVelocity(Timestamp stamp, const Eigen::Vector3d& v_submap, double interval_s);
   /// A new submap frame: the kept poses become T_new_old * T.
   void Reframe(const Eigen::Isometry3d& T_new_old);
 

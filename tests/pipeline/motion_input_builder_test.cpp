@@ -55,6 +55,13 @@ TEST(MotionInputBuilderTest, LidarOnlyIsConstantVelocity) {
       b.Build(ScanAt(1.0), Still(1.0, {}), Still(1.1, {}), c, StillImu(0.0, 2.0));
   EXPECT_EQ(m.type, MotionFactorType::kConstantVelocity);
   EXPECT_TRUE(m.imu.empty());
+  EXPECT_EQ(m.v_world_pos, Eigen::Vector3d::Zero());
+  // Its first scan carries the velocity it starts from, where the owner gives one.
+  c.lidar_only_initial_v_world = Eigen::Vector3d(3.0, -1.0, 0.1);
+  const ScanMotionInput first =
+      b.Build(ScanAt(1.0), Still(1.0, {}), Still(1.1, {}), c, StillImu(0.0, 2.0));
+  EXPECT_EQ(first.type, MotionFactorType::kConstantVelocity);
+  EXPECT_EQ(first.v_world_pos, Eigen::Vector3d(3.0, -1.0, 0.1));
 }
 
 TEST(MotionInputBuilderTest, OdometryFromThePosWhileGnssHoldsIt) {

@@ -142,6 +142,28 @@ TEST(MotionPriorTest, ConstantVelocityPredictsTheLastIntervalAndDeskewsWithTheLa
   EXPECT_TRUE(Near(*prior.ConstantVelocityMotion(0.1, 3), three, 1e-7));
 }
 
+// Seeded with a velocity before the first scan: the first scan is de-skewed and the second
+// predicted at it, and the seeds leave as real poses come (kDeskewVelocityIntervals + 1 kept).
+TEST(MotionPriorTest, SeedVelocityDeskewsAndPredictsTheFirstScans) {
+  MotionPrior prior(ImuPreintegration::Options(), false);
+  const Eigen::Vector3d v(6.0, 0.5, 0.0);
+  prior.SeedVelocity(T(0.0), v, 0.1);
+  Eigen::Isometry3d over_scan = Eigen::Isometry3d::Identity();
+  over_scan.translation() = 0.1 * v;
+  const Eigen::Isometry3d d0 =
+      prior.DeskewMotion(ScanAt(0.0), ScanMotionInput(), Eigen::Isometry3d::Identity(),
+                         Eigen::Vector3d::Zero(), kG, Vector6d::Zero());
+  EXPECT_TRUE(Near(d0, over_scan, 1e-7));
+  prior.Record(T(0.0), Eigen::Isometry3d::Identity());
+  const PreviousScan prev = Prev(0.0, Eigen::Isometry3d::Identity(), Eigen::Vector3d::Zero());
+  const Prediction p =
+      prior.Predict(ScanAt(0.1), ScanMotionInput(), false, prev, Eigen::Isometry3d::Identity(), kG);
+  EXPECT_TRUE(Near(p.T_submap, over_scan, 1e-7));
+  // Three real poses standing still push the seeds out: no motion left.
+  for (int k = 1; k <= 3; ++k) prior.Record(T(0.1 * k), Eigen::Isometry3d::Identity());
+  EXPECT_TRUE(Near(*prior.ConstantVelocityMotion(0.1, 100), Eigen::Isometry3d::Identity(), 1e-12));
+}
+
 TEST(MotionPriorTest, DeskewMotionByTheMotionSource) {
   const MotionPrior prior(ImuPreintegration::Options(), true);
   ScanMotionInput odo;

@@ -340,6 +340,8 @@ const std::vector<std::pair<std::string, KeyHandler>>& Handlers() {
     SLAM_MMS_KEY_D("localizer.min_inlier_ratio", o->system.localizer.min_inlier_ratio);
     SLAM_MMS_KEY_D("localizer.registration_voxel_m", o->system.localizer.registration_voxel_m);
     SLAM_MMS_KEY_B("localizer.per_submap_surfels", o->system.localizer.per_submap_surfels);
+    SLAM_MMS_KEY_B("localizer.lidar_only_initial_velocity",
+                   o->system.localizer.lidar_only_initial_velocity);
     SLAM_MMS_KEY_B("localizer.archive_surfels", o->system.localizer.archive_surfels);
     h.emplace_back("localizer.spill_dir",
                    Path([](Options* o) { return &o->system.localizer.spill_dir; }));

@@ -113,6 +113,13 @@ struct Level1Options {
   /// left the live map, for AllSurfels(). Off by default: they grow with the drive (measured
   /// +0.3 MB a scan, 385 MB after 2 min), while the point-cloud map is the product's output.
   bool archive_surfels = false;
+  /// lidar_only starts from the POS's velocity at its first scan as well as its pose (both the
+  /// initial state it is anchored at): its first scans are de-skewed at that velocity, where
+  /// otherwise the first two are not de-skewed at all (no velocity before two registered scans),
+  /// which smears the map it starts from by the motion of a sweep (0.3-0.9 m at 3-9 m/s) and
+  /// costs 0.15-0.4 m of drift on drives that start moving (docs/sweep.md, session 18). After
+  /// that, LiDAR only.
+  bool lidar_only_initial_velocity = true;
   /// Bounded memory on long drives: where finished submaps' point clouds go. Empty (default):
   /// they stay in memory. Otherwise a private folder is created inside it (an error at Create
   /// when that fails) and removed with the Localizer; a submap's map cloud is written there when

@@ -28,26 +28,6 @@ struct Case {
   OfflinePos pos;
 };
 
-// The simulated calibration drives carry a navigation-grade IMU; the POS is given its model, as a
-// user configures the IMU of a calibration drive (densities as simulated, bias random walks
-// sigma_instability * sqrt(2 / tau)). With the tactical defaults the filter takes the levelling of
-// a navigation-grade IMU for 100x noisier than it is: its pitch then rests on the initial OXTS
-// record's (0.03 deg sigma), and the straight drive's calibrated pitch was 0.050 deg off instead
-// of 0.040 (session 18).
-InsFilter::Options NavigationGradePos() {
-  const sim::ImuSimulator::Options imu =
-      sim::ImuSimulator::Options::ForGrade(sim::ImuGrade::kNavigation);
-  InsFilter::Options o;
-  o.gyro_noise_density = imu.gyro_noise_density;
-  o.accel_noise_density = imu.accel_noise_density;
-  o.gyro_bias_random_walk = imu.gyro_bias_instability * std::sqrt(2.0 / imu.gyro_bias_tau_s);
-  o.accel_bias_random_walk = imu.accel_bias_instability * std::sqrt(2.0 / imu.accel_bias_tau_s);
-  o.init_sigma_gyro_bias_radps = std::hypot(imu.gyro_turn_on_bias_sigma, imu.gyro_bias_instability);
-  o.init_sigma_accel_bias_mps2 =
-      std::hypot(imu.accel_turn_on_bias_sigma, imu.accel_bias_instability);
-  return o;
-}
-
 Case Open(const std::filesystem::path& drive_dir) {
   Case c;
   StatusOr<std::unique_ptr<DriveReader>> r = OpenDrive(drive_dir, DriveSourceOptions{});
@@ -55,7 +35,6 @@ Case Open(const std::filesystem::path& drive_dir) {
   if (!r.ok()) return c;
   c.reader = std::move(r).value();
   MappingSystem::Options mo;
-  mo.ins = NavigationGradePos();
   StatusOr<OfflinePos> pos = ComputeOfflinePos(*c.reader, mo);
   EXPECT_TRUE(pos.ok()) << pos.status().ToString();
   if (pos.ok()) c.pos = std::move(pos).value();

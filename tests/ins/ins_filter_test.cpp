@@ -378,20 +378,26 @@ TEST(InsFilterTest, StampedAttitudeIsCarriedToTheFirstFix) {
   EXPECT_LT(vel_err[1], 0.05);
 }
 
-TEST(InsFilterTest, InitializeFromOxtsRecord) {
-  InsFilter filter;
+// An OXTS record at Karlsruhe, RTK fixed (5 cm), level, heading yaw_rad, standing.
+OxtsRecord RtkFixedRecord(double yaw_rad) {
   OxtsRecord rec;
   rec.lat_deg = 49.011;
   rec.lon_deg = 8.4165;
   rec.alt_m = 112.0;
-  rec.roll_rad = 0.01;
-  rec.pitch_rad = -0.02;
-  rec.yaw_rad = 2.0;
-  rec.vn = 3.0;
-  rec.ve = 4.0;
+  rec.yaw_rad = yaw_rad;
   rec.pos_accuracy_m = 0.05;
   rec.navstat = kOxtsNavstatLocked;
   rec.posmode = 6;
+  return rec;
+}
+
+TEST(InsFilterTest, InitializeFromOxtsRecord) {
+  InsFilter filter;
+  OxtsRecord rec = RtkFixedRecord(2.0);
+  rec.roll_rad = 0.01;
+  rec.pitch_rad = -0.02;
+  rec.vn = 3.0;
+  rec.ve = 4.0;
   // The OXTS adapter (io): attitude and velocity, then the record's own fix sets the position.
   ASSERT_TRUE(
       filter.InitializeAttitude(Eigen::Quaterniond(OxtsAttitude(rec)), OxtsVelocityEnu(rec)).ok());
@@ -411,17 +417,11 @@ TEST(InsFilterTest, InitializeFromOxtsRecord) {
 // with that accuracy, grown by the unobserved gyro bias over the IMU carry to the first fix;
 // without it the options' init sigmas hold. Roll, pitch, yaw about the world axes.
 TEST(InsFilterTest, StatedInitialAttitudeSigma) {
-  OxtsRecord rec;
-  rec.lat_deg = 49.011;
-  rec.lon_deg = 8.4165;
-  rec.alt_m = 112.0;
-  rec.yaw_rad = 0.7;
-  rec.pos_accuracy_m = 0.05;
-  rec.navstat = kOxtsNavstatLocked;
-  rec.posmode = 6;
+  const OxtsRecord rec = RtkFixedRecord(0.7);
   const Eigen::Matrix3d R = OxtsAttitude(rec);
   const Eigen::Vector3d stated = Eigen::Vector3d(0.03, 0.03, 0.1) * (M_PI / 180.0);
-  const InsFilter::Options o;
+  InsFilter::Options o;
+  o.use_stated_attitude_sigma = true;
   // carry_s: the first fix that long after the attitude's stamp, the vehicle standing meanwhile.
   auto world_sigmas = [&](std::optional<Eigen::Vector3d> sigma, double carry_s) {
     InsFilter filter = InsFilter::Create(o).value();
@@ -450,6 +450,11 @@ TEST(InsFilterTest, StatedInitialAttitudeSigma) {
   EXPECT_NEAR(unknown[0], o.init_sigma_roll_pitch_rad, 1e-12);
   EXPECT_NEAR(unknown[1], o.init_sigma_roll_pitch_rad, 1e-12);
   EXPECT_NEAR(unknown[2], o.init_sigma_yaw_rad, 1e-12);
+  // Off (the default): the stated sigma is ignored.
+  o.use_stated_attitude_sigma = false;
+  const Eigen::Vector3d ignored = world_sigmas(stated, 0.0);
+  EXPECT_LT((ignored - unknown).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_FALSE(InsFilter::Options().use_stated_attitude_sigma);
   // A sigma that is not finite and positive is refused, naming it.
   InsFilter filter;
   for (const Eigen::Vector3d& bad :

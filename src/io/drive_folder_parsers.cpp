@@ -17,6 +17,12 @@ namespace {
 
 constexpr double kDegToRad = M_PI / 180.0;
 
+// The attitude sigma group of initial_state.csv and pos.csv (all three or none).
+const std::vector<const char*>& RpySigmaColumns() {
+  static const std::vector<const char*> c = {"sigma_roll_deg", "sigma_pitch_deg", "sigma_yaw_deg"};
+  return c;
+}
+
 // Reads `columns` of `row` as finite doubles into `out`.
 Status Doubles(const CsvTable& t, size_t row, const std::vector<const char*>& columns,
                double* out) {
@@ -234,15 +240,12 @@ Status ParseInitialStateCsv(std::string_view bytes, const std::string& file,
   sigma_rpy_rad->reset();
   if (t.num_rows() == 0) return OkStatus();
   bool has_sigmas = false;
-  SLAM_MMS_RETURN_IF_ERROR(
-      GroupComplete(t, {"sigma_roll_deg", "sigma_pitch_deg", "sigma_yaw_deg"}, &has_sigmas));
+  SLAM_MMS_RETURN_IF_ERROR(GroupComplete(t, RpySigmaColumns(), &has_sigmas));
   if (has_sigmas) {
     double sg[3];
-    SLAM_MMS_RETURN_IF_ERROR(
-        Doubles(t, 0, {"sigma_roll_deg", "sigma_pitch_deg", "sigma_yaw_deg"}, sg));
+    SLAM_MMS_RETURN_IF_ERROR(Doubles(t, 0, RpySigmaColumns(), sg));
     for (int k = 0; k < 3; ++k) {
-      SLAM_MMS_RETURN_IF_ERROR(
-          CheckRange(t, 0, InitialStateCsvSchema().optional[k].c_str(), sg[k], 1e-9, 180.0));
+      SLAM_MMS_RETURN_IF_ERROR(CheckRange(t, 0, RpySigmaColumns()[k], sg[k], 1e-9, 180.0));
     }
     *sigma_rpy_rad = Eigen::Vector3d(sg[0], sg[1], sg[2]) * kDegToRad;
   }
@@ -262,8 +265,7 @@ Status ParsePosCsv(std::string_view bytes, const std::string& file, std::vector<
                    std::vector<std::string>* sources) {
   SLAM_MMS_ASSIGN_OR_RETURN(const CsvTable t, CsvTable::Parse(bytes, file, PosCsvSchema()));
   bool has_rpy = false, has_enu = false;
-  SLAM_MMS_RETURN_IF_ERROR(
-      GroupComplete(t, {"sigma_roll_deg", "sigma_pitch_deg", "sigma_yaw_deg"}, &has_rpy));
+  SLAM_MMS_RETURN_IF_ERROR(GroupComplete(t, RpySigmaColumns(), &has_rpy));
   SLAM_MMS_RETURN_IF_ERROR(GroupComplete(t, {"sigma_e_m", "sigma_n_m", "sigma_u_m"}, &has_enu));
   std::vector<Timestamp> stamps;
   SLAM_MMS_RETURN_IF_ERROR(t.IncreasingStamps("stamp_ns", &stamps));
@@ -284,8 +286,7 @@ Status ParsePosCsv(std::string_view bytes, const std::string& file, std::vector<
     p.R_enu_body = AttitudeFromDeg(v[3], v[4], v[5]);
     double s[3];
     if (has_rpy) {
-      SLAM_MMS_RETURN_IF_ERROR(
-          Doubles(t, r, {"sigma_roll_deg", "sigma_pitch_deg", "sigma_yaw_deg"}, s));
+      SLAM_MMS_RETURN_IF_ERROR(Doubles(t, r, RpySigmaColumns(), s));
       p.sigma_rpy_rad = Eigen::Vector3d(s[0], s[1], s[2]) * kDegToRad;
     }
     if (has_enu) {

@@ -71,6 +71,7 @@ SlidingWindowOptions = _C.SlidingWindowOptions
 DeskewOptions = _C.DeskewOptions
 DynamicObjectOptions = _C.DynamicObjectOptions
 ImuPreintegrationOptions = _C.ImuPreintegrationOptions
+ImuNoiseSpec = _C.ImuNoiseSpec
 
 MappingSystem = _C.MappingSystem
 LocalizationResult = _C.LocalizationResult

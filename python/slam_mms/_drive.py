@@ -220,7 +220,8 @@ def _evaluate(result: DriveResult, drive: pathlib.Path, gnss_outages, num_thread
         [(float(s), float(d)) for s, d in gnss_outages],
         [(_C.mapping_mode_name(run.mode), method)], gt_map_mme,
         kind=_READER_KINDS.get(type(reader).__name__, ""), scans_total=len(reader),
-        skipped_scans=[_split_skipped(s) for s in run.skipped_scans], complete=run.complete)
+        skipped_scans=[_split_skipped(s) for s in run.skipped_scans], complete=run.complete,
+        imu_noise=_imu_noise_used(result.options, reader))
     result.extra["method_report"] = method
     result.extra["ground_truth_kind"] = gt_kind or "none"
     result.extra["ground_truth_map_mme"] = gt_map_mme
@@ -287,6 +288,14 @@ def _options_for_reader(opts: "_C.Options", reader: "_C.DriveReader", outages) -
     if streams.t_body_antenna_m is not None:
         opts.ins.gnss.t_body_antenna = streams.t_body_antenna_m
     opts.gnss_outages = list(outages)
+
+
+def _imu_noise_used(options: "_C.Options", reader) -> str:
+    """Where the run's IMU noise model came from, as slam_mms_run reports it ('' = defaults)."""
+    streams = reader.streams
+    if options.use_stated_imu_noise and streams.imu_noise is not None:
+        return streams.imu_noise_source
+    return ""
 
 
 def _run_reader(reader, drive: pathlib.Path, mode, options: "_C.Options", outages,

@@ -296,6 +296,12 @@ class DriveStreams:
     def initial_attitude_sigma_rpy_rad(self) -> Optional[numpy.ndarray]:
         """(3,) 1-sigma roll, pitch, yaw [rad] of initial_state's attitude as its source states it, or None (the filter's init sigmas)."""
     @property
+    def imu_noise(self) -> Optional[ImuNoiseSpec]:
+        """ImuNoiseSpec as the input states it (imu_noise.yaml), or None."""
+    @property
+    def imu_noise_source(self) -> str:
+        ...
+    @property
     def T_body_lidar(self) -> numpy.ndarray:
         ...
     @property
@@ -592,6 +598,64 @@ class IcpTermination:
     def name(self) -> str: ...
     @property
     def value(self) -> int: ...
+
+class ImuNoiseSpec:
+    """An IMU's noise from its datasheet, SI (imu_noise.yaml; Options.set_imu_noise)."""
+    _fields: typing.ClassVar[tuple]
+    def to_dict(self) -> dict: ...
+    def __init__(self: ImuNoiseSpec) -> None:
+        ...
+    def __copy__(self: ImuNoiseSpec) -> ImuNoiseSpec:
+        ...
+    def copy(self: ImuNoiseSpec) -> ImuNoiseSpec:
+        """A deep copy."""
+    @property
+    def model(self) -> str:
+        """Free text."""
+    @model.setter
+    def model(self, value: str) -> None: ...
+    @property
+    def gyro_noise_density(self) -> float:
+        """Angle random walk [rad/s/sqrt(Hz)]."""
+    @gyro_noise_density.setter
+    def gyro_noise_density(self, value: float) -> None: ...
+    @property
+    def accel_noise_density(self) -> float:
+        """Velocity random walk [m/s^2/sqrt(Hz)]."""
+    @accel_noise_density.setter
+    def accel_noise_density(self, value: float) -> None: ...
+    @property
+    def gyro_bias_instability(self) -> float:
+        """[rad/s]"""
+    @gyro_bias_instability.setter
+    def gyro_bias_instability(self, value: float) -> None: ...
+    @property
+    def gyro_bias_correlation_time_s(self) -> float:
+        """[s]"""
+    @gyro_bias_correlation_time_s.setter
+    def gyro_bias_correlation_time_s(self, value: float) -> None: ...
+    @property
+    def accel_bias_instability(self) -> float:
+        """[m/s^2]"""
+    @accel_bias_instability.setter
+    def accel_bias_instability(self, value: float) -> None: ...
+    @property
+    def accel_bias_correlation_time_s(self) -> float:
+        """[s]"""
+    @accel_bias_correlation_time_s.setter
+    def accel_bias_correlation_time_s(self, value: float) -> None: ...
+    @property
+    def gyro_turn_on_bias_sigma(self) -> float:
+        """[rad/s]; 0 = not stated."""
+    @gyro_turn_on_bias_sigma.setter
+    def gyro_turn_on_bias_sigma(self, value: float) -> None: ...
+    @property
+    def accel_turn_on_bias_sigma(self) -> float:
+        """[m/s^2]; 0 = not stated."""
+    @accel_turn_on_bias_sigma.setter
+    def accel_turn_on_bias_sigma(self, value: float) -> None: ...
+    def validate(self: ImuNoiseSpec) -> None:
+        """Raises ValueError naming the first bad field and its rule."""
 
 class ImuPreintegrationOptions:
     """IMU preintegration noise (F_Prein)."""
@@ -1589,8 +1653,15 @@ class Options:
         """The one thread count, in [1, 64]."""
     @num_threads.setter
     def num_threads(self, value: int) -> None: ...
+    @property
+    def use_stated_imu_noise(self) -> bool:
+        """Model the IMU with the noise its input states (run_drive; DriveStreams.imu_noise)."""
+    @use_stated_imu_noise.setter
+    def use_stated_imu_noise(self, value: bool) -> None: ...
     def validate(self: Options) -> None:
         """Raises ValueError naming the first bad field and its rule."""
+    def set_imu_noise(self: Options, spec: ImuNoiseSpec) -> None:
+        """The IMU's datasheet noise in ins and localizer.imu (what run_drive does with DriveStreams.imu_noise)."""
     def to_dict(*args, **kwargs) -> typing.Any:
         """The fields as a dict (nested options as dicts, arrays as lists)."""
 
@@ -2278,8 +2349,8 @@ def plot_trajectories_top_view(ground_truth: Trajectory, ground_truth_name: str,
 def read_ply(path: os.PathLike[str]) -> numpy.ndarray:
     """N x 4 float32 [x y z intensity]."""
 
-def report_to_json(drive: str, scans: int, duration_s: float, ground_truth: str, gnss_outages: List[Tuple[float, float]], methods: List[Tuple[str, MethodReport]], ground_truth_map_mme: Optional[float] = None, *, kind: str = '', scans_total: int = -1, skipped_scans: List[Tuple[str, str]] = [], command_line: List[str] = [], options_json: str = '', georef_json: str = '', complete: bool = True, outputs: List[str] = []) -> str:
-    """report.json text by the C++ writer (the schema of eval/report.hpp): kind (kitti_raw|folder|rosbag|simulated, '' = null), scans_total (< 0 = null), skipped_scans [(source, reason)], command_line, options_json / georef_json (JSON object texts, '' = null), complete, outputs (file names)."""
+def report_to_json(drive: str, scans: int, duration_s: float, ground_truth: str, gnss_outages: List[Tuple[float, float]], methods: List[Tuple[str, MethodReport]], ground_truth_map_mme: Optional[float] = None, *, kind: str = '', scans_total: int = -1, skipped_scans: List[Tuple[str, str]] = [], command_line: List[str] = [], options_json: str = '', georef_json: str = '', complete: bool = True, outputs: List[str] = [], imu_noise: str = '') -> str:
+    """report.json text by the C++ writer (the schema of eval/report.hpp): kind (kitti_raw|folder|rosbag|simulated, '' = null), scans_total (< 0 = null), skipped_scans [(source, reason)], command_line, options_json / georef_json (JSON object texts, '' = null), complete, outputs (file names), imu_noise (the IMU noise file used, '' = null)."""
 
 def run_app(argv: List[str]) -> int:
     """Runs slam_mms_run with argv (argv[0] the program name) in this process; returns its exit status (0 done, 1 input or processing error, 2 bad command line or config, 130/143 stopped by SIGINT/SIGTERM). Progress goes to stdout, messages to stderr."""

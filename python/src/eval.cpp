@@ -300,9 +300,10 @@ void RegisterEval(py::module_& m) {
              int64_t scans_total,
              const std::vector<std::pair<std::string, std::string>>& skipped_scans,
              const std::vector<std::string>& command_line, const std::string& options_json,
-             const std::string& georef_json, bool complete,
-             const std::vector<std::string>& outputs) {
+             const std::string& georef_json, bool complete, const std::vector<std::string>& outputs,
+             const std::string& imu_noise) {
             EvalReport r;
+            r.input.imu_noise = imu_noise;
             r.input.drive = drive;
             r.input.kind = kind;
             r.input.scans = scans;
@@ -328,11 +329,11 @@ void RegisterEval(py::module_& m) {
           py::arg("skipped_scans") = std::vector<std::pair<std::string, std::string>>(),
           py::arg("command_line") = std::vector<std::string>(), py::arg("options_json") = "",
           py::arg("georef_json") = "", py::arg("complete") = true,
-          py::arg("outputs") = std::vector<std::string>(),
+          py::arg("outputs") = std::vector<std::string>(), py::arg("imu_noise") = "",
           "report.json text by the C++ writer (the schema of eval/report.hpp): kind "
           "(kitti_raw|folder|rosbag|simulated, '' = null), scans_total (< 0 = null), skipped_scans "
           "[(source, reason)], command_line, options_json / georef_json (JSON object texts, '' = "
-          "null), complete, outputs (file names).");
+          "null), complete, outputs (file names), imu_noise (the IMU noise file used, '' = null).");
   m.def("peak_rss_mb", &PeakRssMb, "Peak resident set size of this process [MB] (Linux).");
 
   // ---- map files ----

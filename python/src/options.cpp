@@ -340,6 +340,23 @@ void RegisterOptions(py::module_& m) {
       .Validated()
       .Done();
 
+  using IN = ImuNoiseSpec;
+  OptionsClass<IN>(m, "ImuNoiseSpec",
+                   "An IMU's noise from its datasheet, SI (imu_noise.yaml; "
+                   "Options.set_imu_noise).")
+      .Field("model", &IN::model, "Free text.")
+      .Field("gyro_noise_density", &IN::gyro_noise_density, "Angle random walk [rad/s/sqrt(Hz)].")
+      .Field("accel_noise_density", &IN::accel_noise_density,
+             "Velocity random walk [m/s^2/sqrt(Hz)].")
+      .Field("gyro_bias_instability", &IN::gyro_bias_instability, "[rad/s]")
+      .Field("gyro_bias_correlation_time_s", &IN::gyro_bias_correlation_time_s, "[s]")
+      .Field("accel_bias_instability", &IN::accel_bias_instability, "[m/s^2]")
+      .Field("accel_bias_correlation_time_s", &IN::accel_bias_correlation_time_s, "[s]")
+      .Field("gyro_turn_on_bias_sigma", &IN::gyro_turn_on_bias_sigma, "[rad/s]; 0 = not stated.")
+      .Field("accel_turn_on_bias_sigma", &IN::accel_turn_on_bias_sigma, "[m/s^2]; 0 = not stated.")
+      .Validated()
+      .Done();
+
   using MO = MappingSystem::Options;
   OptionsClass<MO>(m, "Options",
                    "MappingSystem::Options with the C++ defaults. Nested: ins (InsOptions), "
@@ -360,8 +377,19 @@ void RegisterOptions(py::module_& m) {
       .Field("max_pos_jump_m", &MO::max_pos_jump_m, "[m]")
       .Field("max_pos_jump_rad", &MO::max_pos_jump_rad, "[rad]")
       .Field("num_threads", &MO::num_threads, "The one thread count, in [1, 64].")
+      .Field("use_stated_imu_noise", &MO::use_stated_imu_noise,
+             "Model the IMU with the noise its input states (run_drive; DriveStreams.imu_noise).")
       .Validated()
-      .Done();
+      .Done()
+      .def(
+          "set_imu_noise",
+          [](MO& o, const ImuNoiseSpec& spec) {
+            ThrowIfError(spec.Validate());
+            o.SetImuNoise(spec);
+          },
+          py::arg("spec"),
+          "The IMU's datasheet noise in ins and localizer.imu (what run_drive does with "
+          "DriveStreams.imu_noise).");
 }
 
 }  // namespace slam_mms::python

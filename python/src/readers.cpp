@@ -156,6 +156,9 @@ void RegisterReaders(py::module_& m) {
       .def_readonly("initial_attitude_sigma_rpy_rad", &DS::initial_attitude_sigma_rpy_rad,
                     "(3,) 1-sigma roll, pitch, yaw [rad] of initial_state's attitude as its "
                     "source states it, or None (the filter's init sigmas).")
+      .def_readonly("imu_noise", &DS::imu_noise,
+                    "ImuNoiseSpec as the input states it (imu_noise.yaml), or None.")
+      .def_readonly("imu_noise_source", &DS::imu_noise_source)
       .def_property_readonly("T_body_lidar",
                              [](const DS& s) { return IsometryToArray(s.T_body_lidar); })
       .def_readonly("t_body_antenna_m", &DS::t_body_antenna_m, "(3,) or None.");

@@ -33,7 +33,8 @@ def test_every_field_is_exposed():
     # The C++ MappingSystem::Options members, in declaration order.
     assert slam_mms.Options._fields == (
         "mode", "T_body_lidar", "origin", "gnss_outages", "ins", "localizer", "level2",
-        "map_max_range_m", "map_voxel_m", "max_pos_jump_m", "max_pos_jump_rad", "num_threads")
+        "map_max_range_m", "map_voxel_m", "max_pos_jump_m", "max_pos_jump_rad", "num_threads",
+        "use_stated_imu_noise")
     d = slam_mms.Options().to_dict()
     assert d["localizer"]["icp"]["max_iterations"] == 20
     assert d["mode"] == "FULL"

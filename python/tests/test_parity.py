@@ -52,8 +52,10 @@ def test_manual_feed_equals_run_drive(sim_drive):
     reader = slam_mms.KittiRawReader(sim_drive)
     options = slam_mms.Options()
     options.T_body_lidar = reader.T_body_lidar
-    system = slam_mms.MappingSystem(options)
     streams = reader.streams
+    assert streams.imu_noise is not None  # the simulator states its IMU (imu_noise.yaml)
+    options.set_imu_noise(streams.imu_noise)  # as run_drive does
+    system = slam_mms.MappingSystem(options)
     system.initialize_pos(streams.initial_state, streams.initial_attitude_sigma_rpy_rad)
     imu, gnss = streams.imu_samples, streams.gnss_fixes
     i = g = 0

@@ -72,9 +72,17 @@ bool ParsePosWorkflow(const std::string& name, PosWorkflow* pos) {
   return false;
 }
 
+MappingSystem::Options ApplyInputImuNoise(const MappingSystem::Options& options,
+                                          const DriveStreams& streams) {
+  MappingSystem::Options out = options;
+  if (options.use_stated_imu_noise && streams.imu_noise) out.SetImuNoise(*streams.imu_noise);
+  return out;
+}
+
 StatusOr<OfflinePos> ComputeOfflinePos(const DriveReader& reader,
-                                       const MappingSystem::Options& options) {
+                                       const MappingSystem::Options& input_options) {
   const DriveStreams& in = reader.streams();
+  const MappingSystem::Options options = ApplyInputImuNoise(input_options, in);
   OfflinePos out;
   if (in.pos.empty()) {
     PosSmoother::Options so;
@@ -127,7 +135,10 @@ DriveRun RunMethod(const DriveReader& reader, const MappingSystem::Options& base
   run.scans_total = reader.NumScans();
   const auto t0 = std::chrono::steady_clock::now();
 
-  MappingSystem::Options options = base_options;
+  MappingSystem::Options options = ApplyInputImuNoise(base_options, in);
+  if (options.use_stated_imu_noise && in.imu_noise) {
+    SLAM_MMS_LOG(kInfo) << reader.Describe() << ": IMU noise as stated in " << in.imu_noise_source;
+  }
   const bool smooth =
       base_options.mode == MappingMode::kGnssInsSmoothed ||
       (base_options.mode == MappingMode::kFull && run_options.pos == PosWorkflow::kSmoothed);

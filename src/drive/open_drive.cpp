@@ -5,6 +5,7 @@
 
 #include "slam_mms/core/logging.hpp"
 #include "slam_mms/io/folder_drive_reader.hpp"
+#include "slam_mms/io/imu_noise_yaml.hpp"
 #include "slam_mms/io/kitti_calibration.hpp"
 #include "slam_mms/io/kitti_drive_reader.hpp"
 #if defined(SLAM_MMS_HAVE_ROSBAG)
@@ -14,17 +15,24 @@
 namespace slam_mms {
 namespace {
 
-// A reader whose calibration is replaced (--extrinsics): see OverrideExtrinsics.
-class ExtrinsicsOverride final : public DriveReader {
+// A reader whose calibration (--extrinsics) or IMU noise (--imu-noise) is replaced: see
+// OverrideExtrinsics and OverrideImuNoise.
+class StreamsOverride final : public DriveReader {
  public:
-  ExtrinsicsOverride(std::unique_ptr<DriveReader> owned, const DriveReader* base,
-                     const DriveExtrinsics& extrinsics)
+  StreamsOverride(std::unique_ptr<DriveReader> owned, const DriveReader* base,
+                  const DriveExtrinsics& extrinsics)
       : owned_(std::move(owned)),
         base_(base),
         streams_(base_->streams()),
         lidar_offset_ns_(std::llround(extrinsics.lidar_time_offset_s * 1e9)) {
     streams_.T_body_lidar = extrinsics.T_body_lidar;
     if (extrinsics.t_body_antenna_m) streams_.t_body_antenna_m = extrinsics.t_body_antenna_m;
+  }
+  StreamsOverride(std::unique_ptr<DriveReader> owned, const DriveReader* base,
+                  const ImuNoiseSpec& imu_noise, const std::string& source)
+      : owned_(std::move(owned)), base_(base), streams_(base_->streams()) {
+    streams_.imu_noise = imu_noise;
+    streams_.imu_noise_source = source;
   }
   std::string Describe() const override { return base_->Describe(); }
   size_t NumScans() const override { return base_->NumScans(); }
@@ -60,12 +68,19 @@ class ExtrinsicsOverride final : public DriveReader {
 std::unique_ptr<DriveReader> OverrideExtrinsics(std::unique_ptr<DriveReader> base,
                                                 const DriveExtrinsics& extrinsics) {
   const DriveReader* b = base.get();
-  return std::make_unique<ExtrinsicsOverride>(std::move(base), b, extrinsics);
+  return std::make_unique<StreamsOverride>(std::move(base), b, extrinsics);
 }
 
 std::unique_ptr<DriveReader> OverrideExtrinsics(const DriveReader& base,
                                                 const DriveExtrinsics& extrinsics) {
-  return std::make_unique<ExtrinsicsOverride>(nullptr, &base, extrinsics);
+  return std::make_unique<StreamsOverride>(nullptr, &base, extrinsics);
+}
+
+std::unique_ptr<DriveReader> OverrideImuNoise(std::unique_ptr<DriveReader> base,
+                                              const ImuNoiseSpec& imu_noise,
+                                              const std::string& source) {
+  const DriveReader* b = base.get();
+  return std::make_unique<StreamsOverride>(std::move(base), b, imu_noise, source);
 }
 
 const char* DriveSourceKindName(DriveSourceKind kind) {
@@ -95,9 +110,15 @@ StatusOr<std::unique_ptr<DriveReader>> OpenDrive(const std::filesystem::path& pa
   if (!options.extrinsics.empty()) {
     SLAM_MMS_ASSIGN_OR_RETURN(extrinsics, ReadExtrinsicsFile(options.extrinsics));
   }
-  // The drive's own calibration, then --extrinsics over it.
+  std::optional<ImuNoiseSpec> imu_noise;
+  if (!options.imu_noise.empty()) {
+    SLAM_MMS_ASSIGN_OR_RETURN(imu_noise, ReadImuNoiseYaml(options.imu_noise));
+  }
+  // The drive's own calibration and IMU noise, then --extrinsics and --imu-noise over them.
   auto with_extrinsics = [&](std::unique_ptr<DriveReader> reader) {
-    return extrinsics ? OverrideExtrinsics(std::move(reader), *extrinsics) : std::move(reader);
+    if (extrinsics) reader = OverrideExtrinsics(std::move(reader), *extrinsics);
+    if (imu_noise) reader = OverrideImuNoise(std::move(reader), *imu_noise, options.imu_noise);
+    return reader;
   };
   switch (kind) {
     case DriveSourceKind::kAuto:
@@ -140,7 +161,9 @@ StatusOr<std::unique_ptr<DriveReader>> OpenDrive(const std::filesystem::path& pa
       // The bag reader took T_body_lidar and the antenna: only a clock offset needs the wrapper
       // (hosts see the RosbagDriveReader itself otherwise).
       if (extrinsics && extrinsics->lidar_time_offset_s == 0.0) {
-        return std::unique_ptr<DriveReader>(std::move(bag));
+        std::unique_ptr<DriveReader> reader = std::move(bag);
+        if (imu_noise) reader = OverrideImuNoise(std::move(reader), *imu_noise, options.imu_noise);
+        return reader;
       }
       return with_extrinsics(std::move(bag));
 #else

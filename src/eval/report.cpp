@@ -121,6 +121,7 @@ StatusOr<std::string> ReportToJson(const EvalReport& report) {
     skipped.push_back(Json{{"source", s.source}, {"reason", s.reason}});
   }
   input["skipped_scans"] = Json{{"count", in.skipped_scans.size()}, {"scans", skipped}};
+  input["imu_noise"] = in.imu_noise.empty() ? Json(nullptr) : Json(in.imu_noise);
   j["input"] = std::move(input);
 
   Json outages = Json::array();

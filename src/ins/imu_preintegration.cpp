@@ -13,6 +13,13 @@ namespace {
 bool PositiveFinite(double x) { return std::isfinite(x) && x > 0.0; }
 }  // namespace
 
+void ImuPreintegration::Options::SetImuNoise(const ImuNoiseSpec& spec) {
+  gyro_noise_density = spec.gyro_noise_density;
+  accel_noise_density = spec.accel_noise_density;
+  gyro_bias_random_walk = spec.GyroBiasRandomWalk();
+  accel_bias_random_walk = spec.AccelBiasRandomWalk();
+}
+
 Status ImuPreintegration::Options::Validate() const {
   if (!PositiveFinite(gyro_noise_density))
     return internal::OptionError("ImuPreintegration::Options", "gyro_noise_density",

@@ -19,6 +19,15 @@ Status FieldError(const char* field, double value, const char* rule) {
 
 }  // namespace
 
+void InsFilter::Options::SetImuNoise(const ImuNoiseSpec& spec) {
+  gyro_noise_density = spec.gyro_noise_density;
+  accel_noise_density = spec.accel_noise_density;
+  gyro_bias_random_walk = spec.GyroBiasRandomWalk();
+  accel_bias_random_walk = spec.AccelBiasRandomWalk();
+  init_sigma_gyro_bias_radps = spec.GyroBiasInitialSigma();
+  init_sigma_accel_bias_mps2 = spec.AccelBiasInitialSigma();
+}
+
 Status InsFilter::Options::Validate() const {
   if (!PositiveFinite(gyro_noise_density))
     return FieldError("gyro_noise_density", gyro_noise_density, "must be > 0");

@@ -8,6 +8,7 @@
 #include "io/file_util.hpp"
 #include "io/nmea.hpp"
 #include "slam_mms/io/extrinsics_yaml.hpp"
+#include "slam_mms/io/imu_noise_yaml.hpp"
 #include "slam_mms/io/oxts_record.hpp"
 
 namespace slam_mms {
@@ -99,6 +100,9 @@ Status WriteStreams(const DriveStreams& s, const fs::path& dir, const FolderWrit
   e.T_body_lidar = s.T_body_lidar;
   e.t_body_antenna_m = s.t_body_antenna_m;
   SLAM_MMS_RETURN_IF_ERROR(WriteExtrinsicsYaml(e, dir / "extrinsics.yaml"));
+  if (s.imu_noise) {
+    SLAM_MMS_RETURN_IF_ERROR(WriteImuNoiseYaml(*s.imu_noise, dir / kImuNoiseFileName));
+  }
 
   if (s.initial_state) {
     const InsState& x = *s.initial_state;

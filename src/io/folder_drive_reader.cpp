@@ -9,6 +9,7 @@
 #include "io/parsers.hpp"
 #include "slam_mms/core/logging.hpp"
 #include "slam_mms/io/extrinsics_yaml.hpp"
+#include "slam_mms/io/imu_noise_yaml.hpp"
 
 namespace slam_mms {
 
@@ -221,6 +222,11 @@ Status FolderDriveReader::LoadStreams() {
     SLAM_MMS_RETURN_IF_ERROR(io_internal::ParseInitialStateCsv(
         b, initial_csv.string(), &s.initial_state, &s.initial_state_source,
         &s.initial_attitude_sigma_rpy_rad));
+  }
+  const fs::path imu_noise = dir_ / kImuNoiseFileName;
+  if (Exists(imu_noise)) {
+    SLAM_MMS_ASSIGN_OR_RETURN(s.imu_noise, ReadImuNoiseYaml(imu_noise));
+    s.imu_noise_source = imu_noise.string();
   }
   if (Exists(extrinsics)) {
     SLAM_MMS_ASSIGN_OR_RETURN(const DriveExtrinsics e, ReadExtrinsicsYaml(extrinsics));

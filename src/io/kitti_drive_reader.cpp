@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "slam_mms/io/imu_noise_yaml.hpp"
 #include "slam_mms/io/oxts_record.hpp"
 
 namespace slam_mms {
@@ -25,7 +26,15 @@ std::string NumberedFile(const std::filesystem::path& drive_dir, const char* fol
 StatusOr<std::unique_ptr<KittiDriveReader>> KittiDriveReader::Open(
     const std::filesystem::path& drive_dir, const KittiRawReader::Options& options) {
   SLAM_MMS_ASSIGN_OR_RETURN(KittiRawReader reader, KittiRawReader::Open(drive_dir, options));
-  return std::unique_ptr<KittiDriveReader>(new KittiDriveReader(std::move(reader)));
+  std::unique_ptr<KittiDriveReader> out(new KittiDriveReader(std::move(reader)));
+  // Not part of KITTI: a drive written by slam_mms_sim (or a user) may state its IMU's noise.
+  const std::filesystem::path imu_noise = out->reader_.drive_dir() / kImuNoiseFileName;
+  std::error_code ec;
+  if (std::filesystem::exists(imu_noise, ec)) {
+    SLAM_MMS_ASSIGN_OR_RETURN(out->streams_.imu_noise, ReadImuNoiseYaml(imu_noise));
+    out->streams_.imu_noise_source = imu_noise.string();
+  }
+  return out;
 }
 
 KittiDriveReader::KittiDriveReader(KittiRawReader reader) : reader_(std::move(reader)) {

@@ -17,6 +17,11 @@
 
 namespace slam_mms {
 
+void MappingSystem::Options::SetImuNoise(const ImuNoiseSpec& spec) {
+  ins.SetImuNoise(spec);
+  localizer.imu.SetImuNoise(spec);
+}
+
 Status MappingSystem::Options::Validate() const {
   if (!T_body_lidar.matrix().allFinite()) {
     return InvalidArgumentError("MappingSystem::Options::T_body_lidar is not finite");

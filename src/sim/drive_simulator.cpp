@@ -17,6 +17,7 @@
 #include "slam_mms/core/lie.hpp"
 #include "slam_mms/core/logging.hpp"
 #include "slam_mms/core/trajectory.hpp"
+#include "slam_mms/io/imu_noise_yaml.hpp"
 #include "slam_mms/io/kitti_raw_writer.hpp"
 #include "slam_mms/io/kitti_timestamp.hpp"
 #include "slam_mms/io/map_io.hpp"
@@ -249,6 +250,10 @@ StatusOr<DriveSimulator::Summary> DriveSimulator::Run(const std::filesystem::pat
   SLAM_MMS_ASSIGN_OR_RETURN(KittiRawWriter writer, KittiRawWriter::Create(summary.drive_dir, wopt));
   // The true calibration, or a wrong one on purpose (Options::calib_error_*).
   SLAM_MMS_RETURN_IF_ERROR(writer.WriteCalibration(WrittenTLidarBody(o)));
+  // The IMU's datasheet, as a user states theirs (io/imu_noise_yaml.hpp); not ground truth.
+  if (const std::optional<ImuNoiseSpec> spec = o.imu.NoiseSpec()) {
+    SLAM_MMS_RETURN_IF_ERROR(WriteImuNoiseYaml(*spec, summary.drive_dir / kImuNoiseFileName));
+  }
   const std::filesystem::path gt_dir = summary.drive_dir / "ground_truth";
   std::error_code ec;
   std::filesystem::create_directories(gt_dir, ec);

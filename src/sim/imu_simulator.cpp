@@ -80,6 +80,21 @@ Status ImuSimulator::Options::Validate() const {
   return OkStatus();
 }
 
+std::optional<ImuNoiseSpec> ImuSimulator::Options::NoiseSpec() const {
+  ImuNoiseSpec spec;
+  spec.model = "slam_mms_sim simulated IMU (first-order Gauss-Markov bias drift)";
+  spec.gyro_noise_density = gyro_noise_density;
+  spec.accel_noise_density = accel_noise_density;
+  spec.gyro_bias_instability = gyro_bias_instability;
+  spec.gyro_bias_correlation_time_s = gyro_bias_tau_s;
+  spec.accel_bias_instability = accel_bias_instability;
+  spec.accel_bias_correlation_time_s = accel_bias_tau_s;
+  spec.gyro_turn_on_bias_sigma = gyro_turn_on_bias_sigma;
+  spec.accel_turn_on_bias_sigma = accel_turn_on_bias_sigma;
+  if (!spec.Validate().ok()) return std::nullopt;
+  return spec;
+}
+
 ImuSimulator::ImuSimulator(const Options& options, uint64_t seed)
     : options_(options), rng_state_(MixSeed(seed, 0x1A0)) {
   gyro_on_ = options_.gyro_turn_on_bias_sigma * NextNormal3();

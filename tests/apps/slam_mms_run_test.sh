@@ -37,7 +37,7 @@ check_report() {
   if command -v jq >/dev/null; then
     jq -e '((keys - ["outputs"]) == ["command_line","complete","extrinsics","georef","gnss_outages",
              "ground_truth_map","input","methods","options","version","warnings"]) and
-           (.input | keys == ["drive","duration_s","ground_truth","kind","scans","scans_processed",
+           (.input | keys == ["drive","duration_s","ground_truth","imu_noise","kind","scans","scans_processed",
              "scans_total","skipped_scans"]) and
            (.input.scans == .input.scans_processed) and
            (.input.skipped_scans | keys == ["count","scans"]) and

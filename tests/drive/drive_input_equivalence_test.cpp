@@ -97,8 +97,12 @@ void ExpectEquivalent(const fs::path& kitti_drive, int64_t last_frame, const fs:
     auto written = variant.write(**kitti, work / variant.name);
     ASSERT_TRUE(written.ok()) << written.status().ToString();
     DriveSourceOptions so;
-    // A bag holds no calibration: the folder's extrinsics.yaml format, written next to it.
-    if (written->extension() == ".bag") so.extrinsics = work / "folder_pcd_binary/extrinsics.yaml";
+    // A bag holds no calibration and no IMU noise: the folder's extrinsics.yaml and
+    // imu_noise.yaml (where the drive states one: a simulated drive), given as files.
+    if (written->extension() == ".bag") {
+      so.extrinsics = work / "folder_pcd_binary/extrinsics.yaml";
+      if ((*kitti)->streams().imu_noise) so.imu_noise = work / "folder_pcd_binary/imu_noise.yaml";
+    }
     auto reader = OpenDrive(*written, so);
     ASSERT_TRUE(reader.ok()) << reader.status().ToString();
     const Trajectory t = RunFull(**reader);

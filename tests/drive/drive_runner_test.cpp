@@ -90,10 +90,11 @@ TEST_F(DriveRunnerTest, GivesExactlyWhatAHandFedSystemGives) {
   ASSERT_TRUE(run.first_scan_start.has_value());
   EXPECT_EQ(*run.first_scan_start, reader->ScanStart(0));
 
-  // By hand: the initial state, then IMU/GNSS up to each scan's end, then the scan.
-  auto system = MappingSystem::Create(options);
-  ASSERT_TRUE(system.ok());
+  // By hand: the IMU noise the drive states, the initial state, then IMU/GNSS up to each scan's
+  // end, then the scan.
   const DriveStreams& in = reader->streams();
+  auto system = MappingSystem::Create(ApplyInputImuNoise(options, in));
+  ASSERT_TRUE(system.ok());
   ASSERT_TRUE(in.initial_state.has_value());
   // A KITTI drive's POS record states the OXTS RT3003's attitude accuracy (0.03 / 0.03 / 0.1 deg).
   ASSERT_TRUE(in.initial_attitude_sigma_rpy_rad.has_value());
@@ -312,6 +313,30 @@ TEST_F(DriveRunnerTest, SmoothedPosInAnOutageBeatsTheForwardOneAndFullRunsOnIt) 
   const DriveRun failed = RunDrive(no_init, options(MappingMode::kGnssInsSmoothed));
   EXPECT_EQ(failed.status.code(), StatusCode::kFailedPrecondition) << failed.status.ToString();
   EXPECT_EQ(failed.scans_processed, 0u);
+}
+
+// The simulated drive states its IMU's datasheet (imu_noise.yaml); RunDrive models the IMU with it
+// unless use_stated_imu_noise is off, and the result differs from the defaults'.
+TEST_F(DriveRunnerTest, StatedImuNoiseIsAppliedUnlessSwitchedOff) {
+  auto reader = Open(sim_->drive_dir);
+  ASSERT_NE(reader, nullptr);
+  const DriveStreams& in = reader->streams();
+  ASSERT_TRUE(in.imu_noise.has_value());
+  EXPECT_EQ(in.imu_noise_source, (sim_->drive_dir / "imu_noise.yaml").string());
+  MappingSystem::Options options = OptionsFor(MappingMode::kGnssIns, *reader);
+  const MappingSystem::Options applied = ApplyInputImuNoise(options, in);
+  EXPECT_EQ(applied.ins.gyro_noise_density, in.imu_noise->gyro_noise_density);
+  EXPECT_EQ(applied.localizer.imu.accel_bias_random_walk, in.imu_noise->AccelBiasRandomWalk());
+  EXPECT_NE(applied.ins.gyro_noise_density, options.ins.gyro_noise_density);
+  options.use_stated_imu_noise = false;
+  EXPECT_EQ(ApplyInputImuNoise(options, in).ins.gyro_noise_density, options.ins.gyro_noise_density);
+  const DriveRun off = RunDrive(*reader, options);
+  options.use_stated_imu_noise = true;
+  const DriveRun on = RunDrive(*reader, options);
+  ASSERT_TRUE(off.status.ok() && on.status.ok());
+  ASSERT_EQ(off.trajectory.size(), on.trajectory.size());
+  EXPECT_FALSE(off.trajectory.poses().back().T_world_body.isApprox(
+      on.trajectory.poses().back().T_world_body, 1e-12));
 }
 
 TEST(DriveRunOptionsTest, PosWorkflowNames) {

@@ -53,6 +53,7 @@ EvalReport SampleReport() {
   r.methods.emplace_back("lidar_only", lidar);
   r.input.kind = "kitti_raw";
   r.input.scans_total = 150;
+  r.input.imu_noise = "/drives/0013/imu_noise.yaml";
   r.input.skipped_scans = {{"velodyne_points/data/0000000005.bin", "truncated: 1000 bytes"},
                            {"velodyne_points/data/0000000009.bin", "quote \" and \\ and \n"}};
   r.command_line = {"slam_mms_run", "--out=o", "--config", "a b.yaml"};
@@ -71,10 +72,10 @@ TEST(ReportTest, JsonHasTheSchemaKeysAndRoundTrips) {
   ASSERT_TRUE(text.ok()) << text.status().ToString();
   const Json j = ParseOrFail(*text);
   ASSERT_TRUE(j.is_object());
-  EXPECT_EQ(Keys(j), (std::vector<std::string>{"version", "complete", "command_line", "input",
-                                               "gnss_outages", "methods", "ground_truth_map",
-                                               "options", "georef", "extrinsics", "warnings",
-                                               "outputs"}));
+  EXPECT_EQ(Keys(j),
+            (std::vector<std::string>{"version", "complete", "command_line", "input",
+                                      "gnss_outages", "methods", "ground_truth_map", "options",
+                                      "georef", "extrinsics", "warnings", "outputs"}));
   EXPECT_EQ(j["version"], SLAM_MMS_VERSION_STRING);
   EXPECT_EQ(j["warnings"].get<std::vector<std::string>>(), r.warnings);
   EXPECT_EQ(j["complete"], false);
@@ -82,7 +83,7 @@ TEST(ReportTest, JsonHasTheSchemaKeysAndRoundTrips) {
   const Json& input = j["input"];
   EXPECT_EQ(Keys(input),
             (std::vector<std::string>{"drive", "kind", "scans", "scans_total", "scans_processed",
-                                      "duration_s", "ground_truth", "skipped_scans"}));
+                                      "duration_s", "ground_truth", "skipped_scans", "imu_noise"}));
   EXPECT_EQ(input["drive"], "2011_09_26_drive_0013_sync");
   EXPECT_EQ(input["kind"], "kitti_raw");
   EXPECT_EQ(input["scans"], 144);
@@ -94,6 +95,7 @@ TEST(ReportTest, JsonHasTheSchemaKeysAndRoundTrips) {
   ASSERT_EQ(input["skipped_scans"]["scans"].size(), 2u);
   EXPECT_EQ(input["skipped_scans"]["scans"][0]["source"], r.input.skipped_scans[0].source);
   EXPECT_EQ(input["skipped_scans"]["scans"][1]["reason"], r.input.skipped_scans[1].reason);
+  EXPECT_EQ(input["imu_noise"], r.input.imu_noise);
 
   const Json& outages = j["gnss_outages"];
   ASSERT_EQ(outages.size(), 2u);
@@ -159,6 +161,7 @@ TEST(ReportTest, DoublesReadBackExactlyAndDefaultsAreNull) {
   EXPECT_TRUE(j["input"]["scans_total"].is_null());
   EXPECT_EQ(j["input"]["skipped_scans"]["count"], 0);
   EXPECT_TRUE(j["input"]["skipped_scans"]["scans"].empty());
+  EXPECT_TRUE(j["input"]["imu_noise"].is_null());
   EXPECT_TRUE(j["options"].is_null());
   EXPECT_TRUE(j["georef"].is_null());
   EXPECT_TRUE(j["extrinsics"].is_null());

@@ -97,6 +97,11 @@ Options:
                           (.yaml/.yml, the folder's extrinsics.yaml format) or KITTI's
                           calib_imu_to_velo.txt format (what --calibrate-extrinsics writes); for
                           bags, and to override a folder's or a KITTI drive's own.
+  --imu-noise FILE        the IMU's noise from its datasheet (imu_noise.yaml format: angle and
+                          velocity random walk, bias instability and correlation time; see
+                          docs/drive_folder.md) for the POS filter and level 1's preintegration,
+                          over the input's own imu_noise.yaml. Without either: the filter's
+                          defaults, an IMU of unknown grade (config use_stated_imu_noise).
   --calibrate-extrinsics  estimate the LiDAR boresight, lever arm and clock offset from the drive
                           against the offline POS first, write DIR/calib_imu_to_velo_estimated.txt
                           and report.json "extrinsics", and run with the estimate (config key
@@ -163,8 +168,8 @@ StatusOr<RunArgs> ParseRunArgs(int argc, const char* const* argv) {
   CLI::App app("slam_mms_run", "slam_mms_run");
   app.set_help_flag();  // --help is a flag of RunArgs (main prints RunUsage()).
   app.allow_windows_style_options(false);
-  std::string kitti_raw, folder, rosbag, extrinsics, out, mode, pos, frames, config, sim_duration,
-      sim_seed, log_level, dump_config, las_tile_size, checkpoint_every, preset;
+  std::string kitti_raw, folder, rosbag, extrinsics, imu_noise, out, mode, pos, frames, config,
+      sim_duration, sim_seed, log_level, dump_config, las_tile_size, checkpoint_every, preset;
   std::vector<std::string> outages;
   app.add_flag("-h,--help", args.help);
   app.add_flag("--version", args.version);
@@ -176,6 +181,7 @@ StatusOr<RunArgs> ParseRunArgs(int argc, const char* const* argv) {
   app.add_option("--imu-topic", args.imu_topic);
   app.add_option("--gnss-topic", args.gnss_topic);
   app.add_option("--extrinsics", extrinsics);
+  app.add_option("--imu-noise", imu_noise);
   app.add_option("--out", out);
   app.add_option("--mode", mode);
   app.add_option("--pos", pos);
@@ -211,6 +217,7 @@ StatusOr<RunArgs> ParseRunArgs(int argc, const char* const* argv) {
   args.folder = folder;
   args.rosbag = rosbag;
   args.extrinsics = extrinsics;
+  args.imu_noise = imu_noise;
   args.out_dir = out;
   args.config = config;
   if (given("--preset")) {

@@ -30,6 +30,8 @@ struct RunArgs {
   /// Bag topics (empty: the one topic of each message type) and --extrinsics FILE.yaml.
   std::string lidar_topic, imu_topic, gnss_topic;
   std::filesystem::path extrinsics;  ///< Empty: none (bags: identity, logged).
+  /// --imu-noise FILE (io/imu_noise_yaml.hpp): the IMU's datasheet, over the input's own.
+  std::filesystem::path imu_noise;
   std::filesystem::path out_dir;
   /// In run order (all = full, gnss_ins, gnss_ins_smoothed, lidar_only).
   std::vector<MappingMode> modes;

@@ -22,6 +22,7 @@ StatusOr<std::unique_ptr<DriveReader>> OpenRunInput(const RunArgs& args,
   o.imu_topic = args.imu_topic;
   o.gnss_topic = args.gnss_topic;
   o.extrinsics = args.extrinsics;
+  o.imu_noise = args.imu_noise;
   return OpenDrive(path, o);
 }
 

@@ -233,6 +233,7 @@ RunFingerprint MakeFingerprint(const RunArgs& args, const fs::path& input,
   f["topics"] = "[" + quote(args.lidar_topic) + ", " + quote(args.imu_topic) + ", " +
                 quote(args.gnss_topic) + "]";
   f["extrinsics"] = quote(args.extrinsics.string());
+  f["imu_noise"] = quote(args.imu_noise.string());
   f["options"] = options_json;
   std::string outages = "[";
   for (const auto& [start, duration] : args.gnss_outages) {
@@ -419,7 +420,8 @@ std::optional<int> ObtainDrive(const RunArgs& args, bool tty,
 // boresight self-calibrated first where asked: every method then runs with the estimate (the
 // antenna and everything else as the input gives them). Returns the exit code where the run ends.
 std::optional<int> OpenInput(const RunArgs& args, const fs::path& drive_dir, RunConfig* config,
-                             std::unique_ptr<DriveReader>* input, std::string* extrinsics_json) {
+                             std::unique_ptr<DriveReader>* input, std::string* extrinsics_json,
+                             std::string* imu_noise) {
   StatusOr<std::unique_ptr<DriveReader>> opened = OpenRunInput(args, drive_dir);
   if (!opened.ok()) return Fail(opened.status(), kExitError);
   *input = std::move(opened).value();
@@ -432,6 +434,14 @@ std::optional<int> OpenInput(const RunArgs& args, const fs::path& drive_dir, Run
     options.ins.gnss.t_body_antenna = *(*input)->streams().t_body_antenna_m;
   }
   options.gnss_outages = args.gnss_outages;
+  // The IMU's noise: --imu-noise (the reader's, OpenDrive), else the input's imu_noise.yaml;
+  // RunDrive applies it. Else the filter's defaults.
+  if (!args.imu_noise.empty() && !options.use_stated_imu_noise) {
+    return Fail(InvalidArgumentError("--imu-noise is ignored with use_stated_imu_noise: false"),
+                kExitUsage);
+  }
+  const DriveStreams& streams = (*input)->streams();
+  if (options.use_stated_imu_noise && streams.imu_noise) *imu_noise = streams.imu_noise_source;
   const Status valid = options.Validate();
   if (!valid.ok()) return Fail(valid, kExitUsage);
   if (!args.calibrate_extrinsics && !config->drive.estimate_extrinsics) return std::nullopt;
@@ -496,10 +506,13 @@ int RunMain(int argc, const char* const* argv) {
   fs::path drive_dir;
   if (std::optional<int> exit = ObtainDrive(args, tty, remove_sim, &drive_dir)) return *exit;
   std::unique_ptr<DriveReader> input;
-  std::string extrinsics_json;
-  if (std::optional<int> exit = OpenInput(args, drive_dir, &config, &input, &extrinsics_json)) {
+  std::string extrinsics_json, imu_noise;
+  if (std::optional<int> exit =
+          OpenInput(args, drive_dir, &config, &input, &extrinsics_json, &imu_noise)) {
     return *exit;
   }
+  std::printf("IMU noise: %s\n", imu_noise.empty() ? "the filter's defaults (the input states none)"
+                                                   : imu_noise.c_str());
   const DriveReader& reader = *input;
   const MappingSystem::Options& options = config.system;
 
@@ -543,7 +556,7 @@ int RunMain(int argc, const char* const* argv) {
   ReportInput rin{args,         reader,          drive_dir,  simulated_input,
                   gt_dir,       gt_kind,         first_scan, duration_s,
                   options_json, extrinsics_json, geo,        options.num_threads,
-                  stopped,      warnings};
+                  stopped,      warnings,        imu_noise};
   EvaluateAndReport(rin, &runs, &*checkpoint, remove_sim, &fatal);
   const auto [out_bytes, out_files] = DiskUse(args.out_dir);
   std::printf("outputs in %s (%zu files, %.0f MB)\n", args.out_dir.c_str(), out_files,

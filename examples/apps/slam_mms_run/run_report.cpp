@@ -168,6 +168,7 @@ void EvaluateAndReport(const ReportInput& in, std::vector<ModeRun>* runs_out,
                       : !in.args.rosbag.empty() ? "rosbag"
                                                 : "kitti_raw";
   report.input.scans_total = static_cast<int64_t>(in.reader.NumScans());
+  report.input.imu_noise = in.imu_noise;
   // The skipped scans are the reader's, the same for every method: the first run's list.
   if (!runs.empty()) {
     for (const std::string& entry : runs.front().skipped_scans) {

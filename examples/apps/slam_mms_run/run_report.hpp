@@ -38,6 +38,7 @@ struct ReportInput {
   int num_threads = 1;
   bool stopped = false;  ///< A signal stopped the run.
   const std::vector<std::string>& warnings;
+  const std::string& imu_noise;  ///< Where the IMU noise model came from; empty: the defaults.
 };
 
 /// Ground truth, metrics, plots, summary (printed), report.json and report.html; `before_outputs`

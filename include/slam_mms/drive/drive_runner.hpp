@@ -110,6 +110,12 @@ struct DriveRunCallbacks {
   std::function<void(const MappingSystem& system, int submaps_finished)> on_submap;
 };
 
+/// `options` with the IMU noise `streams` state (MappingSystem::Options::SetImuNoise) where
+/// they state one and options.use_stated_imu_noise is on; else `options` unchanged. RunDrive,
+/// ComputeOfflinePos and CalibrateDriveExtrinsics apply it themselves.
+MappingSystem::Options ApplyInputImuNoise(const MappingSystem::Options& options,
+                                          const DriveStreams& streams);
+
 /// Runs `options.mode` over `reader`. options.T_body_lidar is used as given (set it from
 /// reader.streams().T_body_lidar); an options error is returned in DriveRun::status.
 /// kGnssInsSmoothed and `run_options.pos` = kSmoothed need IMU, GNSS and an initial attitude

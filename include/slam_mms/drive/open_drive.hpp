@@ -43,6 +43,10 @@ struct DriveSourceOptions {
   /// only where it gives one, and a nonzero lidar_time_offset_s moves the scan stamps onto the
   /// IMU clock.
   std::filesystem::path extrinsics;
+  /// An IMU noise file (io/imu_noise_yaml.hpp); empty = none. Replaces the input's own
+  /// (DriveStreams::imu_noise) for every kind through OverrideImuNoise: how a bag, which holds
+  /// none, or a KITTI drive gets its IMU's datasheet.
+  std::filesystem::path imu_noise;
 };
 
 /// The kind kAuto would pick for `path` (kKittiRaw where nothing else fits).
@@ -60,6 +64,12 @@ std::unique_ptr<DriveReader> OverrideExtrinsics(std::unique_ptr<DriveReader> bas
 /// The same over a `base` the caller keeps (it must outlive the returned reader).
 std::unique_ptr<DriveReader> OverrideExtrinsics(const DriveReader& base,
                                                 const DriveExtrinsics& extrinsics);
+
+/// `base` with streams().imu_noise = imu_noise and imu_noise_source = source; everything else
+/// forwarded to `base`, which the returned reader owns.
+std::unique_ptr<DriveReader> OverrideImuNoise(std::unique_ptr<DriveReader> base,
+                                              const ImuNoiseSpec& imu_noise,
+                                              const std::string& source);
 
 [[nodiscard]] StatusOr<std::unique_ptr<DriveReader>> OpenDrive(const std::filesystem::path& path,
                                                                const DriveSourceOptions& options);

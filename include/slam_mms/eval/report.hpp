@@ -62,6 +62,8 @@ struct ReportInput {
   /// "simulator", "oxts" or "none" (a folder or bag without ground truth: metrics are null).
   std::string ground_truth = "simulator";
   std::vector<SkippedScan> skipped_scans;
+  /// Where the IMU noise model came from (an imu_noise.yaml); empty: the filter's defaults (null).
+  std::string imu_noise;
 };
 
 /// One method's numbers; nullopt is written as null.

@@ -18,6 +18,7 @@
 #include <Eigen/Geometry>
 #include <vector>
 
+#include "slam_mms/core/imu_noise.hpp"
 #include "slam_mms/core/sensor_data.hpp"
 #include "slam_mms/core/status.hpp"
 #include "slam_mms/core/timestamp.hpp"
@@ -44,6 +45,9 @@ class ImuPreintegration {
     double max_sample_dt_s = 0.6;            ///< Longest accepted interval of one sample [s].
 
     [[nodiscard]] Status Validate() const;
+    /// The four densities from a datasheet (a validated spec; bias random walks from instability
+    /// and correlation time).
+    void SetImuNoise(const ImuNoiseSpec& spec);
   };
 
   ImuPreintegration();

@@ -45,6 +45,7 @@
 #include <optional>
 #include <vector>
 
+#include "slam_mms/core/imu_noise.hpp"
 #include "slam_mms/core/sensor_data.hpp"
 #include "slam_mms/core/status.hpp"
 #include "slam_mms/core/timestamp.hpp"
@@ -134,6 +135,10 @@ class InsFilter {
     bool record_steps = false;
 
     [[nodiscard]] Status Validate() const;
+    /// The IMU noise model from a datasheet (a validated spec): the four densities (bias random
+    /// walks from instability and correlation time) and the initial bias sigmas (turn-on and
+    /// instability). The filter's defaults are an IMU of unknown grade.
+    void SetImuNoise(const ImuNoiseSpec& spec);
   };
 
   /// Default options.

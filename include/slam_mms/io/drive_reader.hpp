@@ -27,6 +27,7 @@
 #include <string>
 #include <vector>
 
+#include "slam_mms/core/imu_noise.hpp"
 #include "slam_mms/core/sensor_data.hpp"
 #include "slam_mms/core/status.hpp"
 #include "slam_mms/core/timestamp.hpp"
@@ -64,6 +65,12 @@ struct DriveStreams {
   /// (KITTI: the OXTS RT3003's specification; a folder: initial_state.csv's sigma columns); the
   /// POS starts with them (MappingSystem::InitializePos). Empty: the filter's init sigmas.
   std::optional<Eigen::Vector3d> initial_attitude_sigma_rpy_rad;
+  /// The IMU's noise as the input states it (the drive folder's imu_noise.yaml, see
+  /// io/imu_noise_yaml.hpp); RunDrive models the IMU with it (MappingSystem::Options::
+  /// SetImuNoise) unless DriveRunOptions::use_stated_imu_noise is off. Empty: not stated (KITTI's
+  /// own drives), the filter's defaults.
+  std::optional<ImuNoiseSpec> imu_noise;
+  std::string imu_noise_source;  ///< The file it came from.
   Eigen::Isometry3d T_body_lidar = Eigen::Isometry3d::Identity();
   /// GNSS antenna lever arm in body [m] where the input gives one.
   std::optional<Eigen::Vector3d> t_body_antenna_m;

@@ -80,7 +80,16 @@ class MappingSystem {
     /// of level 1 (de-skew, range image, ICP, window solve, surfel update, CPU render, background
     /// submap clouds), level 2's solve and registration, and the final map.
     int num_threads = 2;
+    /// Model the IMU with the noise its input states (DriveStreams::imu_noise) where RunDrive
+    /// and the apps apply an input to these options (ApplyInputImuNoise in drive_runner.hpp);
+    /// false: the ins / localizer.imu densities as set. Hosts that feed a MappingSystem
+    /// themselves call SetImuNoise.
+    bool use_stated_imu_noise = true;
     [[nodiscard]] Status Validate() const;
+    /// The IMU's noise from its datasheet (DriveStreams::imu_noise where the input states it) in
+    /// both places it is modelled: the POS filter (ins) and level 1's preintegration
+    /// (localizer.imu). See InsFilter::Options::SetImuNoise.
+    void SetImuNoise(const ImuNoiseSpec& spec);
   };
 
   /// Validates the options and builds every component.

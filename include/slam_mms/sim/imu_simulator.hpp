@@ -11,8 +11,10 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <optional>
 #include <string>
 
+#include "slam_mms/core/imu_noise.hpp"
 #include "slam_mms/core/sensor_data.hpp"
 #include "slam_mms/core/status.hpp"
 #include "slam_mms/sim/reference_trajectory.hpp"
@@ -41,6 +43,9 @@ class ImuSimulator {
     /// The presets (default-constructed Options are the tactical, RT3003-like grade).
     static Options ForGrade(ImuGrade grade);
     [[nodiscard]] Status Validate() const;
+    /// This IMU's datasheet (what DriveSimulator writes to imu_noise.yaml); empty for an IMU
+    /// without white noise or bias drift (the perfect grade), which no datasheet describes.
+    std::optional<ImuNoiseSpec> NoiseSpec() const;
   };
 
   ImuSimulator(const Options& options, uint64_t seed);

@@ -54,7 +54,8 @@ def test_manual_feed_equals_run_drive(sim_drive):
     options.T_body_lidar = reader.T_body_lidar
     streams = reader.streams
     assert streams.imu_noise is not None  # the simulator states its IMU (imu_noise.yaml)
-    options.set_imu_noise(streams.imu_noise)  # as run_drive does
+    if options.use_stated_imu_noise:  # as run_drive does (off by default)
+        options.set_imu_noise(streams.imu_noise)
     system = slam_mms.MappingSystem(options)
     system.initialize_pos(streams.initial_state, streams.initial_attitude_sigma_rpy_rad)
     imu, gnss = streams.imu_samples, streams.gnss_fixes

@@ -316,7 +316,7 @@ TEST_F(DriveRunnerTest, SmoothedPosInAnOutageBeatsTheForwardOneAndFullRunsOnIt) 
 }
 
 // The simulated drive states its IMU's datasheet (imu_noise.yaml); RunDrive models the IMU with it
-// unless use_stated_imu_noise is off, and the result differs from the defaults'.
+// where use_stated_imu_noise is on, and the result differs from the defaults'.
 TEST_F(DriveRunnerTest, StatedImuNoiseIsAppliedUnlessSwitchedOff) {
   auto reader = Open(sim_->drive_dir);
   ASSERT_NE(reader, nullptr);
@@ -324,6 +324,8 @@ TEST_F(DriveRunnerTest, StatedImuNoiseIsAppliedUnlessSwitchedOff) {
   ASSERT_TRUE(in.imu_noise.has_value());
   EXPECT_EQ(in.imu_noise_source, (sim_->drive_dir / "imu_noise.yaml").string());
   MappingSystem::Options options = OptionsFor(MappingMode::kGnssIns, *reader);
+  EXPECT_FALSE(options.use_stated_imu_noise);  // off by default (docs/ins.md)
+  options.use_stated_imu_noise = true;
   const MappingSystem::Options applied = ApplyInputImuNoise(options, in);
   EXPECT_EQ(applied.ins.gyro_noise_density, in.imu_noise->gyro_noise_density);
   EXPECT_EQ(applied.localizer.imu.accel_bias_random_walk, in.imu_noise->AccelBiasRandomWalk());

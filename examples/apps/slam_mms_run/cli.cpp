@@ -100,8 +100,9 @@ Options:
   --imu-noise FILE        the IMU's noise from its datasheet (imu_noise.yaml format: angle and
                           velocity random walk, bias instability and correlation time; see
                           docs/drive_folder.md) for the POS filter and level 1's preintegration,
-                          over the input's own imu_noise.yaml. Without either: the filter's
-                          defaults, an IMU of unknown grade (config use_stated_imu_noise).
+                          over the input's own imu_noise.yaml (used where config
+                          use_stated_imu_noise is on; --imu-noise turns it on). Otherwise the
+                          filter's defaults, an IMU of unknown grade.
   --calibrate-extrinsics  estimate the LiDAR boresight, lever arm and clock offset from the drive
                           against the offline POS first, write DIR/calib_imu_to_velo_estimated.txt
                           and report.json "extrinsics", and run with the estimate (config key

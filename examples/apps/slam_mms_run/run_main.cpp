@@ -370,6 +370,8 @@ std::optional<int> PrepareOptions(const RunArgs& args, RunConfig* config, std::s
     const Status s = ApplyConfigFile(args.config, config);
     if (!s.ok()) return Fail(s, kExitUsage);
   }
+  // --imu-noise asks for the IMU to be modelled with it (and so with the input's own otherwise).
+  if (!args.imu_noise.empty()) options.use_stated_imu_noise = true;
   if (!args.dump_config.empty()) {
     const Status s = WriteConfigFile(*config, args.dump_config);
     if (!s.ok()) return Fail(s, kExitUsage);
@@ -436,10 +438,6 @@ std::optional<int> OpenInput(const RunArgs& args, const fs::path& drive_dir, Run
   options.gnss_outages = args.gnss_outages;
   // The IMU's noise: --imu-noise (the reader's, OpenDrive), else the input's imu_noise.yaml;
   // RunDrive applies it. Else the filter's defaults.
-  if (!args.imu_noise.empty() && !options.use_stated_imu_noise) {
-    return Fail(InvalidArgumentError("--imu-noise is ignored with use_stated_imu_noise: false"),
-                kExitUsage);
-  }
   const DriveStreams& streams = (*input)->streams();
   if (options.use_stated_imu_noise && streams.imu_noise) *imu_noise = streams.imu_noise_source;
   const Status valid = options.Validate();

@@ -67,8 +67,8 @@ struct DriveStreams {
   std::optional<Eigen::Vector3d> initial_attitude_sigma_rpy_rad;
   /// The IMU's noise as the input states it (the drive folder's imu_noise.yaml, see
   /// io/imu_noise_yaml.hpp); RunDrive models the IMU with it (MappingSystem::Options::
-  /// SetImuNoise) unless DriveRunOptions::use_stated_imu_noise is off. Empty: not stated (KITTI's
-  /// own drives), the filter's defaults.
+  /// SetImuNoise) where MappingSystem::Options::use_stated_imu_noise is on. Empty: not stated
+  /// (KITTI's own drives), the filter's defaults.
   std::optional<ImuNoiseSpec> imu_noise;
   std::string imu_noise_source;  ///< The file it came from.
   Eigen::Isometry3d T_body_lidar = Eigen::Isometry3d::Identity();

@@ -114,6 +114,7 @@ Status CityWorld::Impl::Commit() {
   if (!mesh.mean_free_path_m.empty() && mesh.mean_free_path_m.size() != mesh.triangles.size()) {
     return InvalidArgumentError("CityWorld: mean_free_path_m must be empty or one per triangle");
   }
+  texture_seed = MixSeed(options.seed, 0x7E47);
   has_volumes = false;
   for (float m : mesh.mean_free_path_m) has_volumes = has_volumes || m > 0.f;
   for (const auto& t : mesh.triangles) {
@@ -341,11 +342,11 @@ void CityWorld::Impl::FinishHit(const Eigen::Vector3f& o, const Eigen::Vector3f&
   const double rms = RoughnessRms(h->surface);
   if (rms > 0.0) {
     // Surface displaced by height z(p) along its normal: the ray meets it dr = -z / |cos| from
-    // the flat hit (fixed-point iterations on z at the moved point, clamped at grazing angles).
+    // the flat hit (two fixed-point steps on z at the moved point, clamped at grazing angles).
     const double cos_inc = std::max(0.05, static_cast<double>(std::abs(ng.dot(d))));
     const Eigen::Vector3d p0 = (o + d * t).cast<double>(), dd = d.cast<double>();
     double dr = 0.0;
-    for (int it = 0; it < 3; ++it) {
+    for (int it = 0; it < 2; ++it) {
       const Eigen::Vector3d p = p0 + dd * dr;
       dr = -rms * Texture(p.x(), p.y()) / cos_inc;
     }
@@ -401,8 +402,8 @@ double CityWorld::Impl::Texture(double x, double y) const {
   // unit-variance lattice values the interpolated variance averages (26/35)^2 per octave.
   static constexpr double kCell[3] = {0.4, 0.2, 0.1};
   static constexpr double kAmp[3] = {1.0, 0.6, 0.35};
-  const double norm = (26.0 / 35.0) * std::sqrt(1.0 + 0.36 + 0.1225);
-  const uint64_t seed = MixSeed(options.seed, 0x7E47);
+  static const double norm = (26.0 / 35.0) * std::sqrt(1.0 + 0.36 + 0.1225);
+  const uint64_t seed = texture_seed;
   double z = 0.0;
   for (int oct = 0; oct < 3; ++oct) {
     const double gx = x / kCell[oct], gy = y / kCell[oct];

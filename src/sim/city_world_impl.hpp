@@ -21,7 +21,8 @@ struct CityWorld::Impl {
   bool has_path = false;
   PathIndex path;
 
-  bool has_volumes = false;  ///< Some triangle has mean_free_path_m > 0.
+  bool has_volumes = false;   ///< Some triangle has mean_free_path_m > 0.
+  uint64_t texture_seed = 0;  ///< Seed of the roughness texture (from options.seed, in Commit).
 
   RTCDevice device = nullptr;
   RTCScene scene = nullptr;

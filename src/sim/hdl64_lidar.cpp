@@ -21,15 +21,20 @@ double HashNormal(uint64_t key) {
   return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
 }
 
-// A range neighbour (next firing of the ring, or the next ring at the same firing) with a return
-// farther than the depth-edge threshold away.
-bool IsDepthEdgeImpl(const std::vector<float>& r, int nb, int nf, int b, int f, double threshold) {
-  const float r0 = r[static_cast<size_t>(b) * nf + f];
-  const double limit = threshold + 0.02 * r0;
+// A depth edge beside (b, f): a neighbour (the ring's previous or next firing, or the previous
+// or next ring at the same firing) whose range differs by more than threshold + 2 % of the range
+// and whose point lies off this point's tangent plane by more than 0.1 m + 0.5 % of the range
+// (so that a smooth surface seen at a slant, like the ground between rings, is no edge).
+bool IsDepthEdge(const std::vector<float>& r, const std::vector<Eigen::Vector3f>& p,
+                 const std::vector<Eigen::Vector3f>& n, int nb, int nf, int b, int f,
+                 double threshold) {
+  const size_t i0 = static_cast<size_t>(b) * nf + f;
+  const float r0 = r[i0];
+  const double limit = threshold + 0.02 * r0, plane = 0.1 + 0.005 * r0;
   auto differs = [&](int bb, int ff) {
     if (bb < 0 || bb >= nb || ff < 0 || ff >= nf) return false;
-    const float rn = r[static_cast<size_t>(bb) * nf + ff];
-    return rn > 0.f && std::abs(rn - r0) > limit;
+    const size_t i = static_cast<size_t>(bb) * nf + ff;
+    return r[i] > 0.f && std::abs(r[i] - r0) > limit && std::abs(n[i0].dot(p[i] - p[i0])) > plane;
   };
   return differs(b, f - 1) || differs(b, f + 1) || differs(b - 1, f) || differs(b + 1, f);
 }
@@ -43,11 +48,6 @@ struct Hdl64Lidar::Echo {
   double cos_inc;
   SurfaceClass surface;
 };
-
-bool Hdl64Lidar::IsDepthEdge(const std::vector<float>& hit_range, int nb, int nf, int b,
-                             int f) const {
-  return IsDepthEdgeImpl(hit_range, nb, nf, b, f, options_.mixed_pixel_edge_threshold_m);
-}
 
 void Hdl64Lidar::MergeEchoes(Echo* echoes, int n, int num_samples, double max_separation_m,
                              double* range, double* shaded, SurfaceClass* surface) {
@@ -208,8 +208,9 @@ Hdl64Lidar::Output Hdl64Lidar::Simulate(const CityWorld& world,
   // return). Pass 2: mixed pixels, calibration residuals, noise, dropouts -> range (< 0 = none).
   const size_t total = static_cast<size_t>(nb) * nf;
   std::vector<float> hit_range(total, -1.f), hit_cos(total, 0.f), hit_albedo(total, 0.f);
+  std::vector<uint8_t> hit_volume(total, 0);  // a return from inside a scattering volume
   std::vector<float> range(total, -1.f), refl(total, 0.f);
-  std::vector<Eigen::Vector3f> p_world(total);
+  std::vector<Eigen::Vector3f> p_world(total), n_world(total);
   std::vector<SurfaceClass> surf(total, SurfaceClass::kOther);
   const uint64_t scan_key = MixSeed(seed, 0x11DA5 + static_cast<uint64_t>(scan_index));
   auto ray_key = [&](int b, int f) {
@@ -254,7 +255,9 @@ Hdl64Lidar::Output Hdl64Lidar::Simulate(const CityWorld& world,
         hit_range[idx] = h.range_m;
         hit_cos[idx] = cos_inc;
         hit_albedo[idx] = h.albedo;
+        hit_volume[idx] = h.volume_return ? 1 : 0;
         p_world[idx] = o + dirs[b] * h.range_m;
+        n_world[idx] = h.normal_world;
         surf[idx] = h.surface;
       }
     }
@@ -273,7 +276,11 @@ Hdl64Lidar::Output Hdl64Lidar::Simulate(const CityWorld& world,
         double r_true = hit_range[idx];
         if (r_true < 0.0) continue;
         double shaded = hit_albedo[idx] * (0.3 + 0.7 * hit_cos[idx]);
-        if (divergence && IsDepthEdge(hit_range, nb, nf, b, f)) {
+        // A return from inside a scattering volume is already one draw of its depth distribution:
+        // its footprint is not resampled (edges of the volume are, from the pixels beside it).
+        if (divergence && hit_volume[idx] == 0 &&
+            IsDepthEdge(hit_range, p_world, n_world, nb, nf, b, f,
+                        options_.mixed_pixel_edge_threshold_m)) {
           // Sample the footprint: centre (pass 1) and a hexagon at 2/3 of its radius.
           if (pose_f != f) {
             T_world_lidar = trajectory.Pose(t_start_s + f * firing_dt) * T_body_lidar;

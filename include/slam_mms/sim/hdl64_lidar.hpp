@@ -19,7 +19,8 @@
 //   range reads (1 + range_scale) r + range_offset. The 4 x num_beams residuals are drawn from the
 //   `seed` passed to Simulate (not the scan index), so they are fixed for a drive (LaserErrors).
 // - Beam divergence (beam_divergence_rad > 0): where a return's range differs from a neighbour's
-//   (same ring, next firing, or same firing, next ring) by more than a depth-edge threshold, the
+//   (same ring, next firing, or same firing, next ring) by more than a depth-edge threshold and
+//   the neighbour lies off the return's tangent plane (see mixed_pixel_edge_threshold_m), the
 //   footprint is sampled with 7 sub-rays (centre and a hexagon at 2/3 of the footprint radius)
 //   and the echoes are merged: within mixed_pixel_max_separation_m of each other the range is their
 //   energy-weighted mean (albedo |cos| / r^2), a mixed pixel between foreground and background;
@@ -70,7 +71,8 @@ class Hdl64Lidar {
     double beam_divergence_rad = 0.0;
     /// Echoes of one footprint closer than this in range merge into one return [m].
     double mixed_pixel_max_separation_m = 5.0;
-    /// A neighbour farther than this in range (plus 2 % of the range) marks a depth edge [m].
+    /// A neighbour farther than this in range (plus 2 % of the range) and off the tangent plane by
+    /// more than 0.1 m + 0.5 % of the range marks a depth edge [m].
     double mixed_pixel_edge_threshold_m = 0.3;
 
     /// The values docs/simulator.md gives for a factory-calibrated HDL-64E: per-laser residuals
@@ -115,7 +117,6 @@ class Hdl64Lidar {
 
  private:
   struct Echo;
-  bool IsDepthEdge(const std::vector<float>& hit_range, int nb, int nf, int b, int f) const;
   static void MergeEchoes(Echo* echoes, int n, int num_samples, double max_separation_m,
                           double* range, double* shaded, SurfaceClass* surface);
 

@@ -114,7 +114,18 @@ Status CityWorld::Impl::Commit() {
   if (!mesh.mean_free_path_m.empty() && mesh.mean_free_path_m.size() != mesh.triangles.size()) {
     return InvalidArgumentError("CityWorld: mean_free_path_m must be empty or one per triangle");
   }
-  texture_seed = MixSeed(options.seed, 0x7E47);
+  texture.clear();
+  if (options.road_roughness_rms_m > 0.0 || options.sidewalk_roughness_rms_m > 0.0 ||
+      options.terrain_roughness_rms_m > 0.0) {
+    // Lattice values uniform in [-sqrt(3), sqrt(3)] (unit variance), three octaves.
+    texture.resize(3 * kTextureSize * kTextureSize);
+    const uint64_t seed = MixSeed(options.seed, 0x7E47);
+    for (size_t k = 0; k < texture.size(); ++k) {
+      texture[k] = static_cast<float>(
+          (static_cast<double>(MixSeed(seed, k) >> 11) * (1.0 / 9007199254740992.0) * 2.0 - 1.0) *
+          std::sqrt(3.0));
+    }
+  }
   has_volumes = false;
   for (float m : mesh.mean_free_path_m) has_volumes = has_volumes || m > 0.f;
   for (const auto& t : mesh.triangles) {
@@ -387,34 +398,29 @@ double KeyUniform(uint64_t key, uint64_t stream) {
   return (static_cast<double>(MixSeed(key, stream) >> 11) + 0.5) * (1.0 / 9007199254740992.0);
 }
 
-// Lattice value in [-sqrt(3), sqrt(3)] (unit variance) for cell (i, j) of octave `oct`.
-double LatticeValue(uint64_t seed, int oct, int64_t i, int64_t j) {
-  const uint64_t k = MixSeed(
-      seed ^ (static_cast<uint64_t>(oct) << 56),
-      static_cast<uint64_t>(i) * 0x9E3779B1ULL ^ static_cast<uint64_t>(j) * 0x85EBCA77C2B2AE63ULL);
-  return (static_cast<double>(k >> 11) * (1.0 / 9007199254740992.0) * 2.0 - 1.0) * std::sqrt(3.0);
-}
-
 }  // namespace
 
 double CityWorld::Impl::Texture(double x, double y) const {
-  // Octaves of smoothstep-interpolated value noise, lattice 0.4 / 0.2 / 0.1 m. With independent
-  // unit-variance lattice values the interpolated variance averages (26/35)^2 per octave.
+  // Octaves of smoothstep-interpolated value noise, lattice 0.4 / 0.2 / 0.1 m, each from its own
+  // table of kTextureSize^2 lattice values (periods of 102, 51 and 26 m, never aligned). With
+  // independent unit-variance lattice values the interpolated variance averages (26/35)^2.
   static constexpr double kCell[3] = {0.4, 0.2, 0.1};
   static constexpr double kAmp[3] = {1.0, 0.6, 0.35};
   static const double norm = (26.0 / 35.0) * std::sqrt(1.0 + 0.36 + 0.1225);
-  const uint64_t seed = texture_seed;
+  constexpr int64_t kMask = kTextureSize - 1;
   double z = 0.0;
   for (int oct = 0; oct < 3; ++oct) {
+    const float* table = texture.data() + oct * kTextureSize * kTextureSize;
     const double gx = x / kCell[oct], gy = y / kCell[oct];
     const double fx = std::floor(gx), fy = std::floor(gy);
     const int64_t i = static_cast<int64_t>(fx), j = static_cast<int64_t>(fy);
     double tx = gx - fx, ty = gy - fy;
     tx = tx * tx * (3.0 - 2.0 * tx);
     ty = ty * ty * (3.0 - 2.0 * ty);
-    const double v00 = LatticeValue(seed, oct, i, j), v10 = LatticeValue(seed, oct, i + 1, j);
-    const double v01 = LatticeValue(seed, oct, i, j + 1);
-    const double v11 = LatticeValue(seed, oct, i + 1, j + 1);
+    const int64_t i0 = i & kMask, i1 = (i + 1) & kMask;
+    const int64_t j0 = (j & kMask) * kTextureSize, j1 = ((j + 1) & kMask) * kTextureSize;
+    const double v00 = table[j0 + i0], v10 = table[j0 + i1];
+    const double v01 = table[j1 + i0], v11 = table[j1 + i1];
     z += kAmp[oct] * ((v00 * (1 - tx) + v10 * tx) * (1 - ty) + (v01 * (1 - tx) + v11 * tx) * ty);
   }
   return z / norm;

@@ -21,8 +21,10 @@ struct CityWorld::Impl {
   bool has_path = false;
   PathIndex path;
 
-  bool has_volumes = false;   ///< Some triangle has mean_free_path_m > 0.
-  uint64_t texture_seed = 0;  ///< Seed of the roughness texture (from options.seed, in Commit).
+  bool has_volumes = false;  ///< Some triangle has mean_free_path_m > 0.
+  /// Roughness lattice values, 3 octaves of kTextureSize^2 (filled in Commit where rough).
+  static constexpr int64_t kTextureSize = 256;
+  std::vector<float> texture;
 
   RTCDevice device = nullptr;
   RTCScene scene = nullptr;

@@ -321,6 +321,37 @@ TEST(GroundRoughnessTest, ScansSeeTheRoughSurface) {
   EXPECT_LT(miss[miss.size() / 2], 1e-3);  // the points lie on the textured surface
 }
 
+TEST(RealismOptionsTest, AllModelsOnIndependentOfThreadsAndDifferentFromOff) {
+  DriveSimulator::Options o;
+  o.scenario = "demo";
+  o.duration_s = 10.0;
+  o.world.volumetric_vegetation = true;
+  o.world.EnableGroundRoughness();
+  auto sim = DriveSimulator::Create(o);
+  ASSERT_TRUE(sim.ok()) << sim.status().ToString();
+  Hdl64Lidar::Options lo;
+  lo.EnableLaserIntrinsicErrors();
+  lo.beam_divergence_rad = 2e-3;
+  const Hdl64Lidar lidar(lo);
+  const Eigen::Isometry3d T_body_lidar = KittiTLidarBody().inverse();
+  const double t = sim->first_scan_s() + 3.0;
+  const auto a = lidar.Simulate(sim->world(), sim->trajectory(), T_body_lidar, t, 30, 9, 1);
+  const auto b = lidar.Simulate(sim->world(), sim->trajectory(), T_body_lidar, t, 30, 9, 3);
+  ASSERT_EQ(a.scan.cloud.size(), b.scan.cloud.size());
+  ASSERT_GT(a.scan.cloud.size(), 50000u);
+  for (size_t i = 0; i < a.scan.cloud.size(); ++i) {
+    ASSERT_EQ(a.scan.cloud.points()[i], b.scan.cloud.points()[i]) << i;
+    ASSERT_EQ(a.scan.cloud.intensities()[i], b.scan.cloud.intensities()[i]) << i;
+  }
+  // The models change the scan: foliage returns inside crowns, other ranges.
+  const auto off =
+      Hdl64Lidar().Simulate(sim->world(), sim->trajectory(), T_body_lidar, t, 30, 9, 2);
+  size_t same = 0;
+  for (size_t i = 0; i < std::min(off.scan.cloud.size(), a.scan.cloud.size()); ++i)
+    same += off.scan.cloud.points()[i] == a.scan.cloud.points()[i] ? 1 : 0;
+  EXPECT_LT(same, a.scan.cloud.size() / 10);
+}
+
 TEST(RealismOptionsTest, ValidateNamesTheField) {
   Hdl64Lidar::Options l;
   l.beam_divergence_rad = -1.0;

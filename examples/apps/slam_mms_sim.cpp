@@ -26,6 +26,8 @@
 //   --ground-roughness                 road 5 mm, sidewalk/curb 8 mm, terrain 3 cm RMS texture
 //   --volumetric-vegetation            tree crowns and hedges as scattering volumes
 //   --realism                          all four of the above (divergence 2 mrad)
+//   --max-range M                      LiDAR range limit [m] (default 120; KITTI's scans end near
+//   80)
 //   --threads N (default 2)  --no-scene-cloud  --scene-voxel M  --drive-id N  --date YYYY_MM_DD
 // --oxts also accepts a KITTI OXTS archive <drive>_sync.tar.gz (unpacked with `tar` to a temp dir).
 #include <CLI/CLI.hpp>
@@ -62,6 +64,7 @@ int Usage(const std::string& error) {
          "       [--drive-id N] [--date YYYY_MM_DD]\n"
          "       [--laser-intrinsics] [--beam-divergence-mrad D] [--ground-roughness]\n"
          "       [--volumetric-vegetation] [--realism]   (realism models, off by default)\n"
+         "       [--max-range M]   (LiDAR range limit, default 120 m)\n"
          "       [--calib-error-rpy-deg R,P,Y] [--calib-error-xyz-m X,Y,Z] "
          "[--lidar-time-offset-s T]\n"
          "         (a wrong calib_imu_to_velo.txt and a LiDAR clock T s behind the IMU's, on "
@@ -150,6 +153,7 @@ int main(int argc, char** argv) {
   app.add_flag("--ground-roughness", ground_roughness);
   app.add_flag("--volumetric-vegetation", o.world.volumetric_vegetation);
   app.add_flag("--realism", realism);
+  app.add_option("--max-range", o.lidar.max_range_m);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

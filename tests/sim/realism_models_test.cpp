@@ -4,12 +4,16 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <random>
 
+#include "sim/random.hpp"  // the simulator's seed derivation (MixSeed(seed, 50) for the LiDAR)
 #include "slam_mms/sim/city_world.hpp"
 #include "slam_mms/sim/drive_simulator.hpp"
 #include "slam_mms/sim/hdl64_lidar.hpp"
+#include "testing/test_data.hpp"
 
 namespace slam_mms::sim {
 namespace {
@@ -74,6 +78,42 @@ TEST(LaserIntrinsicsTest, FixedForASeedWithTheStatedSpread) {
   EXPECT_NEAR(Std(az), 0.03, 0.006);
   EXPECT_NEAR(Std(off), 0.02, 0.004);
   EXPECT_NEAR(Std(sc), 1e-3, 2e-4);
+}
+
+TEST(LaserIntrinsicsTest, TheDrivesResidualsAreInScenarioJson) {
+  const testing::ScopedTempDir dir("sim_laser_errors");
+  DriveSimulator::Options o;
+  o.scenario = "demo";
+  o.duration_s = 0.2;
+  o.write_scene_cloud = false;
+  o.lidar.EnableLaserIntrinsicErrors();
+  auto sim = DriveSimulator::Create(o);
+  ASSERT_TRUE(sim.ok()) << sim.status().ToString();
+  auto summary = sim->Run(dir.path);
+  ASSERT_TRUE(summary.ok()) << summary.status().ToString();
+  std::ifstream f(summary->drive_dir / "ground_truth" / "scenario.json");
+  const nlohmann::json j = nlohmann::json::parse(f);
+  const auto& e = j.at("lidar").at("laser_errors");
+  ASSERT_EQ(e.size(), 64u);
+  // The table the scans were simulated with, and its range offsets have the stated spread.
+  const auto used = Hdl64Lidar(o.lidar).LaserErrors(MixSeed(o.seed, 50));
+  double sum2 = 0.0;
+  for (size_t b = 0; b < e.size(); ++b) {
+    ASSERT_EQ(e[b].size(), 4u);
+    EXPECT_EQ(e[b][0].get<double>(), used[b].elevation_deg);
+    EXPECT_EQ(e[b][2].get<double>(), used[b].range_offset_m);
+    sum2 += e[b][2].get<double>() * e[b][2].get<double>();
+  }
+  EXPECT_NEAR(std::sqrt(sum2 / 64.0), 0.02, 0.008);
+  // Without the model there is no table.
+  o.lidar = Hdl64Lidar::Options();
+  const testing::ScopedTempDir dir2("sim_laser_errors_off");
+  auto off = DriveSimulator::Create(o);
+  ASSERT_TRUE(off.ok());
+  auto s2 = off->Run(dir2.path);
+  ASSERT_TRUE(s2.ok());
+  std::ifstream f2(s2->drive_dir / "ground_truth" / "scenario.json");
+  EXPECT_FALSE(nlohmann::json::parse(f2).at("lidar").contains("laser_errors"));
 }
 
 TEST(LaserIntrinsicsTest, EachLaserMeasuresWithItsOwnResiduals) {

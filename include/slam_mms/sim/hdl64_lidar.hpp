@@ -92,10 +92,13 @@ class Hdl64Lidar {
 
   /// One simulated scan and, for the ground truth, the exact (noise-free) world hits.
   struct Output {
-    Scan scan;                                   ///< Points in the lidar frame, per-point times.
-    std::vector<Eigen::Vector3f> p_world_exact;  ///< Same order as the scan's points.
-    std::vector<SurfaceClass> surfaces;          ///< Same order.
-    std::vector<uint8_t> beams;                  ///< Beam (ring) index of each point, 0 = top.
+    Scan scan;  ///< Points in the lidar frame, per-point times.
+    /// Same order as the scan's points: where the beam's centre ray truly met the scene (inside a
+    /// scattering volume: the return's point there). Not the measurement: calibration residuals,
+    /// noise and mixed-pixel blending move the scan's point away from it.
+    std::vector<Eigen::Vector3f> p_world_exact;
+    std::vector<SurfaceClass> surfaces;  ///< Same order.
+    std::vector<uint8_t> beams;          ///< Beam (ring) index of each point, 0 = top.
   };
 
   Hdl64Lidar();

@@ -19,6 +19,15 @@
 //                                      (each |.| <= 1 m)
 //   --lidar-time-offset-s T            LiDAR clock T s behind the IMU's: the scan stamps written
 //                                      are true - T (|T| <= 0.5; the ground truth stays true)
+// Realism models (all off by default; docs/simulator.md "Realism models"):
+//   --laser-intrinsics                 per-laser calibration residuals of an HDL-64E (0.03 deg
+//                                      elevation and azimuth, 2 cm range offset, 1e-3 scale)
+//   --beam-divergence-mrad D           beam divergence (HDL-64E about 2): mixed pixels at edges
+//   --ground-roughness                 road 5 mm, sidewalk/curb 8 mm, terrain 3 cm RMS texture
+//   --volumetric-vegetation            tree crowns and hedges as scattering volumes
+//   --realism                          all four of the above (divergence 2 mrad)
+//   --max-range M                      LiDAR range limit [m] (default 120; KITTI's scans end near
+//   80)
 //   --threads N (default 2)  --no-scene-cloud  --scene-voxel M  --drive-id N  --date YYYY_MM_DD
 // --oxts also accepts a KITTI OXTS archive <drive>_sync.tar.gz (unpacked with `tar` to a temp dir).
 #include <CLI/CLI.hpp>
@@ -53,6 +62,9 @@ int Usage(const std::string& error) {
          "[--no-scene-cloud] "
          "[--scene-voxel M]\n"
          "       [--drive-id N] [--date YYYY_MM_DD]\n"
+         "       [--laser-intrinsics] [--beam-divergence-mrad D] [--ground-roughness]\n"
+         "       [--volumetric-vegetation] [--realism]   (realism models, off by default)\n"
+         "       [--max-range M]   (LiDAR range limit, default 120 m)\n"
          "       [--calib-error-rpy-deg R,P,Y] [--calib-error-xyz-m X,Y,Z] "
          "[--lidar-time-offset-s T]\n"
          "         (a wrong calib_imu_to_velo.txt and a LiDAR clock T s behind the IMU's, on "
@@ -107,6 +119,8 @@ int main(int argc, char** argv) {
   std::string gnss_quality, origin;
   std::vector<std::string> outages;
   bool help = false, version = false, no_scene_cloud = false;
+  bool laser_intrinsics = false, ground_roughness = false, realism = false;
+  double beam_divergence_mrad = 0.0;
   std::vector<double> calib_error_rpy_deg, calib_error_xyz_m;
   // CLI11: `--flag value` and `--flag=value`; numbers are checked by CLI11 (a bad one: exit 2).
   CLI::App app("slam_mms_sim", "slam_mms_sim");
@@ -134,6 +148,12 @@ int main(int argc, char** argv) {
   app.add_option("--calib-error-rpy-deg", calib_error_rpy_deg)->delimiter(',')->expected(3);
   app.add_option("--calib-error-xyz-m", calib_error_xyz_m)->delimiter(',')->expected(3);
   app.add_option("--lidar-time-offset-s", o.lidar_time_offset_s);
+  app.add_flag("--laser-intrinsics", laser_intrinsics);
+  app.add_option("--beam-divergence-mrad", beam_divergence_mrad);
+  app.add_flag("--ground-roughness", ground_roughness);
+  app.add_flag("--volumetric-vegetation", o.world.volumetric_vegetation);
+  app.add_flag("--realism", realism);
+  app.add_option("--max-range", o.lidar.max_range_m);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -148,6 +168,13 @@ int main(int argc, char** argv) {
     return 0;
   }
   if (no_scene_cloud) o.write_scene_cloud = false;
+  if (realism) {
+    laser_intrinsics = ground_roughness = o.world.volumetric_vegetation = true;
+    if (app.count("--beam-divergence-mrad") == 0) beam_divergence_mrad = 2.0;
+  }
+  if (laser_intrinsics) o.lidar.EnableLaserIntrinsicErrors();
+  if (ground_roughness) o.world.EnableGroundRoughness();
+  o.lidar.beam_divergence_rad = beam_divergence_mrad * 1e-3;
   if (!calib_error_rpy_deg.empty()) {
     o.calib_error_rpy_deg =
         Eigen::Vector3d(calib_error_rpy_deg[0], calib_error_rpy_deg[1], calib_error_rpy_deg[2]);
@@ -204,8 +231,8 @@ int main(int argc, char** argv) {
   const auto& st = sim->world().stats();
   std::cerr << "world: " << st.num_triangles << " triangles, " << st.num_buildings << " buildings, "
             << st.num_trees << " trees, " << st.num_poles << " poles, " << st.num_cars
-            << " parked cars, " << st.num_fences << " fences (" << sim->seconds_world_build()
-            << " s)\n";
+            << " parked cars, " << st.num_fences << " fences, " << st.num_hedges << " hedges ("
+            << sim->seconds_world_build() << " s)\n";
   auto summary = sim->Run(out, [](int done, int total) {
     if (done % 50 == 0 || done == total) std::cerr << "scan " << done << "/" << total << "\n";
   });

@@ -28,7 +28,8 @@ class Generator {
         t_end_(t_end),
         impl_(impl),
         o_(impl->options),
-        rng_(MixSeed(o_.seed, 2)) {}
+        rng_(MixSeed(o_.seed, 2)),
+        veg_rng_(MixSeed(o_.seed, 7)) {}
 
   Status Run() {
     auto samples = SamplePath(traj_, t_begin_, t_end_, o_.body_height_above_road_m);
@@ -37,6 +38,9 @@ class Generator {
     impl_->has_path = true;
     BuildGround();
     BuildObjects();
+    impl_->stats.num_hedges = num_hedges_;
+    if (!impl_->mesh.mean_free_path_m.empty())
+      impl_->mesh.mean_free_path_m.resize(impl_->mesh.triangles.size(), 0.f);
     double length = 0.0;
     for (double t = t_begin_ + 0.1; t <= t_end_; t += 0.1)
       length += (traj_.Pose(t).translation() - traj_.Pose(t - 0.1).translation()).norm();
@@ -332,10 +336,74 @@ class Generator {
       Eigen::Vector3d e2(rng_.Normal(), rng_.Normal(), rng_.Normal());
       e1 = e1.normalized() * 0.35;
       e2 = e2.normalized() * 0.35;
+      // With volumetric vegetation the leaves are still drawn (the same random sequence keeps
+      // the rest of the world unchanged) but the crown is a scattering hull instead.
+      if (o_.volumetric_vegetation) continue;
       m.AddTriangle(p.cast<float>(), (p + e1).cast<float>(), (p + e2).cast<float>(),
                     SurfaceClass::kFoliage, albedo);
     }
+    if (o_.volumetric_vegetation) EmitCrownHull(center, rc, rz, albedo);
     ++impl_->stats.num_trees;
+  }
+
+  // A closed, lumpy ellipsoid (semi-axes rc, rc, rz, each vertex's radius scaled by 0.85-1.15),
+  // wound outward, marked as a scattering volume of the foliage mean free path.
+  void EmitCrownHull(const Eigen::Vector3d& c, double rc, double rz, float albedo) {
+    TriangleMesh& m = impl_->mesh;
+    const size_t first = m.triangles.size();
+    constexpr int kLat = 7, kLon = 14;
+    std::vector<Eigen::Vector3f> v((kLat - 1) * kLon);
+    auto at = [&](int i, int j) -> Eigen::Vector3f& { return v[(i - 1) * kLon + (j % kLon)]; };
+    for (int i = 1; i < kLat; ++i) {
+      const double th = M_PI * i / kLat;
+      for (int j = 0; j < kLon; ++j) {
+        const double ph = 2.0 * M_PI * (j + 0.5 * (i % 2)) / kLon;
+        const double k = veg_rng_.Uniform(0.85, 1.15);
+        at(i, j) = (c + k * Eigen::Vector3d(rc * std::sin(th) * std::cos(ph),
+                                            rc * std::sin(th) * std::sin(ph), rz * std::cos(th)))
+                       .cast<float>();
+      }
+    }
+    const Eigen::Vector3f top =
+        (c + Eigen::Vector3d(0, 0, rz * veg_rng_.Uniform(0.85, 1.15))).cast<float>();
+    const Eigen::Vector3f bottom =
+        (c - Eigen::Vector3d(0, 0, rz * veg_rng_.Uniform(0.85, 1.15))).cast<float>();
+    const Eigen::Vector3f cf = c.cast<float>();
+    auto tri = [&](const Eigen::Vector3f& a, const Eigen::Vector3f& b, const Eigen::Vector3f& d) {
+      const Eigen::Vector3f n = (b - a).cross(d - a);
+      if (n.dot((a + b + d) / 3.f - cf) >= 0.f) {
+        m.AddTriangle(a, b, d, SurfaceClass::kFoliage, albedo);
+      } else {
+        m.AddTriangle(a, d, b, SurfaceClass::kFoliage, albedo);
+      }
+    };
+    for (int j = 0; j < kLon; ++j) {
+      tri(top, at(1, j), at(1, j + 1));
+      tri(bottom, at(kLat - 1, j), at(kLat - 1, j + 1));
+      for (int i = 1; i + 1 < kLat; ++i) {
+        tri(at(i, j), at(i + 1, j), at(i + 1, j + 1));
+        tri(at(i, j), at(i + 1, j + 1), at(i, j + 1));
+      }
+    }
+    m.MarkVolume(first, static_cast<float>(o_.foliage_mean_free_path_m));
+  }
+
+  // A hedge along a -> b on the side `away` points to: a box hull 0.6-1.2 m deep, 0.8-1.8 m high,
+  // a scattering volume of the hedge mean free path. Uses only veg_rng_.
+  void EmitHedge(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& away) {
+    const Eigen::Vector2d d = b - a;
+    const double len = d.norm();
+    if (len < 2.0) return;
+    TriangleMesh& m = impl_->mesh;
+    const size_t first = m.triangles.size();
+    const double depth = veg_rng_.Uniform(0.6, 1.2), h = veg_rng_.Uniform(0.8, 1.8);
+    const Eigen::Vector2d c = (a + b) / 2 + away * (depth / 2);
+    m.AddBox(P3(c, Ground(c) + h / 2 - 0.05), Frame(d / len),
+             Eigen::Vector3f(static_cast<float>(len / 2), static_cast<float>(depth / 2),
+                             static_cast<float>(h / 2 + 0.05)),
+             SurfaceClass::kFoliage, static_cast<float>(veg_rng_.Uniform(0.25, 0.45)));
+    m.MarkVolume(first, static_cast<float>(o_.hedge_mean_free_path_m));
+    ++num_hedges_;
   }
 
   void EmitPole(const Eigen::Vector2d& q, const Eigen::Vector2d& t,
@@ -427,6 +495,8 @@ class Generator {
             if (RectFree((a + b) / 2, p.tangent, length / 2, 0.1, 0.05)) {
               MarkRect((a + b) / 2, p.tangent, length / 2, 0.1);
               EmitFence(a, b);
+              if (o_.volumetric_vegetation && veg_rng_.Bernoulli(o_.hedge_probability))
+                EmitHedge(a + nrm * 0.15, b + nrm * 0.15, nrm);
             }
             TryBuilding(p.p + p.tangent * 2.0, p.tangent, nrm, front + rng_.Uniform(5.0, 9.0),
                         length - 4.0, rng_.Uniform(8.0, 12.0), rng_.Uniform(4.0, 9.0));
@@ -440,6 +510,12 @@ class Generator {
             }
           } else {  // open lot / parking
             length = rng_.Uniform(8.0, 25.0);
+            if (o_.volumetric_vegetation && veg_rng_.Bernoulli(o_.hedge_probability)) {
+              const Eigen::Vector2d a = p.p + nrm * (front + 0.4);
+              if (PointFree(a + nrm * 0.5, 0.2) &&
+                  PointFree(a + nrm * 0.5 + p.tangent * length, 0.2))
+                EmitHedge(a, a + p.tangent * length, nrm);
+            }
           }
           next_lot = p.s + length;
         }
@@ -509,6 +585,8 @@ class Generator {
   CityWorld::Impl* impl_;
   const CityWorld::Options& o_;
   Rng rng_;
+  Rng veg_rng_;  ///< Vegetation details only (the rest of the world does not depend on it).
+  int num_hedges_ = 0;
   std::unordered_set<int64_t> occupied_, furniture_;
   bool check_furniture_ = false;
 };

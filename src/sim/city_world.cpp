@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "sim/city_world_impl.hpp"
+#include "sim/random.hpp"
 
 namespace slam_mms::sim {
 
@@ -78,8 +79,22 @@ void TriangleMesh::AddCylinder(const Eigen::Vector3f& base, float radius, float 
   }
 }
 
+void TriangleMesh::MarkVolume(size_t first_triangle, float mfp) {
+  mean_free_path_m.resize(triangles.size(), 0.f);
+  for (size_t i = first_triangle; i < triangles.size(); ++i) mean_free_path_m[i] = mfp;
+}
+
 void TriangleMesh::Append(const TriangleMesh& o) {
   const int base = static_cast<int>(vertices.size());
+  if (!mean_free_path_m.empty() || !o.mean_free_path_m.empty()) {
+    mean_free_path_m.resize(triangles.size(), 0.f);
+    if (o.mean_free_path_m.empty()) {
+      mean_free_path_m.resize(triangles.size() + o.triangles.size(), 0.f);
+    } else {
+      mean_free_path_m.insert(mean_free_path_m.end(), o.mean_free_path_m.begin(),
+                              o.mean_free_path_m.end());
+    }
+  }
   vertices.insert(vertices.end(), o.vertices.begin(), o.vertices.end());
   for (const auto& t : o.triangles) triangles.push_back(t + Eigen::Vector3i::Constant(base));
   classes.insert(classes.end(), o.classes.begin(), o.classes.end());
@@ -96,6 +111,23 @@ Status CityWorld::Impl::Commit() {
   if (mesh.classes.size() != mesh.triangles.size() || mesh.albedo.size() != mesh.triangles.size()) {
     return InvalidArgumentError("CityWorld: classes/albedo must have one entry per triangle");
   }
+  if (!mesh.mean_free_path_m.empty() && mesh.mean_free_path_m.size() != mesh.triangles.size()) {
+    return InvalidArgumentError("CityWorld: mean_free_path_m must be empty or one per triangle");
+  }
+  texture.clear();
+  if (options.road_roughness_rms_m > 0.0 || options.sidewalk_roughness_rms_m > 0.0 ||
+      options.terrain_roughness_rms_m > 0.0) {
+    // Lattice values uniform in [-sqrt(3), sqrt(3)] (unit variance), three octaves.
+    texture.resize(3 * kTextureSize * kTextureSize);
+    const uint64_t seed = MixSeed(options.seed, 0x7E47);
+    for (size_t k = 0; k < texture.size(); ++k) {
+      texture[k] = static_cast<float>(
+          (static_cast<double>(MixSeed(seed, k) >> 11) * (1.0 / 9007199254740992.0) * 2.0 - 1.0) *
+          std::sqrt(3.0));
+    }
+  }
+  has_volumes = false;
+  for (float m : mesh.mean_free_path_m) has_volumes = has_volumes || m > 0.f;
   for (const auto& t : mesh.triangles) {
     if (t.minCoeff() < 0 || t.maxCoeff() >= static_cast<int>(mesh.vertices.size())) {
       return InvalidArgumentError("CityWorld: a triangle indexes a missing vertex");
@@ -201,7 +233,25 @@ Status CityWorld::Options::Validate() const {
   if (!(pole_spacing_m >= 5.0)) return fail("pole_spacing_m", pole_spacing_m, "must be >= 5");
   if (!(body_height_above_road_m > 0.0))
     return fail("body_height_above_road_m", body_height_above_road_m, "must be > 0");
+  for (auto [name, r] :
+       {std::pair<const char*, double>{"road_roughness_rms_m", road_roughness_rms_m},
+        {"sidewalk_roughness_rms_m", sidewalk_roughness_rms_m},
+        {"terrain_roughness_rms_m", terrain_roughness_rms_m}}) {
+    if (!(r >= 0.0 && r <= 0.2)) return fail(name, r, "must be in [0, 0.2]");
+  }
+  if (!(foliage_mean_free_path_m > 0.01))
+    return fail("foliage_mean_free_path_m", foliage_mean_free_path_m, "must be > 0.01");
+  if (!(hedge_mean_free_path_m > 0.01))
+    return fail("hedge_mean_free_path_m", hedge_mean_free_path_m, "must be > 0.01");
+  if (!(hedge_probability >= 0.0 && hedge_probability <= 1.0))
+    return fail("hedge_probability", hedge_probability, "must be in [0, 1]");
   return OkStatus();
+}
+
+void CityWorld::Options::EnableGroundRoughness() {
+  road_roughness_rms_m = 0.005;
+  sidewalk_roughness_rms_m = 0.008;
+  terrain_roughness_rms_m = 0.03;
 }
 
 CityWorld::CityWorld(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -228,7 +278,13 @@ StatusOr<CityWorld> CityWorld::Build(const ReferenceTrajectory& trajectory, cons
 }
 
 StatusOr<CityWorld> CityWorld::FromMesh(TriangleMesh mesh) {
+  return FromMesh(std::move(mesh), Options());
+}
+
+StatusOr<CityWorld> CityWorld::FromMesh(TriangleMesh mesh, const Options& options) {
+  SLAM_MMS_RETURN_IF_ERROR(options.Validate());
   auto impl = std::make_unique<Impl>();
+  impl->options = options;
   impl->mesh = std::move(mesh);
   SLAM_MMS_RETURN_IF_ERROR(impl->Commit());
   return CityWorld(std::move(impl));
@@ -268,14 +324,170 @@ void CityWorld::Intersect(const Eigen::Vector3f* origins, const Eigen::Vector3f*
         h = RayHit{};
         continue;
       }
-      h.range_m = rh.ray.tfar[k];
-      Eigen::Vector3f ng(rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]);
-      const float len = ng.norm();
-      ng = len > 0 ? Eigen::Vector3f(ng / len) : Eigen::Vector3f::UnitZ();
-      if (ng.dot(directions[start + k]) > 0.f) ng = -ng;
-      h.normal_world = ng;
-      h.albedo = impl_->ShadeAlbedo(rh.hit.primID[k], rh.hit.u[k], rh.hit.v[k], &h.surface);
+      impl_->FinishHit(origins[start + k], directions[start + k], rh.ray.tfar[k], rh.hit.primID[k],
+                       rh.hit.u[k], rh.hit.v[k],
+                       Eigen::Vector3f(rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]), &h);
     }
+  }
+}
+
+void CityWorld::Impl::FinishHit(const Eigen::Vector3f& o, const Eigen::Vector3f& d, float t,
+                                unsigned prim, float u, float v, Eigen::Vector3f ng,
+                                RayHit* h) const {
+  *h = RayHit{};
+  h->range_m = t;
+  const float len = ng.norm();
+  ng = len > 0 ? Eigen::Vector3f(ng / len) : Eigen::Vector3f::UnitZ();
+  if (ng.dot(d) > 0.f) ng = -ng;
+  h->normal_world = ng;
+  h->albedo = ShadeAlbedo(prim, u, v, &h->surface);
+  if (has_volumes && mesh.mean_free_path_m[prim] > 0.f) {
+    // Hull faces are wound outward: (b - a) x (c - a) points out of the volume.
+    const Eigen::Vector3i& tri = mesh.triangles[prim];
+    const Eigen::Vector3f& a = mesh.vertices[tri(0)];
+    const Eigen::Vector3f n_out = (mesh.vertices[tri(1)] - a).cross(mesh.vertices[tri(2)] - a);
+    h->mean_free_path_m = mesh.mean_free_path_m[prim];
+    h->entering = n_out.dot(d) < 0.f;
+    return;
+  }
+  const double rms = RoughnessRms(h->surface);
+  if (rms > 0.0) {
+    // Surface displaced by height z(p) along its normal: the ray meets it dr = -z / |cos| from
+    // the flat hit (two fixed-point steps on z at the moved point, clamped at grazing angles).
+    const double cos_inc = std::max(0.05, static_cast<double>(std::abs(ng.dot(d))));
+    const Eigen::Vector3d p0 = (o + d * t).cast<double>(), dd = d.cast<double>();
+    double dr = 0.0;
+    for (int it = 0; it < 2; ++it) {
+      const Eigen::Vector3d p = p0 + dd * dr;
+      dr = -rms * Texture(p.x(), p.y()) / cos_inc;
+    }
+    h->range_m = std::max(1e-3f, static_cast<float>(t + dr));
+  }
+}
+
+RayHit CityWorld::Impl::IntersectOne(const Eigen::Vector3f& o, const Eigen::Vector3f& d,
+                                     float tnear, float tfar) const {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  RTCRayHit rh;
+  rh.ray.org_x = o.x();
+  rh.ray.org_y = o.y();
+  rh.ray.org_z = o.z();
+  rh.ray.dir_x = d.x();
+  rh.ray.dir_y = d.y();
+  rh.ray.dir_z = d.z();
+  rh.ray.tnear = tnear;
+  rh.ray.tfar = tfar;
+  rh.ray.time = 0.f;
+  rh.ray.mask = 0xFFFFFFFFu;
+  rh.ray.id = 0;
+  rh.ray.flags = 0;
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  rtcIntersect1(scene, &context, &rh);
+  RayHit h;
+  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return h;
+  FinishHit(o, d, rh.ray.tfar, rh.hit.primID, rh.hit.u, rh.hit.v,
+            Eigen::Vector3f(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z), &h);
+  return h;
+}
+
+namespace {
+
+double KeyUniform(uint64_t key, uint64_t stream) {
+  return (static_cast<double>(MixSeed(key, stream) >> 11) + 0.5) * (1.0 / 9007199254740992.0);
+}
+
+}  // namespace
+
+double CityWorld::Impl::Texture(double x, double y) const {
+  // Octaves of smoothstep-interpolated value noise, lattice 0.4 / 0.2 / 0.1 m, each from its own
+  // table of kTextureSize^2 lattice values (periods of 102, 51 and 26 m, never aligned). With
+  // independent unit-variance lattice values the interpolated variance averages (26/35)^2.
+  static constexpr double kCell[3] = {0.4, 0.2, 0.1};
+  static constexpr double kAmp[3] = {1.0, 0.6, 0.35};
+  static const double norm = (26.0 / 35.0) * std::sqrt(1.0 + 0.36 + 0.1225);
+  constexpr int64_t kMask = kTextureSize - 1;
+  double z = 0.0;
+  for (int oct = 0; oct < 3; ++oct) {
+    const float* table = texture.data() + oct * kTextureSize * kTextureSize;
+    const double gx = x / kCell[oct], gy = y / kCell[oct];
+    const double fx = std::floor(gx), fy = std::floor(gy);
+    const int64_t i = static_cast<int64_t>(fx), j = static_cast<int64_t>(fy);
+    double tx = gx - fx, ty = gy - fy;
+    tx = tx * tx * (3.0 - 2.0 * tx);
+    ty = ty * ty * (3.0 - 2.0 * ty);
+    const int64_t i0 = i & kMask, i1 = (i + 1) & kMask;
+    const int64_t j0 = (j & kMask) * kTextureSize, j1 = ((j + 1) & kMask) * kTextureSize;
+    const double v00 = table[j0 + i0], v10 = table[j0 + i1];
+    const double v01 = table[j1 + i0], v11 = table[j1 + i1];
+    z += kAmp[oct] * ((v00 * (1 - tx) + v10 * tx) * (1 - ty) + (v01 * (1 - tx) + v11 * tx) * ty);
+  }
+  return z / norm;
+}
+
+double CityWorld::Impl::RoughnessRms(SurfaceClass cls) const {
+  switch (cls) {
+    case SurfaceClass::kRoad:
+    case SurfaceClass::kMarking: return options.road_roughness_rms_m;
+    case SurfaceClass::kCurb:
+    case SurfaceClass::kSidewalk: return options.sidewalk_roughness_rms_m;
+    case SurfaceClass::kTerrain: return options.terrain_roughness_rms_m;
+    default: return 0.0;
+  }
+}
+
+double CityWorld::RoughnessHeight(double x, double y, SurfaceClass cls) const {
+  const double rms = impl_->RoughnessRms(cls);
+  return rms > 0.0 ? rms * impl_->Texture(x, y) : 0.0;
+}
+
+void CityWorld::IntersectScattering(const Eigen::Vector3f* origins,
+                                    const Eigen::Vector3f* directions, const uint64_t* keys,
+                                    size_t n, float min_range_m, float max_range_m,
+                                    RayHit* hits) const {
+  Intersect(origins, directions, n, min_range_m, max_range_m, hits);
+  if (!impl_->has_volumes) return;
+  for (size_t i = 0; i < n; ++i) {
+    if (hits[i].mean_free_path_m <= 0.f) continue;
+    const Eigen::Vector3f& o = origins[i];
+    const Eigen::Vector3f& d = directions[i];
+    RayHit h = hits[i];
+    bool resolved = false;
+    // Walk the hull faces along the ray: entering one, the penetration depth is exponential
+    // (Beer-Lambert); a return there, unless the next face or a solid surface comes first.
+    for (int step = 0; step < 16 && h.range_m >= 0.f && h.mean_free_path_m > 0.f; ++step) {
+      const RayHit next = impl_->IntersectOne(o, d, h.range_m + 1e-4f, max_range_m);
+      if (h.entering) {
+        const double depth = -h.mean_free_path_m * std::log(KeyUniform(keys[i], 2 * step));
+        if (next.range_m < 0.f || h.range_m + depth < next.range_m) {
+          const double r = h.range_m + depth;
+          if (r > max_range_m) {
+            h = RayHit{};
+            resolved = true;
+            break;
+          }
+          // Leaves at random orientation: |cos incidence| uniform in (0, 1].
+          const double c = KeyUniform(keys[i], 2 * step + 1);
+          const Eigen::Vector3f axis =
+              std::abs(d.z()) < 0.9f ? Eigen::Vector3f::UnitZ() : Eigen::Vector3f::UnitX();
+          const Eigen::Vector3f perp = d.cross(axis).normalized();
+          RayHit v;
+          v.range_m = static_cast<float>(r);
+          v.normal_world = (-d * static_cast<float>(c) +
+                            perp * static_cast<float>(std::sqrt(std::max(0.0, 1.0 - c * c))));
+          v.surface = h.surface;
+          v.albedo = h.albedo;
+          v.volume_return = true;
+          h = v;
+          resolved = true;
+          break;
+        }
+      }
+      h = next;
+    }
+    if (!resolved && h.mean_free_path_m > 0.f) h = RayHit{};  // gave up inside a tangle of hulls
+    hits[i] = h;
   }
 }
 

@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "sim/random.hpp"
 #include "slam_mms/io/trajectory_io.hpp"
 
 namespace slam_mms::sim {
@@ -138,6 +139,13 @@ Status WriteScenarioJson(const DriveSimulator::Options& o, const DriveSimulator&
                     {"pole_spacing_m", w.pole_spacing_m},
                     {"tree_probability", w.tree_probability},
                     {"parked_car_probability", w.parked_car_probability},
+                    {"roughness_rms_m", Json{{"road", w.road_roughness_rms_m},
+                                             {"sidewalk", w.sidewalk_roughness_rms_m},
+                                             {"terrain", w.terrain_roughness_rms_m}}},
+                    {"volumetric_vegetation", w.volumetric_vegetation},
+                    {"foliage_mean_free_path_m", w.foliage_mean_free_path_m},
+                    {"hedge_mean_free_path_m", w.hedge_mean_free_path_m},
+                    {"hedge_probability", w.hedge_probability},
                     {"stats", Json{{"triangles", st.num_triangles},
                                    {"ground_triangles", st.num_ground_triangles},
                                    {"buildings", st.num_buildings},
@@ -145,6 +153,7 @@ Status WriteScenarioJson(const DriveSimulator::Options& o, const DriveSimulator&
                                    {"poles", st.num_poles},
                                    {"cars", st.num_cars},
                                    {"fences", st.num_fences},
+                                   {"hedges", st.num_hedges},
                                    {"path_length_m", st.path_length_m}}}};
   Hdl64Lidar lidar(l);
   j["lidar"] = Json{{"model", "HDL-64E"},
@@ -160,7 +169,29 @@ Status WriteScenarioJson(const DriveSimulator::Options& o, const DriveSimulator&
                     {"elevation_bias_deg", l.elevation_bias_deg},
                     {"dropout_base", l.dropout_base},
                     {"dropout_far", l.dropout_far},
+                    {"laser_elevation_sigma_deg", l.laser_elevation_sigma_deg},
+                    {"laser_azimuth_sigma_deg", l.laser_azimuth_sigma_deg},
+                    {"laser_range_offset_sigma_m", l.laser_range_offset_sigma_m},
+                    {"laser_range_scale_sigma", l.laser_range_scale_sigma},
+                    {"beam_divergence_rad", l.beam_divergence_rad},
+                    {"mixed_pixel_max_separation_m", l.mixed_pixel_max_separation_m},
+                    {"mixed_pixel_edge_threshold_m", l.mixed_pixel_edge_threshold_m},
                     {"motion_compensated", false}};
+  {
+    // The per-laser residuals the scans were simulated with (DriveSimulator passes this seed).
+    Json errors = Json::array();
+    bool any = false;
+    for (const auto& e : lidar.LaserErrors(MixSeed(o.seed, 50))) {
+      errors.push_back({e.elevation_deg, e.azimuth_deg, e.range_offset_m, e.range_scale});
+      any = any || e.elevation_deg != 0.0 || e.azimuth_deg != 0.0 || e.range_offset_m != 0.0 ||
+            e.range_scale != 0.0;
+    }
+    if (any) {
+      j["lidar"]["laser_errors_columns"] = {"elevation_deg", "azimuth_deg", "range_offset_m",
+                                            "range_scale"};
+      j["lidar"]["laser_errors"] = std::move(errors);
+    }
+  }
   j["imu"] = Json{{"rate_hz", imu.rate_hz},
                   {"gyro_noise_density", imu.gyro_noise_density},
                   {"gyro_bias_instability", imu.gyro_bias_instability},

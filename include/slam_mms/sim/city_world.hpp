@@ -9,6 +9,15 @@
 // (porous crowns of leaf triangles) and parked cars; the ground follows the road height of the
 // nearest path point. Materials carry a reflectance (albedo) that the LiDAR model shades.
 //
+// Optional realism models (off by default; docs/simulator.md "Realism models"):
+// - Ground roughness (Options::*_roughness_rms_m): ground hits are displaced along the surface
+//   normal by a fixed, seeded height texture (value noise, 0.1-0.4 m wavelengths) of the stated
+//   RMS per class, so every scan sees the same rough surface. Applied inside Intersect.
+// - Volumetric vegetation (Options::volumetric_vegetation): tree crowns become closed, lumpy hulls
+//   and hedges appear along yards and open lots; a hull is a scattering volume (a triangle with
+//   TriangleMesh::mean_free_path_m > 0), and IntersectScattering returns points inside it at an
+//   exponentially distributed penetration depth (Beer-Lambert), or lets the ray pass through.
+//
 // Ownership: move-only; owns its Embree device and scene. Thread safety: after Build/FromMesh, all
 // const methods (Intersect in particular) may be called concurrently.
 
@@ -45,6 +54,9 @@ struct TriangleMesh {
   std::vector<Eigen::Vector3i> triangles;
   std::vector<SurfaceClass> classes;  ///< One per triangle.
   std::vector<float> albedo;          ///< One per triangle.
+  /// Empty (all solid) or one per triangle: > 0 marks a face of a closed, outward-wound hull of a
+  /// scattering volume (vegetation) with this mean free path [m]; 0 = a solid surface.
+  std::vector<float> mean_free_path_m;
 
   void AddTriangle(const Eigen::Vector3f& a, const Eigen::Vector3f& b, const Eigen::Vector3f& c,
                    SurfaceClass cls, float albedo);
@@ -55,6 +67,8 @@ struct TriangleMesh {
   void AddCylinder(const Eigen::Vector3f& base, float radius, float height, int sides,
                    SurfaceClass cls, float albedo);
   void Append(const TriangleMesh& other);
+  /// Sets the mean free path of triangles [first, end) (filling earlier ones with 0).
+  void MarkVolume(size_t first_triangle, float mean_free_path_m);
 };
 
 /// What a ray hit.
@@ -64,6 +78,11 @@ struct RayHit {
       Eigen::Vector3f::Zero();  ///< Unit geometric normal, facing the ray.
   SurfaceClass surface = SurfaceClass::kOther;
   float albedo = 0.0f;  ///< Reflectance of the surface at the hit (lane markings included).
+  /// > 0: the hit is on the hull of a scattering volume with this mean free path [m] (Intersect
+  /// only; IntersectScattering resolves volumes into returns inside them).
+  float mean_free_path_m = 0.0f;
+  bool entering = false;       ///< The ray crosses the hull from outside to inside.
+  bool volume_return = false;  ///< IntersectScattering: a return from inside a volume.
 };
 
 class CityWorld {
@@ -84,6 +103,19 @@ class CityWorld {
     double pole_spacing_m = 30.0;        ///< Mean spacing of lamps and sign posts per side [m].
     double tree_probability = 0.5;       ///< Per 60 m stretch of sidewalk: a row of trees.
     double parked_car_probability = 0.45;  ///< Per 40 m stretch of curb: a row of parked cars.
+    /// Ground roughness, RMS height of the texture [m] (0 = off): road and lane markings;
+    /// sidewalks and curb faces; terrain (verges, lots).
+    double road_roughness_rms_m = 0.0;
+    double sidewalk_roughness_rms_m = 0.0;
+    double terrain_roughness_rms_m = 0.0;
+    /// Tree crowns as scattering volumes (instead of leaf triangles) and hedges.
+    bool volumetric_vegetation = false;
+    double foliage_mean_free_path_m = 1.0;  ///< Tree crowns [m].
+    double hedge_mean_free_path_m = 0.3;    ///< Hedges [m].
+    double hedge_probability = 0.5;  ///< Per fenced yard or open lot, with volumetric_vegetation.
+
+    /// docs/simulator.md's values: roughness 5 mm road, 8 mm sidewalk, 3 cm terrain.
+    void EnableGroundRoughness();
 
     [[nodiscard]] Status Validate() const;
   };
@@ -97,6 +129,7 @@ class CityWorld {
     int num_poles = 0;
     int num_cars = 0;
     int num_fences = 0;
+    int num_hedges = 0;  ///< With Options::volumetric_vegetation.
     double path_length_m = 0.0;
   };
 
@@ -108,8 +141,10 @@ class CityWorld {
                                                  double t_end_s);
   [[nodiscard]] static StatusOr<CityWorld> Build(const ReferenceTrajectory& trajectory,
                                                  const Options& options);
-  /// A world of the given triangles (tests, custom scenes).
+  /// A world of the given triangles (tests, custom scenes). With `options`, its seed and ground
+  /// roughness apply (to triangles of the ground classes road, marking, curb, sidewalk, terrain).
   [[nodiscard]] static StatusOr<CityWorld> FromMesh(TriangleMesh mesh);
+  [[nodiscard]] static StatusOr<CityWorld> FromMesh(TriangleMesh mesh, const Options& options);
 
   CityWorld(CityWorld&&) noexcept;
   CityWorld& operator=(CityWorld&&) noexcept;
@@ -121,6 +156,17 @@ class CityWorld {
   /// `min_range_m` are misses. Uses Embree ray packets of 16.
   void Intersect(const Eigen::Vector3f* origins, const Eigen::Vector3f* directions, size_t n,
                  float min_range_m, float max_range_m, RayHit* hits) const;
+
+  /// Intersect, then every ray entering a scattering volume penetrates it by a depth drawn from
+  /// an exponential distribution of the volume's mean free path (uniforms from `keys[i]`, one per
+  /// ray, counter-based): a return inside (normal in a random direction, volume_return = true) or
+  /// on through to whatever lies beyond. Solid hits inside a volume (a trunk) stop the ray.
+  void IntersectScattering(const Eigen::Vector3f* origins, const Eigen::Vector3f* directions,
+                           const uint64_t* keys, size_t n, float min_range_m, float max_range_m,
+                           RayHit* hits) const;
+
+  /// The ground-roughness height texture of class `cls` at (x, y) [m] (0 where off or not ground).
+  double RoughnessHeight(double x, double y, SurfaceClass cls) const;
 
   /// Fraction of `num_rays` rays from `p_world` into the upper hemisphere between `min_elevation`
   /// and 90 deg that hit the scene within 300 m: the sky blockage seen by a GNSS antenna.

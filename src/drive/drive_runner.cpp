@@ -72,10 +72,14 @@ bool ParsePosWorkflow(const std::string& name, PosWorkflow* pos) {
   return false;
 }
 
+bool UsesStatedImuNoise(const MappingSystem::Options& options, const DriveStreams& streams) {
+  return options.use_stated_imu_noise && streams.imu_noise.has_value();
+}
+
 MappingSystem::Options ApplyInputImuNoise(const MappingSystem::Options& options,
                                           const DriveStreams& streams) {
   MappingSystem::Options out = options;
-  if (options.use_stated_imu_noise && streams.imu_noise) out.SetImuNoise(*streams.imu_noise);
+  if (UsesStatedImuNoise(options, streams)) out.SetImuNoise(*streams.imu_noise);
   return out;
 }
 
@@ -136,7 +140,7 @@ DriveRun RunMethod(const DriveReader& reader, const MappingSystem::Options& base
   const auto t0 = std::chrono::steady_clock::now();
 
   MappingSystem::Options options = ApplyInputImuNoise(base_options, in);
-  if (options.use_stated_imu_noise && in.imu_noise) {
+  if (UsesStatedImuNoise(options, in)) {
     SLAM_MMS_LOG(kInfo) << reader.Describe() << ": IMU noise as stated in " << in.imu_noise_source;
   }
   const bool smooth =

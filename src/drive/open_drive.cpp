@@ -114,9 +114,13 @@ StatusOr<std::unique_ptr<DriveReader>> OpenDrive(const std::filesystem::path& pa
   if (!options.imu_noise.empty()) {
     SLAM_MMS_ASSIGN_OR_RETURN(imu_noise, ReadImuNoiseYaml(options.imu_noise));
   }
-  // The drive's own calibration and IMU noise, then --extrinsics and --imu-noise over them.
-  auto with_extrinsics = [&](std::unique_ptr<DriveReader> reader) {
-    if (extrinsics) reader = OverrideExtrinsics(std::move(reader), *extrinsics);
+  // The drive's own calibration and IMU noise, then --extrinsics and --imu-noise over them
+  // (`reader_took_extrinsics`: the reader applied them itself).
+  auto with_overrides = [&](std::unique_ptr<DriveReader> reader,
+                            bool reader_took_extrinsics = false) {
+    if (extrinsics && !reader_took_extrinsics) {
+      reader = OverrideExtrinsics(std::move(reader), *extrinsics);
+    }
     if (imu_noise) reader = OverrideImuNoise(std::move(reader), *imu_noise, options.imu_noise);
     return reader;
   };
@@ -128,7 +132,7 @@ StatusOr<std::unique_ptr<DriveReader>> OpenDrive(const std::filesystem::path& pa
       ro.last_frame = options.last_frame;
       SLAM_MMS_ASSIGN_OR_RETURN(std::unique_ptr<KittiDriveReader> reader,
                                 KittiDriveReader::Open(path, ro));
-      return with_extrinsics(std::move(reader));
+      return with_overrides(std::move(reader));
     }
     case DriveSourceKind::kFolder: {
       FolderDriveReader::Options fo;
@@ -137,7 +141,7 @@ StatusOr<std::unique_ptr<DriveReader>> OpenDrive(const std::filesystem::path& pa
       fo.allow_missing_extrinsics = extrinsics.has_value();
       SLAM_MMS_ASSIGN_OR_RETURN(std::unique_ptr<FolderDriveReader> folder,
                                 FolderDriveReader::Open(path, fo));
-      return with_extrinsics(std::move(folder));
+      return with_overrides(std::move(folder));
     }
     case DriveSourceKind::kRosbag: {
 #if defined(SLAM_MMS_HAVE_ROSBAG)
@@ -160,12 +164,7 @@ StatusOr<std::unique_ptr<DriveReader>> OpenDrive(const std::filesystem::path& pa
                                 RosbagDriveReader::Open(path, bo));
       // The bag reader took T_body_lidar and the antenna: only a clock offset needs the wrapper
       // (hosts see the RosbagDriveReader itself otherwise).
-      if (extrinsics && extrinsics->lidar_time_offset_s == 0.0) {
-        std::unique_ptr<DriveReader> reader = std::move(bag);
-        if (imu_noise) reader = OverrideImuNoise(std::move(reader), *imu_noise, options.imu_noise);
-        return reader;
-      }
-      return with_extrinsics(std::move(bag));
+      return with_overrides(std::move(bag), extrinsics && extrinsics->lidar_time_offset_s == 0.0);
 #else
       break;
 #endif

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "io/file_util.hpp"
+#include "io/yaml_util.hpp"
 #include "slam_mms/core/lie.hpp"
 #include "slam_mms/core/logging.hpp"
 
@@ -15,15 +16,12 @@ namespace {
 
 constexpr double kRotationTolerance = 1e-6;
 
-std::string Where(const std::string& file, const YAML::Node& node) {
-  const YAML::Mark mark = node.Mark();
-  return mark.is_null() ? file : file + ":" + std::to_string(mark.line + 1);
-}
+using io_internal::YamlWhere;
 
 // A sequence of exactly `n` finite numbers under `key`.
 Status Numbers(const YAML::Node& node, const std::string& key, size_t n, const std::string& file,
                std::vector<double>* values) {
-  const std::string where = Where(file, node) + ": " + key;
+  const std::string where = YamlWhere(file, node) + ": " + key;
   if (!node.IsSequence()) {
     return DataLossError(where + " must be a sequence of " + std::to_string(n) + " numbers");
   }
@@ -33,13 +31,9 @@ Status Numbers(const YAML::Node& node, const std::string& key, size_t n, const s
   }
   values->clear();
   for (size_t k = 0; k < n; ++k) {
-    const YAML::Node v = node[k];
     double d = 0.0;
-    if (!v.IsScalar() || !io_internal::ParseDouble(v.Scalar(), &d)) {
-      return DataLossError(where + "[" + std::to_string(k) + "] '" +
-                           (v.IsScalar() ? v.Scalar() : std::string("(not a scalar)")) +
-                           "' is not a finite number");
-    }
+    SLAM_MMS_RETURN_IF_ERROR(
+        io_internal::YamlFiniteNumber(node[k], where + "[" + std::to_string(k) + "]", "", &d));
     values->push_back(d);
   }
   return OkStatus();
@@ -57,7 +51,7 @@ Status RotationCheck(const Eigen::Matrix3d& R, const std::string& where) {
 }
 
 StatusOr<Eigen::Isometry3d> ParseTransform(const YAML::Node& node, const std::string& file) {
-  const std::string where = Where(file, node) + ": T_body_lidar";
+  const std::string where = YamlWhere(file, node) + ": T_body_lidar";
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   std::vector<double> v;
   if (node.IsSequence()) {
@@ -80,7 +74,7 @@ StatusOr<Eigen::Isometry3d> ParseTransform(const YAML::Node& node, const std::st
     for (const auto& kv : node) {
       const std::string k = kv.first.as<std::string>();
       if (k != "xyz" && k != "rpy_deg") {
-        return DataLossError(Where(file, kv.first) + ": T_body_lidar: unknown key '" + k +
+        return DataLossError(YamlWhere(file, kv.first) + ": T_body_lidar: unknown key '" + k +
                              "' (expected xyz and rpy_deg)");
       }
     }
@@ -111,7 +105,7 @@ StatusOr<DriveExtrinsics> ParseExtrinsicsYaml(const std::string& text, const std
     bool have_T = false;
     for (const auto& kv : root) {
       if (!kv.first.IsScalar()) {
-        return DataLossError(Where(file, kv.first) + ": keys must be plain names");
+        return DataLossError(YamlWhere(file, kv.first) + ": keys must be plain names");
       }
       const std::string key = kv.first.Scalar();
       if (key == "T_body_lidar") {
@@ -122,14 +116,10 @@ StatusOr<DriveExtrinsics> ParseExtrinsicsYaml(const std::string& text, const std
         SLAM_MMS_RETURN_IF_ERROR(Numbers(kv.second, key, 3, file, &v));
         out.t_body_antenna_m = Eigen::Vector3d(v[0], v[1], v[2]);
       } else if (key == "lidar_time_offset_s") {
-        const YAML::Node& v = kv.second;
-        if (!v.IsScalar() || !io_internal::ParseDouble(v.Scalar(), &out.lidar_time_offset_s)) {
-          return DataLossError(Where(file, v) + ": " + key + " '" +
-                               (v.IsScalar() ? v.Scalar() : std::string("(not a scalar)")) +
-                               "' is not a finite number [s]");
-        }
+        SLAM_MMS_RETURN_IF_ERROR(io_internal::YamlFiniteNumber(
+            kv.second, YamlWhere(file, kv.second) + ": " + key, " [s]", &out.lidar_time_offset_s));
       } else {
-        SLAM_MMS_LOG(kInfo) << Where(file, kv.first) << ": key '" << key << "' ignored";
+        SLAM_MMS_LOG(kInfo) << YamlWhere(file, kv.first) << ": key '" << key << "' ignored";
       }
     }
     if (!have_T) return DataLossError(file + ": key T_body_lidar missing");

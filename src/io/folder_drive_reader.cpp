@@ -4,12 +4,12 @@
 
 #include "core/option_error.hpp"
 #include "io/drive_folder_parsers.hpp"
+#include "io/drive_imu_noise.hpp"
 #include "io/file_util.hpp"
 #include "io/nmea.hpp"
 #include "io/parsers.hpp"
 #include "slam_mms/core/logging.hpp"
 #include "slam_mms/io/extrinsics_yaml.hpp"
-#include "slam_mms/io/imu_noise_yaml.hpp"
 
 namespace slam_mms {
 
@@ -223,11 +223,7 @@ Status FolderDriveReader::LoadStreams() {
         b, initial_csv.string(), &s.initial_state, &s.initial_state_source,
         &s.initial_attitude_sigma_rpy_rad));
   }
-  const fs::path imu_noise = dir_ / kImuNoiseFileName;
-  if (Exists(imu_noise)) {
-    SLAM_MMS_ASSIGN_OR_RETURN(s.imu_noise, ReadImuNoiseYaml(imu_noise));
-    s.imu_noise_source = imu_noise.string();
-  }
+  SLAM_MMS_RETURN_IF_ERROR(io_internal::ReadDriveImuNoise(dir_, &s));
   if (Exists(extrinsics)) {
     SLAM_MMS_ASSIGN_OR_RETURN(const DriveExtrinsics e, ReadExtrinsicsYaml(extrinsics));
     s.T_body_lidar = e.T_body_lidar;

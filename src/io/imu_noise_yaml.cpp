@@ -7,7 +7,9 @@
 #include <cstdio>
 #include <system_error>
 
+#include "io/drive_imu_noise.hpp"
 #include "io/file_util.hpp"
+#include "io/yaml_util.hpp"
 #include "slam_mms/core/logging.hpp"
 
 namespace slam_mms {
@@ -47,10 +49,7 @@ const std::array<Quantity, 8>& Quantities() {
   return kQ;
 }
 
-std::string Where(const std::string& file, const YAML::Node& node) {
-  const YAML::Mark mark = node.Mark();
-  return mark.is_null() ? file : file + ":" + std::to_string(mark.line + 1);
-}
+using io_internal::YamlWhere;
 
 }  // namespace
 
@@ -65,12 +64,12 @@ StatusOr<ImuNoiseSpec> ParseImuNoiseYaml(const std::string& text, const std::str
     std::array<std::string, 8> seen;  // the key that set each quantity
     for (const auto& kv : root) {
       if (!kv.first.IsScalar()) {
-        return DataLossError(Where(file, kv.first) + ": keys must be plain names");
+        return DataLossError(YamlWhere(file, kv.first) + ": keys must be plain names");
       }
       const std::string key = kv.first.Scalar();
       const YAML::Node& v = kv.second;
       if (key == "model") {
-        if (!v.IsScalar()) return DataLossError(Where(file, v) + ": model must be a text");
+        if (!v.IsScalar()) return DataLossError(YamlWhere(file, v) + ": model must be a text");
         spec.model = v.Scalar();
         continue;
       }
@@ -81,19 +80,18 @@ StatusOr<ImuNoiseSpec> ParseImuNoiseYaml(const std::string& text, const std::str
         if (!si && (Q.datasheet_key == nullptr || key != Q.datasheet_key)) continue;
         known = true;
         if (!seen[q].empty()) {
-          return DataLossError(Where(file, kv.first) + ": " + key + " gives the same quantity as " +
-                               seen[q] + "; give one of them");
+          return DataLossError(YamlWhere(file, kv.first) + ": " + key +
+                               " gives the same quantity as " + seen[q] + "; give one of them");
         }
         double d = 0.0;
-        if (!v.IsScalar() || !io_internal::ParseDouble(v.Scalar(), &d)) {
-          return DataLossError(Where(file, v) + ": " + key + " '" +
-                               (v.IsScalar() ? v.Scalar() : std::string("(not a scalar)")) +
-                               "' is not a finite number");
-        }
+        SLAM_MMS_RETURN_IF_ERROR(
+            io_internal::YamlFiniteNumber(v, YamlWhere(file, v) + ": " + key, "", &d));
         spec.*Q.field = si ? d : d * Q.to_si;
         seen[q] = key;
       }
-      if (!known) SLAM_MMS_LOG(kInfo) << Where(file, kv.first) << ": key '" << key << "' ignored";
+      if (!known) {
+        SLAM_MMS_LOG(kInfo) << YamlWhere(file, kv.first) << ": key '" << key << "' ignored";
+      }
     }
     for (size_t q = 0; q < Quantities().size(); ++q) {
       const Quantity& Q = Quantities()[q];
@@ -144,6 +142,15 @@ std::string FormatImuNoiseYaml(const ImuNoiseSpec& spec) {
     s += std::string(Q.si_key) + ": " + FormatDouble(spec.*Q.field) + "\n";
   }
   return s;
+}
+
+Status io_internal::ReadDriveImuNoise(const std::filesystem::path& dir, DriveStreams* streams) {
+  const std::filesystem::path file = dir / kImuNoiseFileName;
+  std::error_code ec;
+  if (!std::filesystem::exists(file, ec)) return OkStatus();
+  SLAM_MMS_ASSIGN_OR_RETURN(streams->imu_noise, ReadImuNoiseYaml(file));
+  streams->imu_noise_source = file.string();
+  return OkStatus();
 }
 
 Status WriteImuNoiseYaml(const ImuNoiseSpec& spec, const std::filesystem::path& file) {

@@ -3,7 +3,7 @@
 #include <cmath>
 #include <cstdio>
 
-#include "slam_mms/io/imu_noise_yaml.hpp"
+#include "io/drive_imu_noise.hpp"
 #include "slam_mms/io/oxts_record.hpp"
 
 namespace slam_mms {
@@ -28,12 +28,8 @@ StatusOr<std::unique_ptr<KittiDriveReader>> KittiDriveReader::Open(
   SLAM_MMS_ASSIGN_OR_RETURN(KittiRawReader reader, KittiRawReader::Open(drive_dir, options));
   std::unique_ptr<KittiDriveReader> out(new KittiDriveReader(std::move(reader)));
   // Not part of KITTI: a drive written by slam_mms_sim (or a user) may state its IMU's noise.
-  const std::filesystem::path imu_noise = out->reader_.drive_dir() / kImuNoiseFileName;
-  std::error_code ec;
-  if (std::filesystem::exists(imu_noise, ec)) {
-    SLAM_MMS_ASSIGN_OR_RETURN(out->streams_.imu_noise, ReadImuNoiseYaml(imu_noise));
-    out->streams_.imu_noise_source = imu_noise.string();
-  }
+  SLAM_MMS_RETURN_IF_ERROR(
+      io_internal::ReadDriveImuNoise(out->reader_.drive_dir(), &out->streams_));
   return out;
 }
 

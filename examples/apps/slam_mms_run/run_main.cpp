@@ -439,7 +439,7 @@ std::optional<int> OpenInput(const RunArgs& args, const fs::path& drive_dir, Run
   // The IMU's noise: --imu-noise (the reader's, OpenDrive), else the input's imu_noise.yaml;
   // RunDrive applies it. Else the filter's defaults.
   const DriveStreams& streams = (*input)->streams();
-  if (options.use_stated_imu_noise && streams.imu_noise) *imu_noise = streams.imu_noise_source;
+  if (UsesStatedImuNoise(options, streams)) *imu_noise = streams.imu_noise_source;
   const Status valid = options.Validate();
   if (!valid.ok()) return Fail(valid, kExitUsage);
   if (!args.calibrate_extrinsics && !config->drive.estimate_extrinsics) return std::nullopt;

@@ -110,9 +110,13 @@ struct DriveRunCallbacks {
   std::function<void(const MappingSystem& system, int submaps_finished)> on_submap;
 };
 
+/// True where `streams` state an IMU noise and options.use_stated_imu_noise is on: the run
+/// models the IMU with it.
+bool UsesStatedImuNoise(const MappingSystem::Options& options, const DriveStreams& streams);
+
 /// `options` with the IMU noise `streams` state (MappingSystem::Options::SetImuNoise) where
-/// they state one and options.use_stated_imu_noise is on; else `options` unchanged. RunDrive,
-/// ComputeOfflinePos and CalibrateDriveExtrinsics apply it themselves.
+/// UsesStatedImuNoise; else `options` unchanged. RunDrive, ComputeOfflinePos and
+/// CalibrateDriveExtrinsics apply it themselves.
 MappingSystem::Options ApplyInputImuNoise(const MappingSystem::Options& options,
                                           const DriveStreams& streams);
 

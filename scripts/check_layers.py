@@ -22,14 +22,15 @@ import tempfile
 
 # Layers, bottom up: a module may include only modules of a lower layer.
 #   core <- io, ins, surfel <- registration, render_egl, rosbag <- backend <- pipeline
-#   eval and sim beside pipeline; drive (offline runner, readers, outputs) on top.
+#   eval and sim beside pipeline; drive (offline runner, readers, outputs) and merge (multi-drive
+#   adjustment) on top.
 LAYER = {
     "core": 0,
     "io": 1, "ins": 1, "surfel": 1,
     "registration": 2, "render_egl": 2, "rosbag": 2,
     "backend": 3,
     "pipeline": 4, "eval": 4, "sim": 4,
-    "drive": 5,
+    "drive": 5, "merge": 5,
 }
 SDK = {"core", "ins", "surfel", "render_egl", "registration", "backend", "pipeline"}
 

@@ -51,4 +51,31 @@ bool GnssPositionFactor::Evaluate(double const* const* parameters, double* resid
   return true;
 }
 
+bool BiasedGnssPositionFactor::Evaluate(double const* const* parameters, double* residuals,
+                                        double** jacobians) const {
+  double* pose_jacobian[1] = {jacobians != nullptr ? jacobians[0] : nullptr};
+  if (!unbiased_->Evaluate(parameters, residuals, jacobians != nullptr ? pose_jacobian : nullptr)) {
+    return false;
+  }
+  const Eigen::Map<const Eigen::Vector3d> b(parameters[1]);
+  Eigen::Map<Eigen::Vector3d> res(residuals);
+  res += unbiased_->sqrt_information() * b;
+  if (jacobians != nullptr && jacobians[1] != nullptr) {
+    Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>> J(jacobians[1]);
+    J = unbiased_->sqrt_information();
+  }
+  return true;
+}
+
+bool ZeroMeanPrior3Factor::Evaluate(double const* const* parameters, double* residuals,
+                                    double** jacobians) const {
+  Eigen::Map<Eigen::Vector3d> res(residuals);
+  res = sqrt_info_ * Eigen::Map<const Eigen::Vector3d>(parameters[0]);
+  if (jacobians != nullptr && jacobians[0] != nullptr) {
+    Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>> J(jacobians[0]);
+    J = sqrt_info_;
+  }
+  return true;
+}
+
 }  // namespace slam_mms

@@ -14,6 +14,7 @@
 
 #include <Eigen/Core>
 #include <memory>
+#include <utility>
 
 #include "slam_mms/core/status.hpp"
 
@@ -39,6 +40,31 @@ class GnssPositionFactor final : public ceres::SizedCostFunction<3, 7> {
   Eigen::Vector3d p_world_antenna_;
   Eigen::Matrix3d sqrt_info_;
   Eigen::Vector3d t_body_antenna_;
+};
+
+/// F_GNSS with a GNSS bias b (a constant world offset of the fixes' datum, shared by the fixes
+/// of one bias key): r = sqrt_info * (p_world_body + R_world_body * t_body_antenna + b - p~).
+/// Parameter blocks: pose[7], bias[3].
+class BiasedGnssPositionFactor final : public ceres::SizedCostFunction<3, 7, 3> {
+ public:
+  explicit BiasedGnssPositionFactor(std::unique_ptr<GnssPositionFactor> unbiased)
+      : unbiased_(std::move(unbiased)) {}
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override;
+
+ private:
+  std::unique_ptr<GnssPositionFactor> unbiased_;
+};
+
+/// A zero-mean prior on a 3-vector: r = sqrt_info * b. Parameter block: b[3].
+class ZeroMeanPrior3Factor final : public ceres::SizedCostFunction<3, 3> {
+ public:
+  explicit ZeroMeanPrior3Factor(const Eigen::Matrix3d& sqrt_info) : sqrt_info_(sqrt_info) {}
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override;
+
+ private:
+  Eigen::Matrix3d sqrt_info_;
 };
 
 }  // namespace slam_mms

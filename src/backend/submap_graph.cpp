@@ -2,11 +2,14 @@
 
 #include <ceres/problem.h>
 
+#include <Eigen/Cholesky>
 #include <algorithm>
 #include <array>
 #include <limits>
 #include <map>
+#include <memory>
 #include <string>
+#include <utility>
 
 #include "backend/backend_math.hpp"
 #include "backend/ceres_solve.hpp"
@@ -80,6 +83,20 @@ struct SubmapGraph::Impl {
   int last_free = 0;
   std::optional<size_t> pending_loop_from;  // Oldest node index touched by loops since last solve.
   std::map<size_t, Sequential> sequential;  // Keyed by the index of the older node.
+  std::map<int, std::unique_ptr<std::array<double, 3>>> gnss_biases;
+  std::vector<SubmapGraphFactor> factors;  // As added (Factors()).
+
+  void Record(SubmapFactorKind kind, SubmapId a, SubmapId b, const Eigen::Isometry3d& T,
+              const Matrix6d& covariance, const RobustLoss& loss = RobustLoss::None()) {
+    SubmapGraphFactor f;
+    f.kind = kind;
+    f.a = a;
+    f.b = b;
+    f.T = T;
+    f.covariance = covariance;
+    f.loss = loss;
+    factors.push_back(f);
+  }
 
   explicit Impl(const Options& o) : options(o) {
     ceres::Problem::Options po;
@@ -240,6 +257,7 @@ Status SubmapGraph::AddRegistrationFactor(SubmapId a, SubmapId b, const Eigen::I
   SLAM_MMS_RETURN_IF_ERROR(
       impl_->AddBetween(a, b, T_a_b, covariance, loss, "AddRegistrationFactor"));
   impl_->RecordSequential(a, b, T_a_b, covariance, /*reckon=*/false);
+  impl_->Record(SubmapFactorKind::kRegistration, a, b, T_a_b, covariance, loss);
   return OkStatus();
 }
 
@@ -248,6 +266,7 @@ Status SubmapGraph::AddReckonFactor(SubmapId a, SubmapId b, const Eigen::Isometr
   SLAM_MMS_RETURN_IF_ERROR(
       impl_->AddBetween(a, b, T_a_b, covariance, RobustLoss::None(), "AddReckonFactor"));
   impl_->RecordSequential(a, b, T_a_b, covariance, /*reckon=*/true);
+  impl_->Record(SubmapFactorKind::kReckon, a, b, T_a_b, covariance);
   return OkStatus();
 }
 
@@ -266,6 +285,7 @@ StatusOr<LoopCheck> SubmapGraph::AddLoopFactor(SubmapId a, SubmapId b,
   const size_t oldest = std::min(m.Find(a)->index, m.Find(b)->index);
   m.pending_loop_from = std::min(m.pending_loop_from.value_or(oldest), oldest);
   ++m.num_loops;
+  m.Record(SubmapFactorKind::kLoop, a, b, T_a_b, covariance);
   SLAM_MMS_LOG(kDebug) << "SubmapGraph: loop " << a << "<->" << b
                        << " d2 = " << check.mahalanobis_sq;
   return check;
@@ -280,16 +300,26 @@ Status SubmapGraph::AddPosePrior(SubmapId id, const Eigen::Isometry3d& T_world_s
   SLAM_MMS_RETURN_IF_ERROR(ValidateCovariance<6>(covariance, "SubmapGraph::AddPosePrior"));
   SLAM_MMS_ASSIGN_OR_RETURN(auto cost, PosePriorFactor::Create(T_world_submap, covariance));
   m.problem->AddResidualBlock(cost.release(), nullptr, node->pose.data());
+  m.Record(SubmapFactorKind::kPosePrior, id, id, T_world_submap, covariance);
   return OkStatus();
 }
 
 Status SubmapGraph::AddGnssPrior(SubmapId id, const Eigen::Vector3d& p_world_antenna,
                                  const Eigen::Matrix3d& covariance,
                                  const Eigen::Isometry3d& T_submap_body,
-                                 const Eigen::Vector3d& t_body_antenna) {
+                                 const Eigen::Vector3d& t_body_antenna, int gnss_bias) {
   Impl& m = *impl_;
   Node* node = m.Find(id);
   if (node == nullptr) return NotFoundError("SubmapGraph::AddGnssPrior: unknown submap " + Id(id));
+  std::array<double, 3>* bias = nullptr;
+  if (gnss_bias >= 0) {
+    auto it = m.gnss_biases.find(gnss_bias);
+    if (it == m.gnss_biases.end()) {
+      return NotFoundError("SubmapGraph::AddGnssPrior: unknown GNSS bias " +
+                           std::to_string(gnss_bias));
+    }
+    bias = it->second.get();
+  }
   SLAM_MMS_RETURN_IF_ERROR(ValidatePose(T_submap_body, "SubmapGraph::AddGnssPrior T_submap_body"));
   if (!p_world_antenna.allFinite() || !t_body_antenna.allFinite()) {
     return InvalidArgumentError("SubmapGraph::AddGnssPrior: position or lever arm not finite");
@@ -299,11 +329,81 @@ Status SubmapGraph::AddGnssPrior(SubmapId id, const Eigen::Vector3d& p_world_ant
   const Eigen::Vector3d t_submap_antenna = T_submap_body * t_body_antenna;
   SLAM_MMS_ASSIGN_OR_RETURN(
       auto cost, GnssPositionFactor::Create(p_world_antenna, covariance, t_submap_antenna));
-  m.problem->AddResidualBlock(cost.release(), m.options.gnss_loss.NewLossFunction(),
-                              node->pose.data());
+  if (bias != nullptr) {
+    m.problem->AddResidualBlock(new BiasedGnssPositionFactor(std::move(cost)),
+                                m.options.gnss_loss.NewLossFunction(), node->pose.data(),
+                                bias->data());
+  } else {
+    m.problem->AddResidualBlock(cost.release(), m.options.gnss_loss.NewLossFunction(),
+                                node->pose.data());
+  }
   ++node->num_gnss;
   ++m.num_gnss;
+  SubmapGraphFactor f;
+  f.kind = SubmapFactorKind::kGnss;
+  f.a = f.b = id;
+  f.covariance = Matrix6d::Zero();
+  f.covariance.topLeftCorner<3, 3>() = covariance;
+  f.p_world_antenna = p_world_antenna;
+  f.T_submap_body = T_submap_body;
+  f.t_body_antenna = t_body_antenna;
+  f.gnss_bias = gnss_bias;
+  m.factors.push_back(f);
   return OkStatus();
+}
+
+Status SubmapGraph::AddGnssBias(int key, const Eigen::Matrix3d& prior_covariance) {
+  Impl& m = *impl_;
+  if (key < 0) {
+    return InvalidArgumentError("SubmapGraph::AddGnssBias: key " + std::to_string(key) +
+                                " must be >= 0");
+  }
+  if (m.gnss_biases.count(key) != 0) {
+    return InvalidArgumentError("SubmapGraph::AddGnssBias: bias " + std::to_string(key) +
+                                " exists");
+  }
+  SLAM_MMS_RETURN_IF_ERROR(ValidateCovariance<3>(prior_covariance, "SubmapGraph::AddGnssBias"));
+  const Eigen::Matrix3d sqrt_info =
+      prior_covariance.llt().matrixL().solve(Eigen::Matrix3d::Identity());
+  auto block = std::make_unique<std::array<double, 3>>();
+  block->fill(0.0);
+  m.problem->AddParameterBlock(block->data(), 3);
+  m.problem->AddResidualBlock(new ZeroMeanPrior3Factor(sqrt_info), nullptr, block->data());
+  m.gnss_biases.emplace(key, std::move(block));
+  return OkStatus();
+}
+
+StatusOr<Eigen::Vector3d> SubmapGraph::GnssBias(int key) const {
+  auto it = impl_->gnss_biases.find(key);
+  if (it == impl_->gnss_biases.end()) {
+    return NotFoundError("SubmapGraph::GnssBias: unknown GNSS bias " + std::to_string(key));
+  }
+  return Eigen::Vector3d(it->second->data());
+}
+
+const std::vector<SubmapGraphFactor>& SubmapGraph::Factors() const { return impl_->factors; }
+
+const char* SubmapFactorKindName(SubmapFactorKind kind) {
+  switch (kind) {
+    case SubmapFactorKind::kRegistration: return "registration";
+    case SubmapFactorKind::kReckon: return "reckon";
+    case SubmapFactorKind::kLoop: return "loop";
+    case SubmapFactorKind::kPosePrior: return "pose_prior";
+    case SubmapFactorKind::kGnss: return "gnss";
+  }
+  return "unknown";
+}
+
+bool SubmapFactorKindFromName(const char* name, SubmapFactorKind* kind) {
+  for (SubmapFactorKind k :
+       {SubmapFactorKind::kRegistration, SubmapFactorKind::kReckon, SubmapFactorKind::kLoop,
+        SubmapFactorKind::kPosePrior, SubmapFactorKind::kGnss}) {
+    if (std::string(SubmapFactorKindName(k)) == name) {
+      *kind = k;
+      return true;
+    }
+  }
+  return false;
 }
 
 StatusOr<SolveSummary> SubmapGraph::Solve(SolveTrigger trigger) {

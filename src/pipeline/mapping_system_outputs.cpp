@@ -145,4 +145,57 @@ PointCloud MappingSystem::FinalMap(MapPointStamps* stamps) const {
   }
   return std::move(down).value();
 }
+
+StatusOr<DriveResult> MappingSystem::ExportDriveResult() const {
+  const Impl& m = *impl_;
+  if (!m.finished) {
+    return FailedPreconditionError("MappingSystem::ExportDriveResult: call Finish() first");
+  }
+  if (!m.loc || !m.level2) {
+    return FailedPreconditionError(
+        "MappingSystem::ExportDriveResult: mode has no submaps (kFull and kLidarOnly only)");
+  }
+  DriveResult out;
+  SLAM_MMS_ASSIGN_OR_RETURN(out.origin, Origin());
+  out.T_body_lidar = m.opt.T_body_lidar;
+  const SubmapGraph& graph = m.level2->graph();
+  for (const SubmapRecord& rec : m.loc->submaps()) {
+    if (!graph.HasSubmap(rec.id)) continue;  // never finished (none after Finish)
+    DriveSubmap sub;
+    sub.id = rec.id;
+    sub.start = rec.start;
+    sub.end = rec.end;
+    sub.T_world_submap = rec.T_world_submap;
+    for (size_t j = 0; j < rec.T_submap_scan.size(); ++j) {
+      SubmapScanPose s;
+      s.submap = rec.id;
+      s.scan_id = rec.scan_indices[j];
+      s.stamp = rec.scan_stamps[j];
+      s.T_submap_scan = rec.T_submap_scan[j];
+      s.T_world_scan = rec.T_world_submap * rec.T_submap_scan[j];
+      sub.scans.push_back(s);
+    }
+    sub.cov_submap_scan = rec.cov_submap_scan;
+    SLAM_MMS_ASSIGN_OR_RETURN(sub.map_cloud,
+                              m.loc->SubmapCloud(rec.id, Localizer::CloudKind::kMap));
+    SLAM_MMS_ASSIGN_OR_RETURN(sub.registration_cloud,
+                              m.loc->SubmapCloud(rec.id, Localizer::CloudKind::kRegistration));
+    out.submaps.push_back(std::move(sub));
+  }
+  out.factors = graph.Factors();
+  out.gnss_availability = GnssAvailability();
+  return out;
+}
+
+std::vector<std::pair<Timestamp, Eigen::Isometry3d>> DriveResult::ScanPoses() const {
+  std::vector<std::pair<Timestamp, Eigen::Isometry3d>> out;
+  for (const DriveSubmap& sub : submaps) {
+    for (const SubmapScanPose& s : sub.scans) {
+      out.emplace_back(s.stamp, sub.T_world_submap * s.T_submap_scan);
+    }
+  }
+  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  return out;
+}
+
 }  // namespace slam_mms

@@ -333,4 +333,6 @@ StatusOr<std::vector<SubmapPoseUpdate>> SubmapManager::Finish(const SubmapSource
 
 const SubmapManager::Stats& SubmapManager::stats() const { return impl_->stats; }
 
+const SubmapGraph& SubmapManager::graph() const { return *impl_->graph; }
+
 }  // namespace slam_mms

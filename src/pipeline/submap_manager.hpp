@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "registration/point_icp.hpp"
+#include "slam_mms/backend/submap_graph.hpp"
 #include "slam_mms/core/status.hpp"
 #include "slam_mms/ins/gnss_prior.hpp"
 #include "slam_mms/pipeline/level2_options.hpp"
@@ -50,6 +51,8 @@ class SubmapManager {
   /// The final solve; its estimates as for OnSubmapFinished.
   StatusOr<std::vector<SubmapPoseUpdate>> Finish(const SubmapSource& submaps);
   const Stats& stats() const;
+  /// The level-2 graph (its factors for DriveResult).
+  const SubmapGraph& graph() const;
 
  private:
   SubmapManager();

@@ -19,7 +19,9 @@
 //  - AddGnssPrior: a GNSS antenna position on a scan of a submap (eq 24; the ins module's
 //    GnssPositionFactor with the lever arm folded into the submap frame). Plug and play: add it
 //    only for valid fixes; the graph works with none (then the first submap is held fixed as the
-//    gauge).
+//    gauge). Fixes may share a GNSS bias (AddGnssBias): a constant offset of their datum, e.g. one
+//    per drive in the multi-drive adjustment.
+// Factors() gives every factor back as it was added, so a graph can be written out and rebuilt.
 //
 // Solving: batch Levenberg-Marquardt (<= Options::max_iterations), warm-started from the current
 // estimate. The orchestration decides when (§5.2.3) and says why with SolveTrigger. Solve time is
@@ -41,13 +43,12 @@
 
 #include "slam_mms/backend/robust_loss.hpp"
 #include "slam_mms/backend/solve_summary.hpp"
+#include "slam_mms/backend/submap_graph_factor.hpp"
 #include "slam_mms/core/lie.hpp"
 #include "slam_mms/core/status.hpp"
 #include "slam_mms/core/timestamp.hpp"
 
 namespace slam_mms {
-
-using SubmapId = int64_t;
 
 /// Why the orchestration asks for a global solve (paper §5.2.3).
 enum class SolveTrigger {
@@ -144,10 +145,20 @@ class SubmapGraph {
   /// on straight roads (a rotation about the direction of travel moves no position).
   Status AddPosePrior(SubmapId id, const Eigen::Isometry3d& T_world_submap,
                       const Matrix6d& covariance);
+  /// `gnss_bias` >= 0: the fix measures p_antenna + b with b the bias of that key (added before
+  /// with AddGnssBias); -1: no bias.
   Status AddGnssPrior(SubmapId id, const Eigen::Vector3d& p_world_antenna,
                       const Eigen::Matrix3d& covariance,
                       const Eigen::Isometry3d& T_submap_body = Eigen::Isometry3d::Identity(),
-                      const Eigen::Vector3d& t_body_antenna = Eigen::Vector3d::Zero());
+                      const Eigen::Vector3d& t_body_antenna = Eigen::Vector3d::Zero(),
+                      int gnss_bias = -1);
+  /// A GNSS bias `key` (>= 0, new): an unknown constant world offset b [m] of the fixes added
+  /// with it, with a zero-mean prior of `prior_covariance` [m^2]. Free in every solve.
+  Status AddGnssBias(int key, const Eigen::Matrix3d& prior_covariance);
+  /// The current estimate of bias `key` (NotFound where never added).
+  StatusOr<Eigen::Vector3d> GnssBias(int key) const;
+  /// Every factor in the order it was added (a loop's covariance as given, before loop_loss).
+  const std::vector<SubmapGraphFactor>& Factors() const;
 
   /// Batch LM (eq 25), then every scan pose follows its submap.
   StatusOr<SolveSummary> Solve(SolveTrigger trigger);

@@ -45,6 +45,7 @@
 #include "slam_mms/core/trajectory.hpp"
 #include "slam_mms/ins/gnss_prior.hpp"
 #include "slam_mms/ins/ins_filter.hpp"
+#include "slam_mms/pipeline/drive_result.hpp"
 #include "slam_mms/pipeline/level2_options.hpp"
 #include "slam_mms/pipeline/localization_result.hpp"
 #include "slam_mms/pipeline/localizer.hpp"
@@ -153,6 +154,10 @@ class MappingSystem {
   int num_skipped_scans() const;
   /// Scan intervals where the POS jumped (see Options::max_pos_jump_m): F_Prein instead of F_Odom.
   int num_pos_jumps() const;
+  /// The finished drive for the multi-drive adjustment (DriveResult): its submaps with their
+  /// clouds and level 2's factors. After Finish(); kFull and kLidarOnly (FailedPrecondition
+  /// otherwise). Reads spilled clouds back.
+  StatusOr<DriveResult> ExportDriveResult() const;
   /// Level-2 statistics (loops found, solves).
   Level2Stats level2_stats() const;
   const Options& options() const;

@@ -1,0 +1,139 @@
+#pragma once
+// DriveAdjustment: several finished drives of one area adjusted into one consistent map (what
+// survey tools call strip or drive adjustment), on the level-2 graph (SubmapGraph).
+//
+//   1. One frame: every drive is moved into the local ENU world of the first drive (an exact rigid
+//      transform between two ENU tangent frames through ECEF).
+//   2. One graph: every drive's submaps and its level-2 factors as they were added (reckon,
+//      map-to-map, loops, attitude priors, GNSS), the GNSS fixes of each drive sharing one GNSS
+//      bias (a constant world offset of that drive's GNSS datum, zero-mean prior of
+//      Options::gnss_bias_sigma_m; 0 = none), so a drive whose GNSS is offset moves rigidly.
+//   3. Overlaps: for each submap, the nearest submaps of every other drive whose scan positions
+//      come within Options::overlap_distance_m of its middle scan (a spatial hash of the scan
+//      positions: the cost grows with the overlaps, not with the square of the drives).
+//   4. Verification, multi-hypothesis: the submaps' registration clouds are registered (PointIcp,
+//      coarse then fine) from the prior relative pose and from that pose shifted on a 3x3 grid of
+//      world x/y steps of each of Options::hypothesis_offsets_m; the best result is the lowest
+//      point-to-plane RMS among those with at least min_inlier_ratio inliers; the pair is
+//      accepted where that RMS is at most max_rms_m and at most max_rms_ratio_to_self times the
+//      RMS with which the source submap fits its own drive's neighbour (a different place that
+//      looks alike fits clearly worse than the same place does), and no hypothesis that ends at a
+//      different pose (beyond hypothesis_agreement_m / _rad) fits about as well (at least
+//      ambiguity_ratio of the inliers and an RMS within 1 / ambiguity_ratio of the best):
+//      repetitive or similar-looking places are rejected, not guessed.
+//   5. Solve and reject: the graph is solved (every node free); an accepted overlap whose
+//      whitened residual then exceeds consistency_gate_chi2 contradicts the rest (GNSS, the
+//      drives' chains, the other overlaps) and is removed, and the graph solved again (at most
+//      max_rejection_rounds).
+//
+// The result holds every drive with its adjusted submap poses (scan poses follow rigidly), every
+// overlap tested with its verdict and its offset before and after (the translation between the
+// two drives' maps there that the registration measured, under the input and the adjusted poses),
+// and each drive's GNSS bias.
+//
+// Thread safety: Run is a pure function (uses Options::num_threads threads).
+
+#include <Eigen/Geometry>
+#include <string>
+#include <vector>
+
+#include "slam_mms/backend/solve_summary.hpp"
+#include "slam_mms/backend/submap_graph.hpp"
+#include "slam_mms/core/status.hpp"
+#include "slam_mms/pipeline/drive_result.hpp"
+#include "slam_mms/registration/registration_options.hpp"
+
+namespace slam_mms {
+
+class DriveAdjustment {
+ public:
+  struct Options {
+    double overlap_distance_m = 15.0;  ///< Scan positions of two submaps this close [m], > 0.
+    int max_pairs_per_submap = 2;      ///< Nearest submaps of each other drive tested, >= 1.
+    /// Grid steps of the world x/y shifts of the prior relative pose tried besides it [m] (each a
+    /// 3x3 grid: 8 hypotheses); {3}: any offset within +-4.5 m starts within 1.5 m per axis.
+    std::vector<double> hypothesis_offsets_m = {3.0};
+    double coarse_correspondence_m = 3.0;  ///< ICP association distance, coarse pass [m], > 0.
+    double fine_correspondence_m = 0.8;    ///< ICP association distance, fine pass [m], > 0.
+    /// Of the best hypothesis, in (0, 1] (level 2's loop verification: Level2Options).
+    double min_inlier_ratio = 0.5;
+    double max_rms_m = 0.25;  ///< Point-to-plane RMS of the best hypothesis [m], > 0.
+    /// ... and at most this times the RMS with which the source submap fits its own drive's
+    /// neighbouring submap (the data's own noise level: sensor, voxels, motion), > 0.
+    double max_rms_ratio_to_self = 2.0;
+    double hypothesis_agreement_m = 0.3;     ///< Two hypotheses agree within this [m] ...
+    double hypothesis_agreement_rad = 0.02;  ///< ... and this [rad].
+    /// A disagreeing hypothesis with at least this fraction of the best's inliers and an RMS
+    /// within 1 / ambiguity_ratio of the best's: ambiguous, in (0, 1].
+    double ambiguity_ratio = 0.9;
+    /// Whitened squared residual of an accepted overlap after the solve above which it is
+    /// rejected as inconsistent (6 DoF), > 0.
+    double consistency_gate_chi2 = 50.0;
+    int max_rejection_rounds = 3;  ///< >= 0.
+    /// Registration covariance: the ICP's, scaled by this and floored (as level 2's map-to-map).
+    double registration_covariance_scale = 100.0;
+    double registration_sigma_floor_rad = 0.001;
+    double registration_sigma_floor_m = 0.02;
+    /// Per-drive GNSS bias prior sigma [m] (0: no bias; the drives' GNSS taken as one datum).
+    double gnss_bias_sigma_m = 10.0;
+    /// Cross-drive factors' robust loss (in sigmas of the whitened residual).
+    RobustLoss overlap_loss = RobustLoss::Cauchy(5.0);
+    /// The merged graph's solve (the whole graph at once: more time than level 2 gives a drive).
+    SubmapGraph::Options graph = DefaultGraphOptions();
+    PointIcpOptions icp;
+    int num_threads = 2;  ///< [1, 64].
+
+    [[nodiscard]] Status Validate() const;
+    static SubmapGraph::Options DefaultGraphOptions() {
+      SubmapGraph::Options g;
+      g.max_iterations = 200;
+      g.max_solve_time_s = 120.0;
+      return g;
+    }
+  };
+
+  struct Drive {
+    std::string name;
+    DriveResult result;
+  };
+
+  /// One pair of submaps of two drives tested for overlap.
+  struct Overlap {
+    size_t drive_a = 0;  ///< Index into the drives (drive_a < drive_b).
+    size_t drive_b = 0;
+    SubmapId submap_a = 0;  ///< The drives' own submap ids.
+    SubmapId submap_b = 0;
+    double distance_m = 0.0;  ///< Nearest scan positions under the input poses.
+    bool verified = false;    ///< Registration accepted it (step 4).
+    bool accepted = false;    ///< In the final graph (verified and consistent, step 5).
+    std::string verdict;      ///< Why it was rejected, or "accepted".
+    int hypotheses_converged = 0;
+    double inlier_ratio = 0.0;  ///< Of the best hypothesis.
+    double rms_m = 0.0;
+    double self_rms_m = 0.0;  ///< The source submap against its own neighbour (0: unknown).
+    Eigen::Isometry3d T_a_b = Eigen::Isometry3d::Identity();  ///< Registered (verified only).
+    Matrix6d covariance = Matrix6d::Identity();
+    /// Translation of the registered T_a_b against the poses' [m]: input and adjusted.
+    double offset_before_m = 0.0;
+    double offset_after_m = 0.0;
+    double rotation_before_rad = 0.0;
+    double rotation_after_rad = 0.0;
+  };
+
+  struct Result {
+    GeodeticPoint origin;                      ///< The common world: the first drive's.
+    std::vector<Drive> drives;                 ///< In the common world, adjusted submap poses.
+    std::vector<Drive> drives_input;           ///< In the common world, as given.
+    std::vector<Overlap> overlaps;             ///< Every pair tested.
+    std::vector<Eigen::Vector3d> gnss_bias_m;  ///< Per drive (zero without biases).
+    SolveSummary summary;
+    int rejection_rounds = 0;
+    int num_accepted() const;
+  };
+
+  /// Adjusts `drives` (at least one; each with submaps). InvalidArgument naming the drive for an
+  /// empty drive or factors that name unknown submaps.
+  static StatusOr<Result> Run(std::vector<Drive> drives, const Options& options);
+};
+
+}  // namespace slam_mms

@@ -258,6 +258,7 @@ DriveRun RunMethod(const DriveReader& reader, const MappingSystem::Options& base
   if (status.ok()) {
     status = system->Finish();
     run.finished = status.ok();
+    if (run.finished && callbacks.on_finished) callbacks.on_finished(*system);
   }
   run.complete = run.finished && !stopped;
   run.status = status;

@@ -134,6 +134,8 @@ Options:
   --resume                continue a killed run from DIR/checkpoint (same command line): its
                           finished methods are read back, the rest run (a method that was running
                           starts again from the first scan).
+  --drive-result          write the full method's drive result (submaps, their clouds and level-2
+                          factors) to DIR/drive_result for slam_mms_merge (docs/merge.md).
   --checkpoint-every N    while a method runs, write its trajectory so far every N finished
                           submaps (default 10; 0 = never); finished methods are always recorded.
   --sim-scenario NAME     the drive simulated without input data: demo (default: one city block
@@ -196,6 +198,7 @@ StatusOr<RunArgs> ParseRunArgs(int argc, const char* const* argv) {
   app.add_option("--sim-duration", sim_duration);
   app.add_option("--sim-seed", sim_seed);
   app.add_flag("--keep-sim", args.keep_sim);
+  app.add_flag("--drive-result", args.drive_result);
   app.add_flag("--calibrate-extrinsics", args.calibrate_extrinsics);
   app.add_option("--log-level", log_level);
   app.add_option("--crs", args.crs);

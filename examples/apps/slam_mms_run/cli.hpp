@@ -65,6 +65,8 @@ struct RunArgs {
   bool resume = false;           ///< --resume: continue a killed run from its checkpoint in --out.
   int checkpoint_every_submaps = 10;  ///< --checkpoint-every N finished submaps (0 = never).
   bool keep_sim = false;  ///< --keep-sim: keep the simulated default drive in --out/sim.
+  /// --drive-result: write the full method's DriveResult to --out/drive_result (slam_mms_merge).
+  bool drive_result = false;
   /// --calibrate-extrinsics: CalibrateExtrinsics before the methods (see --help).
   bool calibrate_extrinsics = false;
   std::vector<std::string> command_line;  ///< argv as given (report.json).

@@ -40,6 +40,7 @@
 #include "slam_mms/io/kitti_drive_reader.hpp"
 #include "slam_mms/io/map_io.hpp"
 #include "slam_mms/io/trajectory_io.hpp"
+#include "slam_mms/merge/drive_result_io.hpp"
 #include "slam_mms/pipeline/mapping_system.hpp"
 #include "slam_mms/pipeline/sensor_presets.hpp"
 #include "slam_mms/sim/drive_simulator.hpp"
@@ -317,7 +318,22 @@ Status RunMethods(const RunArgs& args, const MappingSystem::Options& options,
         SLAM_MMS_LOG(kWarning) << "checkpoint: " << s.ToString();
       }
     };
-    ModeRun run = RunMode(mode, options, reader, args.pos, tty, &g_stop, on_submap);
+    // --drive-result: the full method's submaps, clouds and level-2 factors (slam_mms_merge).
+    Status drive_result = OkStatus();
+    std::function<void(const MappingSystem&)> on_finished;
+    if (args.drive_result && mode == MappingMode::kFull) {
+      on_finished = [&](const MappingSystem& system) {
+        StatusOr<DriveResult> r = system.ExportDriveResult();
+        drive_result = r.ok() ? WriteDriveResult(*r, args.out_dir / "drive_result") : r.status();
+        if (r.ok() && drive_result.ok()) {
+          std::printf("[%s] drive result: %zu submaps, %zu factors in %s\n", name.c_str(),
+                      r->submaps.size(), r->factors.size(),
+                      (args.out_dir / "drive_result").string().c_str());
+        }
+      };
+    }
+    ModeRun run = RunMode(mode, options, reader, args.pos, tty, &g_stop, on_submap, on_finished);
+    if (!drive_result.ok()) warn("drive result not written: " + drive_result.ToString());
     // The map entropy (CPU) beside the writing of the files (mostly one thread formatting and
     // writing): both only read the run.
     std::optional<StatusOr<eval::MapEntropyResult>> entropy;

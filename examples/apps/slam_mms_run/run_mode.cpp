@@ -21,7 +21,8 @@ bool ResetPeakRss() {
 
 ModeRun RunMode(MappingMode mode, const MappingSystem::Options& base_options,
                 const DriveReader& reader, PosWorkflow pos, bool tty, const std::atomic<bool>* stop,
-                std::function<void(const MappingSystem&, int)> on_submap) {
+                std::function<void(const MappingSystem&, int)> on_submap,
+                std::function<void(const MappingSystem&)> on_finished) {
   ModeRun run;
   run.mode = mode;
   run.name = MappingModeName(mode);
@@ -35,6 +36,7 @@ ModeRun RunMode(MappingMode mode, const MappingSystem::Options& base_options,
   callbacks.on_scan = [&](size_t fed, size_t) { progress.Update(fed); };
   callbacks.stop = stop;
   callbacks.on_submap = std::move(on_submap);
+  callbacks.on_finished = std::move(on_finished);
   DriveRunOptions run_options;
   run_options.pos = pos;
   DriveRun d = RunDrive(reader, options, callbacks, run_options);

@@ -55,10 +55,12 @@ struct ModeRun {
 /// Runs `mode` with `options` (mode overridden) on `reader`; `pos`: the POS of full (--pos).
 /// `tty`: progress bar vs plain lines. `stop` (may be null; set by the SIGINT/SIGTERM handler)
 /// ends the run after the current scan, with what was fed finished (ModeRun::complete false).
-/// `on_submap` (may be empty): DriveRunCallbacks::on_submap (the checkpoints).
+/// `on_submap` (may be empty): DriveRunCallbacks::on_submap (the checkpoints); `on_finished`
+/// (may be empty): DriveRunCallbacks::on_finished (the drive result).
 ModeRun RunMode(MappingMode mode, const MappingSystem::Options& options, const DriveReader& reader,
                 PosWorkflow pos, bool tty, const std::atomic<bool>* stop = nullptr,
-                std::function<void(const MappingSystem&, int)> on_submap = {});
+                std::function<void(const MappingSystem&, int)> on_submap = {},
+                std::function<void(const MappingSystem&)> on_finished = {});
 
 /// Resets the kernel's peak-RSS counter (VmHWM) so the next mode's peak is its own; returns false
 /// where /proc/self/clear_refs is not writable (the peak is then the process's).

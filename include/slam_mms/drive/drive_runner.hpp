@@ -108,6 +108,9 @@ struct DriveRunCallbacks {
   /// Each time level 1 starts a new submap (so one more is finished), with the system (e.g. to
   /// write its FinalTrajectory() so far) and the submaps finished so far; may be empty.
   std::function<void(const MappingSystem& system, int submaps_finished)> on_submap;
+  /// Once Finish() has completed (also after a stop), with the system (e.g. to export its
+  /// DriveResult); may be empty.
+  std::function<void(const MappingSystem& system)> on_finished;
 };
 
 /// True where `streams` state an IMU noise and options.use_stated_imu_noise is on: the run

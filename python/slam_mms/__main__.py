@@ -5,6 +5,7 @@
     python -m slam_mms run --rosbag FILE.bag --extrinsics FILE.yaml --out DIR [...]
     python -m slam_mms run --out DIR          # simulates the demo drive into DIR/sim first
     python -m slam_mms run --help | --version | --config-keys | --dump-config FILE
+    python -m slam_mms merge --drive OUT1 --drive OUT2 [...] --out DIR [...]
     python -m slam_mms version
 
 ``run`` takes exactly slam_mms_run's flags (docs/user_guide.md) and runs the app's own C++ entry
@@ -38,7 +39,11 @@ def main(argv: Optional[List[str]] = None) -> int:
         sys.stdout.flush()
         sys.stderr.flush()
         return _C.run_app([f"{_PROG} run", *rest])
-    print(f"{_PROG}: error: unknown command '{command}' (expected run or version)", file=sys.stderr)
+    if command == "merge":
+        sys.stdout.flush()
+        sys.stderr.flush()
+        return _C.merge_app([f"{_PROG} merge", *rest])
+    print(f"{_PROG}: error: unknown command '{command}' (expected run, merge or version)", file=sys.stderr)
     return 2
 
 

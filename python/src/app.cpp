@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "common.hpp"
+#include "slam_mms_merge/merge_main.hpp"
 #include "slam_mms_run/run_main.hpp"
 
 namespace slam_mms::python {
@@ -27,6 +28,19 @@ void RegisterApp(py::module_& m) {
       "Runs slam_mms_run with argv (argv[0] the program name) in this process; returns its exit "
       "status (0 done, 1 input or processing error, 2 bad command line or config, 130/143 "
       "stopped by SIGINT/SIGTERM). Progress goes to stdout, messages to stderr.");
+  m.def(
+      "merge_app",
+      [](const std::vector<std::string>& argv) {
+        std::vector<const char*> c_argv;
+        c_argv.reserve(argv.size() + 1);
+        for (const std::string& a : argv) c_argv.push_back(a.c_str());
+        c_argv.push_back(nullptr);
+        py::gil_scoped_release release;
+        return app::MergeMain(static_cast<int>(argv.size()), c_argv.data());
+      },
+      py::arg("argv"),
+      "Runs slam_mms_merge with argv (argv[0] the program name) in this process; returns its exit "
+      "status (0 done, 1 input or processing error, 2 bad command line).");
 }
 
 }  // namespace slam_mms::python

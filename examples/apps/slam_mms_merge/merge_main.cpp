@@ -148,6 +148,7 @@ int MergeMainImpl(int argc, const char* const* argv) {
   std::string out_dir, crs, log_level = "warning";
   double las_tile_size = 100.0;
   int threads = 2;
+  DriveAdjustment::Options options;
   CLI::App app("slam_mms_merge: drives of one area adjusted into one map (docs/merge.md)",
                "slam_mms_merge");
   app.set_version_flag("--version", std::string("slam_mms_merge ") + SLAM_MMS_VERSION_STRING);
@@ -158,6 +159,12 @@ int MergeMainImpl(int argc, const char* const* argv) {
       ->check(CLI::PositiveNumber);
   app.add_option("--crs", crs, "output CRS of the LAS tiles (default WGS 84 / UTM of the origin)");
   app.add_option("--threads", threads, "threads")->check(CLI::Range(1, 64));
+  app.add_option("--gnss-bias-sigma", options.gnss_bias_sigma_m,
+                 "prior sigma of each drive's GNSS datum offset [m]; 0 = one datum for all")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--overlap-distance", options.overlap_distance_m,
+                 "submaps of two drives whose scans come this close are tested [m]")
+      ->check(CLI::PositiveNumber);
   app.add_option("--log-level", log_level, "debug|info|warning|error");
   try {
     app.parse(argc, argv);
@@ -204,7 +211,6 @@ int MergeMainImpl(int argc, const char* const* argv) {
     drives.push_back({name, std::move(r).value()});
   }
 
-  DriveAdjustment::Options options;
   options.num_threads = threads;
   options.graph.num_threads = threads;
   auto adjusted = DriveAdjustment::Run(drives, options);

@@ -1,0 +1,59 @@
+#!/usr/bin/env bash
+# End-to-end test of slam_mms_merge (issue 24; registered in tests/CMakeLists.txt):
+#   slam_mms_merge_test.sh SLAM_MMS_MERGE SLAM_MMS_RUN SLAM_MMS_SIM
+# One short simulated drive, run twice by slam_mms_run --drive-result with different GNSS outages
+# (two drives of one street with their own outage drift), merged: the overlaps are found and
+# accepted, the offset between the drives where they overlap shrinks to <= 3 cm, no drive's ATE
+# or outage error grows, the merged map is sharper than the union of the two maps; the outputs
+# exist; a folder without a drive result and an unwritable --out fail with a message naming them.
+set -uo pipefail
+merge=$1
+run=$2
+sim=$3
+tmp=$(mktemp -d "${TMPDIR:-/tmp}/slam_mms_merge_test.XXXXXX")
+trap 'rm -rf "$tmp"' EXIT
+fail() { echo "FAIL: $*"; exit 1; }
+
+"$sim" --scenario demo --seed 5 --duration 24 --out "$tmp/sim" --no-scene-cloud >"$tmp/sim.log" 2>&1 ||
+  { cat "$tmp/sim.log"; fail "slam_mms_sim"; }
+drive=$(ls -d "$tmp"/sim/*/*_sync | head -n1)
+[[ -d $drive ]] || fail "no simulated drive in $tmp/sim"
+for spec in "a 3:12" "b 12:10"; do
+  set -- $spec
+  timeout 300 "$run" --kitti-raw "$drive" --mode full --drive-result --gnss-outage "$2" \
+    --out "$tmp/$1" >"$tmp/$1.log" 2>&1 || { tail -20 "$tmp/$1.log"; fail "slam_mms_run $1"; }
+  [[ -s $tmp/$1/drive_result/drive_result.json ]] || fail "no drive result in $tmp/$1"
+  grep -q "drive result:" "$tmp/$1.log" || fail "slam_mms_run did not report the drive result"
+done
+
+timeout 300 "$merge" --drive "$tmp/a" --drive "$tmp/b" --out "$tmp/m" >"$tmp/m.log" 2>&1 ||
+  { cat "$tmp/m.log"; fail "slam_mms_merge"; }
+cat "$tmp/m.log"
+for f in report.json georef.json overlaps.csv a.tum b.tum a_before.tum map/index.json; do
+  [[ -s $tmp/m/merged/$f ]] || fail "no merged/$f"
+done
+python3 - "$tmp/m/merged/report.json" <<'PY' || fail "merged report"
+import json, sys
+r = json.load(open(sys.argv[1]))
+o = r["overlaps"]
+assert o["accepted"] >= 2, o
+off = r["overlap_offset_m"]
+assert off["after"] <= 0.03 and off["after"] < off["before"], off
+for d in r["drives"]:
+    assert d["ground_truth"] == "simulator", d
+    assert d["ate_after_m"] <= d["ate_before_m"] + 1e-3, d
+    assert d["max_outage_err_after_m"] <= d["max_outage_err_before_m"] + 1e-3, d
+e = r["map_entropy"]
+assert e["merged"] < e["union_before"], e
+print("merged report ok:", off, e)
+PY
+
+# A folder without a drive result; an unwritable --out.
+"$merge" --drive "$tmp/a" --drive "$tmp/sim" --out "$tmp/m2" >"$tmp/bad.log" 2>&1
+[[ $? -eq 1 ]] || fail "a folder without a drive result must exit 1"
+grep -q "drive_result.json" "$tmp/bad.log" || fail "the error must name drive_result.json"
+touch "$tmp/file"
+"$merge" --drive "$tmp/a" --drive "$tmp/b" --out "$tmp/file/x" >"$tmp/unw.log" 2>&1
+[[ $? -eq 1 ]] || fail "an unwritable --out must exit 1"
+grep -q "\-\-out" "$tmp/unw.log" || fail "the error must name --out"
+echo "PASS"

@@ -67,10 +67,9 @@ Status DriveSimulator::Options::Validate() const {
                   "route variants exist for scenarios \"demo\" and \"default\" only (-1 = none)");
     }
     if (route_variant < 0 || route_variant >= n) {
-      return fail("route_variant", std::to_string(route_variant),
-                  ("must be in [0, " + std::to_string(n) + ") for scenario \"" + scenario +
-                   "\" (or -1: the scenario's route alone)")
-                      .c_str());
+      const std::string rule = "must be in [0, " + std::to_string(n) + ") for scenario \"" +
+                               scenario + "\" (or -1: the scenario's route alone)";
+      return fail("route_variant", std::to_string(route_variant), rule.c_str());
     }
   }
   if (!(duration_s >= 0.0)) return fail("duration_s", std::to_string(duration_s), "must be >= 0");

@@ -3,7 +3,14 @@
 //   slam_mms_sim --scenario default --seed N --duration S --out DIR
 //   slam_mms_sim --oxts OXTS_DRIVE_DIR --seed N --duration S --out DIR     (real KITTI motion)
 //
+//   slam_mms_sim --scenario demo --seed N --route-variant K --out DIR   (drive K + 1 of one city)
+//
 // Further options:
+//   --route-variant K                  route variant K of scenario demo or default (0, 1, 2): every
+//                                      variant of one seed drives through the same city, in one
+//                                      world frame; variant K starts K hours later, has its own
+//                                      sensor noise and is written as drive K + 1 (unless
+//                                      --drive-id); see docs/simulator.md "Route variants"
 //   --gnss-outage START_S:DURATION_S   (repeatable; relative to the first scan)
 //   --imu-grade perfect|consumer|tactical|navigation   (default tactical, RT3003-like)
 //   --gnss-quality fixed|float|sps     best GNSS solution reachable (default fixed)
@@ -55,6 +62,8 @@ int Usage(const std::string& error) {
   (error.empty() ? std::cout : std::cerr)
       << "usage: slam_mms_sim (--scenario default | --oxts OXTS_DRIVE_DIR) --seed N --duration S "
          "--out DIR\n"
+         "       [--route-variant K]   (scenarios demo and default: K in 0..2, drives of one "
+         "city)\n"
          "       [--gnss-outage START_S:DURATION_S]... [--imu-grade "
          "perfect|consumer|tactical|navigation]\n"
          "       [--gnss-quality fixed|float|sps] [--urban-canyon SCALE] [--origin LAT,LON,H]\n"
@@ -128,6 +137,7 @@ int main(int argc, char** argv) {
   app.add_flag("-h,--help", help);
   app.add_flag("--version", version);
   app.add_option("--scenario", o.scenario);
+  app.add_option("--route-variant", o.route_variant);
   app.add_option("--oxts", o.oxts_drive_dir);
   app.add_option("--oxts-start", o.oxts_start_s);
   app.add_option("--seed", o.seed);
@@ -206,6 +216,10 @@ int main(int argc, char** argv) {
     o.origin_longitude_deg = numbers[1];
     o.origin_height_m = numbers[2];
   }
+  if (app.count("--route-variant") > 0 && o.route_variant < 0) {
+    return Usage("--route-variant wants K >= 0 (route_variant), got " +
+                 std::to_string(o.route_variant));
+  }
   if (out.empty()) return Usage("--out DIR is required");
   auto grade = slam_mms::sim::ParseImuGrade(imu_grade);
   if (!grade.ok()) return Usage(grade.status().message());
@@ -227,6 +241,11 @@ int main(int argc, char** argv) {
   if (!sim.ok()) {
     std::cerr << "slam_mms_sim: " << sim.status().ToString() << "\n";
     return 1;
+  }
+  if (o.route_variant >= 0) {
+    std::cerr << "route variant " << o.route_variant << " of "
+              << slam_mms::sim::NumRouteVariants(o.scenario) << " (world along all of them), drive "
+              << sim->options().drive_id << ", sensor seed " << sim->sensor_seed() << "\n";
   }
   const auto& st = sim->world().stats();
   std::cerr << "world: " << st.num_triangles << " triangles, " << st.num_buildings << " buildings, "

@@ -22,18 +22,21 @@ Eigen::Matrix3f Frame(const Eigen::Vector2d& t) {
 
 class Generator {
  public:
-  Generator(const ReferenceTrajectory& traj, double t_begin, double t_end, CityWorld::Impl* impl)
-      : traj_(traj),
-        t_begin_(t_begin),
-        t_end_(t_end),
+  Generator(const std::vector<CityWorld::PathSpan>& spans, bool either_direction,
+            CityWorld::Impl* impl)
+      : spans_(spans),
+        either_direction_(either_direction),
         impl_(impl),
         o_(impl->options),
         rng_(MixSeed(o_.seed, 2)),
         veg_rng_(MixSeed(o_.seed, 7)) {}
 
   Status Run() {
-    auto samples = SamplePath(traj_, t_begin_, t_end_, o_.body_height_above_road_m);
-    AssignStreets(o_, &samples);
+    auto samples = SamplePaths(spans_, o_.body_height_above_road_m);
+    // Several paths: an extension must not lower or raise another path's driven street. (One
+    // path keeps its extensions' heights: its world stays as it was.)
+    if (either_direction_) MatchExtensionHeights(&samples);
+    AssignStreets(o_, either_direction_, &samples);
     impl_->path = PathIndex(std::move(samples), 8.0, o_.corridor_m + 12.0);
     impl_->has_path = true;
     BuildGround();
@@ -42,8 +45,11 @@ class Generator {
     if (!impl_->mesh.mean_free_path_m.empty())
       impl_->mesh.mean_free_path_m.resize(impl_->mesh.triangles.size(), 0.f);
     double length = 0.0;
-    for (double t = t_begin_ + 0.1; t <= t_end_; t += 0.1)
-      length += (traj_.Pose(t).translation() - traj_.Pose(t - 0.1).translation()).norm();
+    for (const CityWorld::PathSpan& span : spans_) {
+      const ReferenceTrajectory& traj = *span.trajectory;
+      for (double t = span.t_begin_s + 0.1; t <= span.t_end_s; t += 0.1)
+        length += (traj.Pose(t).translation() - traj.Pose(t - 0.1).translation()).norm();
+    }
     impl_->stats.path_length_m = length;
     return OkStatus();
   }
@@ -580,8 +586,8 @@ class Generator {
     }
   }
 
-  const ReferenceTrajectory& traj_;
-  double t_begin_, t_end_;
+  const std::vector<CityWorld::PathSpan>& spans_;
+  bool either_direction_;
   CityWorld::Impl* impl_;
   const CityWorld::Options& o_;
   Rng rng_;
@@ -593,12 +599,14 @@ class Generator {
 
 }  // namespace
 
-Status GenerateCity(const ReferenceTrajectory& trajectory, double t_begin_s, double t_end_s,
+Status GenerateCity(const std::vector<CityWorld::PathSpan>& spans, bool either_direction,
                     CityWorld::Impl* impl) {
-  if (trajectory.DurationSeconds() <= 0.0 || !(t_end_s > t_begin_s)) {
-    return InvalidArgumentError("CityWorld::Build: the trajectory span is empty");
+  for (const CityWorld::PathSpan& span : spans) {
+    if (span.trajectory->DurationSeconds() <= 0.0 || !(span.t_end_s > span.t_begin_s)) {
+      return InvalidArgumentError("CityWorld::Build: the trajectory span is empty");
+    }
   }
-  Generator g(trajectory, t_begin_s, t_end_s, impl);
+  Generator g(spans, either_direction, impl);
   return g.Run();
 }
 

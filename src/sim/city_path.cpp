@@ -51,12 +51,14 @@ std::vector<PathSample> SamplePath(const ReferenceTrajectory& traj, double t_beg
   for (int k = n_ext; k >= 1; --k) {
     PathSample s = out.front();
     s.p -= s.tangent * (k * kSampleSpacing_m);
+    s.extension = true;
     ext.push_back(s);
   }
   ext.insert(ext.end(), out.begin(), out.end());
   for (int k = 1; k <= n_ext; ++k) {
     PathSample s = out.back();
     s.p += s.tangent * (k * kSampleSpacing_m);
+    s.extension = true;
     ext.push_back(s);
   }
   double s_acc = 0.0;
@@ -67,7 +69,59 @@ std::vector<PathSample> SamplePath(const ReferenceTrajectory& traj, double t_beg
   return ext;
 }
 
-void AssignStreets(const CityWorld::Options& o, std::vector<PathSample>* samples) {
+std::vector<PathSample> SamplePaths(const std::vector<CityWorld::PathSpan>& spans,
+                                    double body_height) {
+  constexpr double kGap_m = 100.0;  // > AssignStreets' 40 m: no revisit is missed at a join
+  std::vector<PathSample> out;
+  for (const CityWorld::PathSpan& span : spans) {
+    std::vector<PathSample> path =
+        SamplePath(*span.trajectory, span.t_begin_s, span.t_end_s, body_height);
+    const double offset = out.empty() ? 0.0 : out.back().s + kGap_m;
+    for (PathSample& p : path) {
+      p.s += offset;
+      p.s_canonical += offset;
+    }
+    path.front().path_start = true;
+    out.insert(out.end(), path.begin(), path.end());
+  }
+  return out;
+}
+
+void MatchExtensionHeights(std::vector<PathSample>* samples) {
+  std::unordered_map<int64_t, std::vector<int>> grid;  // driven samples, 4 m cells
+  auto key = [](int64_t x, int64_t y) {
+    return static_cast<int64_t>((static_cast<uint64_t>(x) << 32) ^
+                                static_cast<uint64_t>(y & 0xffffffffLL));
+  };
+  auto cell = [](double v) { return static_cast<int64_t>(std::floor(v / 4.0)); };
+  for (size_t i = 0; i < samples->size(); ++i) {
+    const PathSample& s = (*samples)[i];
+    if (!s.extension) grid[key(cell(s.p.x()), cell(s.p.y()))].push_back(static_cast<int>(i));
+  }
+  for (PathSample& s : *samples) {
+    if (!s.extension) continue;
+    double best = 2.5;
+    const PathSample* driven = nullptr;
+    for (int64_t dx = -1; dx <= 1; ++dx) {
+      for (int64_t dy = -1; dy <= 1; ++dy) {
+        auto it = grid.find(key(cell(s.p.x()) + dx, cell(s.p.y()) + dy));
+        if (it == grid.end()) continue;
+        for (int j : it->second) {
+          const PathSample& e = (*samples)[j];
+          const double d = (e.p - s.p).norm();
+          if (d < best && std::abs(e.tangent.dot(s.tangent)) > 0.8) {
+            best = d;
+            driven = &e;
+          }
+        }
+      }
+    }
+    if (driven != nullptr) s.z_road = driven->z_road;
+  }
+}
+
+void AssignStreets(const CityWorld::Options& o, bool either_direction,
+                   std::vector<PathSample>* samples) {
   Rng rng(MixSeed(o.seed, 1));
   int street = -1;
   Eigen::Vector2d street_dir = Eigen::Vector2d::Zero();
@@ -83,6 +137,7 @@ void AssignStreets(const CityWorld::Options& o, std::vector<PathSample>* samples
   };
   for (size_t i = 0; i < samples->size(); ++i) {
     PathSample& s = (*samples)[i];
+    if (s.path_start) street_dir = Eigen::Vector2d::Zero();  // a new path: a new street
     int earlier = -1;
     double best = 2.5;
     for (int dx = -1; dx <= 1; ++dx) {
@@ -92,7 +147,8 @@ void AssignStreets(const CityWorld::Options& o, std::vector<PathSample>* samples
         for (int j : it->second) {
           const PathSample& e = (*samples)[j];
           const double d = (e.p - s.p).norm();
-          if (e.s < s.s - 40.0 && d < best && e.tangent.dot(s.tangent) > 0.8) {
+          const double dot = e.tangent.dot(s.tangent);
+          if (e.s < s.s - 40.0 && d < best && (dot > 0.8 || (either_direction && dot < -0.8))) {
             best = d;
             earlier = j;
           }
@@ -105,6 +161,7 @@ void AssignStreets(const CityWorld::Options& o, std::vector<PathSample>* samples
       s.sidewalk = e.sidewalk;
       s.street = e.street;
       s.s_canonical = e.s_canonical + (s.p - e.p).dot(e.tangent);
+      s.canonical_sign = e.tangent.dot(s.tangent) > 0.0 ? 1.0 : -1.0;
       s.revisit = true;
       street_dir = Eigen::Vector2d::Zero();  // a new street starts after the revisit
     } else {

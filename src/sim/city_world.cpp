@@ -271,8 +271,31 @@ StatusOr<CityWorld> CityWorld::Build(const ReferenceTrajectory& trajectory, cons
     return InvalidArgumentError("CityWorld::Build: t_end_s must be > t_begin_s");
   auto impl = std::make_unique<Impl>();
   impl->options = options;
-  SLAM_MMS_RETURN_IF_ERROR(GenerateCity(trajectory, std::max(t_begin_s, trajectory.start_s()),
-                                        std::min(t_end_s, trajectory.end_s()), impl.get()));
+  const PathSpan span{&trajectory, std::max(t_begin_s, trajectory.start_s()),
+                      std::min(t_end_s, trajectory.end_s())};
+  SLAM_MMS_RETURN_IF_ERROR(GenerateCity({span}, /*either_direction=*/false, impl.get()));
+  SLAM_MMS_RETURN_IF_ERROR(impl->Commit());
+  return CityWorld(std::move(impl));
+}
+
+StatusOr<CityWorld> CityWorld::Build(const std::vector<PathSpan>& paths, const Options& options) {
+  SLAM_MMS_RETURN_IF_ERROR(options.Validate());
+  if (paths.empty()) return InvalidArgumentError("CityWorld::Build: no paths");
+  std::vector<PathSpan> clamped;
+  for (size_t i = 0; i < paths.size(); ++i) {
+    const PathSpan& p = paths[i];
+    if (p.trajectory == nullptr)
+      return InvalidArgumentError("CityWorld::Build: paths[" + std::to_string(i) +
+                                  "].trajectory is null");
+    if (!(p.t_end_s > p.t_begin_s))
+      return InvalidArgumentError("CityWorld::Build: paths[" + std::to_string(i) +
+                                  "]: t_end_s must be > t_begin_s");
+    clamped.push_back({p.trajectory, std::max(p.t_begin_s, p.trajectory->start_s()),
+                       std::min(p.t_end_s, p.trajectory->end_s())});
+  }
+  auto impl = std::make_unique<Impl>();
+  impl->options = options;
+  SLAM_MMS_RETURN_IF_ERROR(GenerateCity(clamped, /*either_direction=*/true, impl.get()));
   SLAM_MMS_RETURN_IF_ERROR(impl->Commit());
   return CityWorld(std::move(impl));
 }

@@ -54,8 +54,10 @@ struct CityWorld::Impl {
                            const PathSample** street) const;
 };
 
-/// Generates the procedural city into `impl` (path, ground, objects); does not commit.
-Status GenerateCity(const ReferenceTrajectory& trajectory, double t_begin_s, double t_end_s,
+/// Generates the procedural city into `impl` (path, ground, objects) along `spans` (already
+/// clamped to their trajectories); does not commit. `either_direction`: a street driven in the
+/// opposite direction is a revisit too (CityWorld::Build of several paths).
+Status GenerateCity(const std::vector<CityWorld::PathSpan>& spans, bool either_direction,
                     CityWorld::Impl* impl);
 
 }  // namespace slam_mms::sim

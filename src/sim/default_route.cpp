@@ -2,6 +2,7 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
+#include <string>
 #include <vector>
 
 #include "slam_mms/sim/reference_trajectory.hpp"
@@ -156,6 +157,61 @@ std::vector<PoseSample> DemoUrbanRouteSamples() {
   const std::vector<Leg> legs = {{{0.0, 0.0}, 9.0},  {{100.0, 0.0}, 8.5}, {{100.0, 70.0}, 9.0},
                                  {{0.0, 70.0}, 8.5}, {{0.0, 0.0}, 8.0},   {{60.0, 0.0}, 0.0}};
   return RouteSamples(legs, {});
+}
+
+int NumRouteVariants(const std::string& scenario) {
+  return scenario == "demo" || scenario == "default" ? 3 : 0;
+}
+
+StatusOr<std::vector<PoseSample>> RouteVariantSamples(const std::string& scenario, int variant) {
+  const int n = NumRouteVariants(scenario);
+  if (n == 0) {
+    return InvalidArgumentError("RouteVariantSamples: scenario '" + scenario +
+                                "' has no route variants (only \"demo\" and \"default\")");
+  }
+  if (variant < 0 || variant >= n) {
+    return InvalidArgumentError("RouteVariantSamples: route_variant = " + std::to_string(variant) +
+                                "; must be in [0, " + std::to_string(n) + ") for scenario '" +
+                                scenario + "'");
+  }
+  // Corners in the city frame of DefaultUrbanRouteSamples / DemoUrbanRouteSamples (the same
+  // rotation, road profile and origin): variant 0 is that route itself. docs/simulator.md
+  // "Route variants" lists the streets each variant shares with the others.
+  if (scenario == "demo") {
+    if (variant == 0) return DemoUrbanRouteSamples();
+    if (variant == 1) {
+      // Clockwise around the double block x in [0, 100], y in [0, 140] from its north-west
+      // corner: variant 0's east, first and west streets in the opposite direction, then 30 m
+      // of its own first street again (a revisit).
+      const std::vector<Leg> legs = {{{0.0, 140.0}, 9.0}, {{100.0, 140.0}, 8.5},
+                                     {{100.0, 0.0}, 9.0}, {{0.0, 0.0}, 8.5},
+                                     {{0.0, 140.0}, 8.0}, {{30.0, 140.0}, 0.0}};
+      return RouteSamples(legs, {});
+    }
+    // Variant 2: from the south up variant 0's east street (same direction), clockwise around the
+    // adjacent block x in [100, 200], y in [0, 70], west along variant 0's first street.
+    const std::vector<Leg> legs = {{{100.0, -70.0}, 9.0},
+                                   {{100.0, 70.0}, 8.5},
+                                   {{200.0, 70.0}, 9.0},
+                                   {{200.0, 0.0}, 8.5},
+                                   {{40.0, 0.0}, 0.0}};
+    return RouteSamples(legs, {});
+  }
+  if (variant == 0) return DefaultUrbanRouteSamples();
+  if (variant == 1) {
+    // From the north down variant 0's east street, then its first, west and (half) north streets
+    // in the opposite direction, north into new streets and back to the start (a loop).
+    const std::vector<Leg> legs = {
+        {{300.0, 350.0}, 9.5}, {{300.0, 0.0}, 10.0},  {{-20.0, 0.0}, 9.0},  {{-20.0, 200.0}, 9.5},
+        {{150.0, 200.0}, 8.5}, {{150.0, 350.0}, 9.0}, {{300.0, 350.0}, 0.0}};
+    return RouteSamples(legs, {{420.0, 7.0}, {900.0, 6.0}});
+  }
+  // Variant 2: from the east along variant 0's first street (opposite direction), south down its
+  // south street (same direction), around the block east of it and back down its east street.
+  const std::vector<Leg> legs = {
+      {{450.0, 0.0}, 9.5},   {{150.0, 0.0}, 9.0},   {{150.0, -160.0}, 10.0}, {{450.0, -160.0}, 9.5},
+      {{450.0, 200.0}, 8.5}, {{300.0, 200.0}, 8.5}, {{300.0, 100.0}, 0.0}};
+  return RouteSamples(legs, {{520.0, 8.0}, {1000.0, 6.0}});
 }
 
 std::vector<PoseSample> LongUrbanRouteSamples(double min_duration_s) {

@@ -87,6 +87,9 @@ Status WriteScenarioJson(const DriveSimulator::Options& o, const DriveSimulator&
   j["oxts_drive_dir"] = o.oxts_drive_dir.string();
   j["oxts_start_s"] = o.oxts_start_s;
   j["seed"] = o.seed;
+  j["route_variant"] = o.route_variant;  // -1: the scenario's route alone
+  j["num_route_variants"] = o.oxts_drive_dir.empty() ? NumRouteVariants(o.scenario) : 0;
+  j["sensor_seed"] = sim.sensor_seed();
   j["duration_s"] = o.duration_s;
   j["lead_in_s"] = o.lead_in_s;
   j["drive"] = s.drive_name;
@@ -181,7 +184,7 @@ Status WriteScenarioJson(const DriveSimulator::Options& o, const DriveSimulator&
     // The per-laser residuals the scans were simulated with (DriveSimulator passes this seed).
     Json errors = Json::array();
     bool any = false;
-    for (const auto& e : lidar.LaserErrors(MixSeed(o.seed, 50))) {
+    for (const auto& e : lidar.LaserErrors(MixSeed(sim.sensor_seed(), 50))) {
       errors.push_back({e.elevation_deg, e.azimuth_deg, e.range_offset_m, e.range_scale});
       any = any || e.elevation_deg != 0.0 || e.azimuth_deg != 0.0 || e.range_offset_m != 0.0 ||
             e.range_scale != 0.0;

@@ -60,6 +60,18 @@ Status DriveSimulator::Options::Validate() const {
                 "must be \"default\", \"demo\" or \"long\" (or set oxts_drive_dir)");
   if (oxts_drive_dir.empty() && scenario == "long" && !(duration_s > 0.0))
     return fail("duration_s", std::to_string(duration_s), "must be > 0 for scenario \"long\"");
+  if (route_variant != -1) {
+    const int n = oxts_drive_dir.empty() ? NumRouteVariants(scenario) : 0;
+    if (n == 0) {
+      return fail("route_variant", std::to_string(route_variant),
+                  "route variants exist for scenarios \"demo\" and \"default\" only (-1 = none)");
+    }
+    if (route_variant < 0 || route_variant >= n) {
+      const std::string rule = "must be in [0, " + std::to_string(n) + ") for scenario \"" +
+                               scenario + "\" (or -1: the scenario's route alone)";
+      return fail("route_variant", std::to_string(route_variant), rule.c_str());
+    }
+  }
   if (!(duration_s >= 0.0)) return fail("duration_s", std::to_string(duration_s), "must be >= 0");
   if (!(lead_in_s >= 0.0)) return fail("lead_in_s", std::to_string(lead_in_s), "must be >= 0");
   if (!(oxts_start_s >= 0.0) || !std::isfinite(oxts_start_s)) {
@@ -112,6 +124,7 @@ struct DriveSimulator::Impl {
   double first_scan_s = 0.0;
   int num_scans = 0;
   double seconds_world = 0.0;
+  uint64_t sensor_seed = 1;
 };
 
 namespace {
@@ -193,12 +206,20 @@ StatusOr<DriveSimulator> DriveSimulator::Create(const Options& options_in) {
     }
   } else {
     SLAM_MMS_ASSIGN_OR_RETURN(epoch, ParseKittiTimestamp(o.start_time));
-    samples = o.scenario == "long"   ? LongUrbanRouteSamples(o.duration_s + o.lead_in_s + 5.0)
-              : o.scenario == "demo" ? DemoUrbanRouteSamples()
-                                     : DefaultUrbanRouteSamples();
+    if (o.route_variant >= 0) {
+      SLAM_MMS_ASSIGN_OR_RETURN(samples, RouteVariantSamples(o.scenario, o.route_variant));
+      epoch = epoch.PlusSeconds(3600.0 * o.route_variant);
+    } else {
+      samples = o.scenario == "long"   ? LongUrbanRouteSamples(o.duration_s + o.lead_in_s + 5.0)
+                : o.scenario == "demo" ? DemoUrbanRouteSamples()
+                                       : DefaultUrbanRouteSamples();
+    }
     if (o.date.empty()) o.date = "2026_01_15";
-    if (o.drive_id < 0) o.drive_id = 1;
+    if (o.drive_id < 0) o.drive_id = o.route_variant >= 0 ? o.route_variant + 1 : 1;
   }
+  // Variant 0 keeps the seed's noise (the drive without variants differs only in its world).
+  impl->sensor_seed =
+      o.route_variant > 0 ? MixSeed(o.seed, 1000 + static_cast<uint64_t>(o.route_variant)) : o.seed;
   SLAM_MMS_ASSIGN_OR_RETURN(impl->trajectory, ReferenceTrajectory::Fit(epoch, samples, o.fit));
   const ReferenceTrajectory& traj = impl->trajectory;
   // Timeline: the first scan after the lead-in, then scans back to back.
@@ -217,10 +238,30 @@ StatusOr<DriveSimulator> DriveSimulator::Create(const Options& options_in) {
   impl->num_scans = n;
   const double last_end = impl->first_scan_s + (n - 1) * period + lidar.LastFiringOffsetSeconds();
   const auto t0 = std::chrono::steady_clock::now();
-  SLAM_MMS_ASSIGN_OR_RETURN(
-      CityWorld world,
-      CityWorld::Build(traj, o.world, traj.start_s(), std::min(traj.end_s(), last_end + 1.0)));
-  impl->world = std::make_unique<CityWorld>(std::move(world));
+  if (o.route_variant >= 0) {
+    // One city for all variants: along every variant's whole route, in variant order, whichever
+    // variant (and duration) is simulated.
+    std::vector<ReferenceTrajectory> routes;
+    for (int k = 0; k < NumRouteVariants(o.scenario); ++k) {
+      if (k == o.route_variant) {
+        routes.push_back(traj);
+        continue;
+      }
+      SLAM_MMS_ASSIGN_OR_RETURN(std::vector<PoseSample> route, RouteVariantSamples(o.scenario, k));
+      SLAM_MMS_ASSIGN_OR_RETURN(ReferenceTrajectory fitted,
+                                ReferenceTrajectory::Fit(epoch, route, o.fit));
+      routes.push_back(std::move(fitted));
+    }
+    std::vector<CityWorld::PathSpan> spans;
+    for (const ReferenceTrajectory& r : routes) spans.push_back({&r, r.start_s(), r.end_s()});
+    SLAM_MMS_ASSIGN_OR_RETURN(CityWorld world, CityWorld::Build(spans, o.world));
+    impl->world = std::make_unique<CityWorld>(std::move(world));
+  } else {
+    SLAM_MMS_ASSIGN_OR_RETURN(
+        CityWorld world,
+        CityWorld::Build(traj, o.world, traj.start_s(), std::min(traj.end_s(), last_end + 1.0)));
+    impl->world = std::make_unique<CityWorld>(std::move(world));
+  }
   impl->seconds_world = Seconds(t0);
   return DriveSimulator(std::move(impl));
 }
@@ -231,6 +272,7 @@ const DriveSimulator::Options& DriveSimulator::options() const { return impl_->o
 double DriveSimulator::first_scan_s() const { return impl_->first_scan_s; }
 int DriveSimulator::num_scans() const { return impl_->num_scans; }
 double DriveSimulator::seconds_world_build() const { return impl_->seconds_world; }
+uint64_t DriveSimulator::sensor_seed() const { return impl_->sensor_seed; }
 
 StatusOr<DriveSimulator::Summary> DriveSimulator::Run(const std::filesystem::path& out_dir,
                                                       const Progress& progress,
@@ -269,10 +311,11 @@ StatusOr<DriveSimulator::Summary> DriveSimulator::Run(const std::filesystem::pat
   // ---- 100 Hz IMU / GNSS / POS records ---------------------------------------------------------
   GeographicLib::LocalCartesian enu(o.origin_latitude_deg, o.origin_longitude_deg,
                                     o.origin_height_m);
-  ImuSimulator imu(o.imu, MixSeed(o.seed, 20));
-  GnssSimulator gnss(o.gnss, MixSeed(o.seed, 30));
+  const uint64_t sensor_seed = impl_->sensor_seed;
+  ImuSimulator imu(o.imu, MixSeed(sensor_seed, 20));
+  GnssSimulator gnss(o.gnss, MixSeed(sensor_seed, 30));
   InsErrorProcess ins(o.ins_roll_pitch_sigma_rad, o.ins_yaw_sigma_rad, o.ins_velocity_sigma_mps,
-                      MixSeed(o.seed, 40));
+                      MixSeed(sensor_seed, 40));
   const double imu_dt = 1.0 / o.imu.rate_hz;
   std::vector<double> rec_t;
   std::vector<OxtsRecord> records;
@@ -319,7 +362,7 @@ StatusOr<DriveSimulator::Summary> DriveSimulator::Run(const std::filesystem::pat
     const double ts = first + k * period;
     auto t_l = std::chrono::steady_clock::now();
     Hdl64Lidar::Output out =
-        lidar.Simulate(world, traj, T_body_lidar, ts, k, MixSeed(o.seed, 50), o.num_threads);
+        lidar.Simulate(world, traj, T_body_lidar, ts, k, MixSeed(sensor_seed, 50), o.num_threads);
     summary.seconds_lidar += Seconds(t_l);
     auto t_w = std::chrono::steady_clock::now();
     if (o.write_scene_cloud) scene.Add(out.p_world_exact, out.scan.cloud.intensities());

@@ -18,6 +18,7 @@ PathIndex::PathIndex(std::vector<PathSample> samples, double cell_m, double marg
   ny_ = static_cast<int>(std::ceil((max_.y() - min_.y()) / cell_)) + 1;
   std::vector<std::vector<int>> cells(static_cast<size_t>(nx_) * ny_);
   for (size_t i = 0; i + 1 < samples_.size(); ++i) {
+    if (samples_[i + 1].path_start) continue;  // no segment between two separate paths
     const Eigen::Vector2d a = samples_[i].p.cwiseMin(samples_[i + 1].p) - min_;
     const Eigen::Vector2d b = samples_[i].p.cwiseMax(samples_[i + 1].p) - min_;
     for (int cy = static_cast<int>(a.y() / cell_); cy <= static_cast<int>(b.y() / cell_); ++cy)
@@ -81,7 +82,7 @@ double PathIndex::ZRoad(const PathNearest& n) const {
 double PathIndex::SCanonical(const PathNearest& n) const {
   const auto& a = samples_[n.segment];
   const auto& b = samples_[n.segment + 1];
-  return a.s_canonical + n.alpha * (b.s - a.s);
+  return a.s_canonical + n.alpha * (a.canonical_sign * (b.s - a.s));
 }
 
 }  // namespace slam_mms::sim

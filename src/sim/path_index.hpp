@@ -16,6 +16,13 @@ struct PathSample {
   double sidewalk = 3.0;     // sidewalk width [m]
   int street = 0;
   bool revisit = false;  // lies on a street driven before
+  // +1, or -1 on a revisit driven against the first pass (s_canonical decreases along s).
+  double canonical_sign = 1.0;
+  // First sample of a separate path (several paths of one city): no segment joins it to the
+  // sample before.
+  bool path_start = false;
+  // On the straight extension beyond a path's end (not driven; z_road is the end's).
+  bool extension = false;
 };
 
 struct PathNearest {
@@ -25,6 +32,7 @@ struct PathNearest {
   Eigen::Vector2d foot = Eigen::Vector2d::Zero();
 };
 
+// Segment i joins samples i and i + 1 unless sample i + 1 starts a separate path.
 class PathIndex {
  public:
   PathIndex() = default;

@@ -133,6 +133,14 @@ class CityWorld {
     double path_length_m = 0.0;
   };
 
+  /// A driven span of a trajectory, one of the paths of Build(paths, options). The trajectory is
+  /// borrowed for the call only.
+  struct PathSpan {
+    const ReferenceTrajectory* trajectory = nullptr;
+    double t_begin_s = 0.0;  ///< Clamped to the trajectory like Build's.
+    double t_end_s = 0.0;
+  };
+
   /// Generates the city along `trajectory` (its positions sampled every 0.5 m of travel) between
   /// trajectory seconds `t_begin_s` and `t_end_s` (clamped to the trajectory; streets continue 80 m
   /// beyond both ends).
@@ -140,6 +148,18 @@ class CityWorld {
                                                  const Options& options, double t_begin_s,
                                                  double t_end_s);
   [[nodiscard]] static StatusOr<CityWorld> Build(const ReferenceTrajectory& trajectory,
+                                                 const Options& options);
+  /// Generates one city along several driven paths (e.g. the route variants of a scenario, so that
+  /// several drives see the same streets): the union of the paths' streets, in the order given.
+  /// Paths are never joined to each other (no street between one path's end and the next one's
+  /// start); a street driven by several paths, or twice, in either direction (within 2.5 m,
+  /// headings within about 37 deg of parallel or antiparallel), exists once, with the first pass's
+  /// width and objects. The world depends on the paths and `options` only, so every drive along one
+  /// of the paths sees the same world. With one path it may differ from Build(trajectory, ...)
+  /// where that path drives a street twice in opposite directions (Build merges same-direction
+  /// revisits only). InvalidArgument where `paths` is empty, a trajectory is null or a span is
+  /// empty.
+  [[nodiscard]] static StatusOr<CityWorld> Build(const std::vector<PathSpan>& paths,
                                                  const Options& options);
   /// A world of the given triangles (tests, custom scenes). With `options`, its seed and ground
   /// roughness apply (to triangles of the ground classes road, marking, curb, sidewalk, terrain).

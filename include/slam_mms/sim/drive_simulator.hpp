@@ -52,6 +52,15 @@ class DriveSimulator {
     /// revisit, ~60 s: the demo's drive) or "long" (a serpentine through new streets, as long as
     /// duration_s, which must then be > 0); ignored when oxts_drive_dir is set.
     std::string scenario = "default";
+    /// Route variant of scenario "demo" or "default" (docs/simulator.md "Route variants"):
+    /// -1 (default) = the scenario's route alone, the world generated along it, as before;
+    /// K in [0, NumRouteVariants(scenario)) = variant K's route (K = 0: the same route), in a world
+    /// generated along all the variants' whole routes (CityWorld::Build of several paths), so every
+    /// variant of one seed drives through the same city, in the same world frame. Variant K
+    /// starts K hours after start_time, draws its sensor noise (IMU, GNSS, INS, LiDAR) from
+    /// sensor_seed() (K = 0: `seed`, as without variants; else derived from (seed, K)) and is
+    /// written as drive K + 1 unless drive_id is set. Not with "long" or oxts_drive_dir.
+    int route_variant = -1;
     /// An unpacked KITTI OXTS drive folder (<drive>_sync with oxts/): real motion.
     std::filesystem::path oxts_drive_dir;
     /// With oxts_drive_dir: seconds after the first OXTS record at which the simulated span (the
@@ -69,10 +78,12 @@ class DriveSimulator {
     double origin_height_m = 112.0;
     bool origin_from_oxts = true;
     /// Output naming: "" = "2026_01_15" for scenarios, the OXTS drive's date for real motion;
-    /// drive_id < 0 = 1 for scenarios, the OXTS drive's number.
+    /// drive_id < 0 = 1 for scenarios (route_variant + 1 with a route variant), the OXTS drive's
+    /// number.
     std::string date;
     int drive_id = -1;
-    /// Scenario start time (UTC) "YYYY-MM-DD hh:mm:ss" for scripted scenarios.
+    /// Scenario start time (UTC) "YYYY-MM-DD hh:mm:ss" for scripted scenarios (route variant K
+    /// starts K hours later).
     std::string start_time = "2026-01-15 10:00:00";
     /// The true calibration the scans are simulated with (T_body_lidar = T_lidar_body.inverse()).
     Eigen::Isometry3d T_lidar_body = KittiTLidarBody();
@@ -151,6 +162,9 @@ class DriveSimulator {
   double first_scan_s() const;
   int num_scans() const;
   double seconds_world_build() const;
+  /// The seed of the sensor noise (IMU, GNSS, INS errors, LiDAR): Options::seed, or with a route
+  /// variant K > 0 one derived from (seed, K), so each variant's noise is an independent draw.
+  uint64_t sensor_seed() const;
 
  private:
   struct Impl;

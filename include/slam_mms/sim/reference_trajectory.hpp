@@ -15,6 +15,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <filesystem>
+#include <string>
 #include <vector>
 
 #include "slam_mms/core/status.hpp"
@@ -94,6 +95,20 @@ std::vector<PoseSample> DefaultUrbanRouteSamples();
 /// The demo drive of slam_mms_run / scripts/demo.sh: one city block with four turns, then its
 /// first street again (a revisit), about 60 s at 8-9 m/s.
 std::vector<PoseSample> DemoUrbanRouteSamples();
+
+/// Number of route variants of scripted scenario `scenario`: 3 for "demo" and "default" (drives
+/// through overlapping streets of one city plan), 0 for any other.
+int NumRouteVariants(const std::string& scenario);
+
+/// Trajectory samples of route variant `variant` (in [0, NumRouteVariants(scenario))) of the
+/// scripted scenario "demo" or "default": variant 0 is DemoUrbanRouteSamples /
+/// DefaultUrbanRouteSamples itself; the others drive some of its streets (in either direction) and
+/// streets of their own, in the same city frame (docs/simulator.md "Route variants"). Each pair of
+/// variants shares at least one street and each variant has a street no other drives. Times start
+/// at 0 like the other routes. InvalidArgument (naming route_variant) for a variant out of range
+/// or a scenario without variants.
+[[nodiscard]] StatusOr<std::vector<PoseSample>> RouteVariantSamples(const std::string& scenario,
+                                                                    int variant);
 
 /// Trajectory samples of the long urban drive ("--scenario long"): a serpentine through a street
 /// grid (420 m streets, 120 m apart), always into new streets, of at least `min_duration_s`

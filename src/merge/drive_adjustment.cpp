@@ -224,7 +224,9 @@ StatusOr<SubmapGraph> BuildGraph(const std::vector<DriveAdjustment::Drive>& driv
         case SubmapFactorKind::kLoop:
           st = graph.AddLoopFactor(a, b, f.T, f.covariance).status();
           break;
-        case SubmapFactorKind::kPosePrior: st = graph.AddPosePrior(a, f.T, f.covariance); break;
+        case SubmapFactorKind::kPosePrior:
+          if (o.use_pose_priors) st = graph.AddPosePrior(a, f.T, f.covariance);
+          break;
         case SubmapFactorKind::kGnss:
           st = graph.AddGnssPrior(a, f.p_world_antenna, f.covariance.topLeftCorner<3, 3>(),
                                   f.T_submap_body, f.t_body_antenna,

@@ -172,6 +172,7 @@ TEST(DriveAdjustmentTest, TwoDrivesWithA5mGnssOffsetArePulledTogether) {
   const Eigen::Vector3d offset(3.0, 4.0, 0.0);  // 5 m
   SyntheticDrive b = MakeDrive(street, 3.0, 120.0, 20.0, offset, 12);
   DriveAdjustment::Options opt;
+  opt.gnss_bias_sigma_m = 10.0;  // the drives' GNSS on two datums
   auto r = DriveAdjustment::Run({{"a", a.result}, {"b", b.result}}, opt);
   ASSERT_TRUE(r.ok()) << r.status().ToString();
   EXPECT_TRUE(r->summary.usable());

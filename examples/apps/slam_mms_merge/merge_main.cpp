@@ -162,6 +162,8 @@ int MergeMainImpl(int argc, const char* const* argv) {
   app.add_option("--gnss-bias-sigma", options.gnss_bias_sigma_m,
                  "prior sigma of each drive's GNSS datum offset [m]; 0 = one datum for all")
       ->check(CLI::NonNegativeNumber);
+  bool no_pose_priors = false;
+  app.add_flag("--no-pose-priors", no_pose_priors, "leave the drives' attitude priors out");
   app.add_option("--overlap-distance", options.overlap_distance_m,
                  "submaps of two drives whose scans come this close are tested [m]")
       ->check(CLI::PositiveNumber);
@@ -212,6 +214,7 @@ int MergeMainImpl(int argc, const char* const* argv) {
   }
 
   options.num_threads = threads;
+  options.use_pose_priors = !no_pose_priors;
   options.graph.num_threads = threads;
   auto adjusted = DriveAdjustment::Run(drives, options);
   if (!adjusted.ok()) return Fail(adjusted.status().ToString());

@@ -49,6 +49,12 @@ Progress = Callable[[str], None]
 
 FLEET_JSON_VERSION = 1
 _STDERR_TAIL_LINES = 15
+# Dask's nanny sets these in its workers (thread counts 1, a malloc trim threshold). Both change
+# the last digits of the scan covariances in drive_result.json (and so the adjustment's numbers):
+# every path gives a drive process the client's values (thread counts 1 where unset, no trim
+# threshold where unset), so the sequential and the Dask path run under one environment.
+_THREAD_ENV = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+_CLIENT_ENV = ("MALLOC_TRIM_THRESHOLD_",)
 
 
 class FleetError(RuntimeError):
@@ -83,6 +89,7 @@ class DriveTask:
     args: List[str]  # slam_mms_run's arguments, without the program
     run_exe: Optional[str] = None
     timeout_s: Optional[float] = None
+    env: Dict[str, Optional[str]] = dataclasses.field(default_factory=dict)  # None: unset
 
 
 @dataclasses.dataclass
@@ -115,6 +122,7 @@ class MergeTask:
     args: List[str]
     merge_exe: Optional[str] = None
     timeout_s: Optional[float] = None
+    env: Dict[str, Optional[str]] = dataclasses.field(default_factory=dict)
 
 
 @dataclasses.dataclass
@@ -199,12 +207,22 @@ def _program(exe: Optional[str], command: str) -> List[str]:
     return [exe] if exe else [sys.executable, "-m", "slam_mms", command]
 
 
-def _run_logged(cmd: List[str], log_stem: str, timeout_s: Optional[float]) -> Tuple[int, str]:
+def _task_env() -> Dict[str, Optional[str]]:
+    """The environment overrides of the drive processes, taken on the client (None: unset)."""
+    env: Dict[str, Optional[str]] = {k: os.environ.get(k, "1") for k in _THREAD_ENV}
+    env.update({k: os.environ.get(k) for k in _CLIENT_ENV})
+    return env
+
+
+def _run_logged(cmd: List[str], log_stem: str, timeout_s: Optional[float],
+                env: Dict[str, Optional[str]]) -> Tuple[int, str]:
     """Runs cmd with stdout/stderr in LOG_STEM.stdout.txt / .stderr.txt; (exit status, note)."""
+    full = {k: v for k, v in os.environ.items() if env.get(k, v) is not None}
+    full.update({k: v for k, v in env.items() if v is not None})
     with open(log_stem + ".stdout.txt", "wb") as out, open(log_stem + ".stderr.txt", "wb") as err:
         try:
             proc = subprocess.run(cmd, stdout=out, stderr=err, stdin=subprocess.DEVNULL,
-                                  timeout=timeout_s)
+                                  timeout=timeout_s, env=full)
         except subprocess.TimeoutExpired:
             return -1, f"stopped after the {timeout_s:g} s timeout"
         except OSError as e:
@@ -226,13 +244,13 @@ def run_drive_task(task: DriveTask) -> DriveOutcome:
     # A rerun starts clean: no stale submaps or files of an earlier, unfinished run.
     shutil.rmtree(task.out_dir, ignore_errors=True)
     log_stem = os.path.join(task.log_dir, task.name)
-    rc, note = _run_logged(cmd, log_stem, task.timeout_s)
+    rc, note = _run_logged(cmd, log_stem, task.timeout_s, task.env)
     outcome.wall_s = time.monotonic() - t0
     outcome.returncode = rc
     if rc == 0 and _finished(task.out_dir):
         outcome.status = "done"
         _write_json(os.path.join(task.out_dir, "fleet_task.json"),
-                    {"input": task.path, "args": list(task.args)})
+                    {"input": task.path, "args": _resume_key(task.args)})
         return outcome
     why = note or (f"exit status {rc}" if rc != 0 else "exit status 0 but no complete report.json "
                    "and drive_result/drive_result.json")
@@ -256,7 +274,7 @@ def merge_task(task: MergeTask) -> MergeOutcome:
     shutil.rmtree(os.path.join(task.out_dir, "merged"), ignore_errors=True)
     log_stem = os.path.join(task.log_dir, "merge")
     t0 = time.monotonic()
-    rc, note = _run_logged(cmd, log_stem, task.timeout_s)
+    rc, note = _run_logged(cmd, log_stem, task.timeout_s, task.env)
     outcome.wall_s = time.monotonic() - t0
     outcome.returncode = rc
     report = os.path.join(task.out_dir, "merged", "report.json")
@@ -283,6 +301,19 @@ def _finished(out_dir: str) -> bool:
     except (OSError, ValueError, AttributeError):
         return False
     return complete and os.path.isfile(os.path.join(out_dir, "drive_result", "drive_result.json"))
+
+
+def _resume_key(args: Sequence[str]) -> List[str]:
+    """A drive's run arguments without its --out folder (DIR may have been moved)."""
+    key, skip = [], False
+    for a in args:
+        if skip:
+            skip = False
+        elif a == "--out":
+            skip = True
+        elif not a.startswith("--out="):
+            key.append(a)
+    return key
 
 
 def _recorded_args(out_dir: str) -> Optional[List[str]]:
@@ -423,7 +454,7 @@ def run_fleet(drives: Sequence[Union[PathLike, FleetDrive]], out: PathLike,
         drive_out = os.path.join(drives_dir, d.name)
         args = [_input_flag(d.path), d.path, "--out", drive_out, "--mode", "full",
                 "--drive-result", *run_args, *d.run_args]
-        if _finished(drive_out) and _recorded_args(drive_out) == args:
+        if _finished(drive_out) and _recorded_args(drive_out) == _resume_key(args):
             outcomes[d.name] = DriveOutcome(
                 name=d.name, path=d.path, status="resumed", out_dir=drive_out,
                 message=f"drive {d.name}: finished in an earlier run, not run again")
@@ -432,7 +463,8 @@ def run_fleet(drives: Sequence[Union[PathLike, FleetDrive]], out: PathLike,
         if _finished(drive_out):
             say(f"fleet: {d.name} runs again (its options or input changed)")
         tasks.append(DriveTask(name=d.name, path=d.path, out_dir=drive_out, log_dir=log_dir,
-                               args=args, run_exe=run_exe, timeout_s=timeout_s))
+                               args=args, run_exe=run_exe, timeout_s=timeout_s,
+                               env=_task_env()))
 
     sched = "sequential" if scheduler in (None, "sequential") else str(scheduler)
     own_cluster = None
@@ -522,7 +554,8 @@ def run_fleet(drives: Sequence[Union[PathLike, FleetDrive]], out: PathLike,
         result(MergeOutcome(status="running"), 0.0)  # fleet.json after stage 1
         say(f"fleet: adjustment of {len(ok)} drives")
         mt = MergeTask(drive_dirs=[o.out_dir for o in ok], out_dir=out_dir, log_dir=log_dir,
-                       args=list(merge_args), merge_exe=merge_exe, timeout_s=timeout_s)
+                       args=list(merge_args), merge_exe=merge_exe, timeout_s=timeout_s,
+                       env=_task_env())
         t1 = time.monotonic()
         if client is None:
             m = merge_task(mt)

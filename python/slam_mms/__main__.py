@@ -6,6 +6,8 @@
     python -m slam_mms run --out DIR          # simulates the demo drive into DIR/sim first
     python -m slam_mms run --help | --version | --config-keys | --dump-config FILE
     python -m slam_mms merge --drive OUT1 --drive OUT2 [...] --out DIR [...]
+    python -m slam_mms fleet --drives D1 D2 ... --out DIR [--scheduler local|sequential|ADDRESS]
+                             [--workers N] [...]   (slam_mms_fleet; docs/fleet.md)
     python -m slam_mms version
 
 ``run`` takes exactly slam_mms_run's flags (docs/user_guide.md) and runs the app's own C++ entry
@@ -43,7 +45,12 @@ def main(argv: Optional[List[str]] = None) -> int:
         sys.stdout.flush()
         sys.stderr.flush()
         return _C.merge_app([f"{_PROG} merge", *rest])
-    print(f"{_PROG}: error: unknown command '{command}' (expected run, merge or version)", file=sys.stderr)
+    if command == "fleet":
+        from .fleet import main as fleet_main
+
+        return fleet_main(rest, prog=f"{_PROG} fleet")
+    print(f"{_PROG}: error: unknown command '{command}' (expected run, merge, fleet or version)",
+          file=sys.stderr)
     return 2
 
 

@@ -2322,6 +2322,9 @@ def make_method_report(ate: AteResult = None, relative: RelativeErrorResult = No
 def mapping_mode_name(arg0: MappingMode) -> str:
     ...
 
+def merge_app(argv: List[str]) -> int:
+    """Runs slam_mms_merge with argv (argv[0] the program name) in this process; returns its exit status (0 done, 1 input or processing error, 2 bad command line)."""
+
 def min_log_level() -> LogLevel:
     ...
 

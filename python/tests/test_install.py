@@ -34,3 +34,7 @@ def test_pip_installs_the_package_into_a_venv(tmp_path):
     version, path = proc.stdout.split()
     assert version == slam_mms.__version__
     assert str(venv) in path  # imported from the venv, not from the source tree
+    # The console script of pyproject.toml's [project.scripts].
+    proc = subprocess.run([str(venv / "bin" / "slam_mms_fleet"), "--help"], env=env, cwd="/",
+                          capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0 and "--scheduler" in proc.stdout, proc.stderr

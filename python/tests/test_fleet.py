@@ -1,6 +1,6 @@
 """slam_mms.fleet (issue 24 item 3): drives as Dask tasks, then the adjustment.
 
-Two short simulated drives (the same 8 s demo drive, once as is and once with a GNSS outage) run
+Three short simulated drives (the same 8 s demo drive, as is and with two GNSS outages) run
 through the sequential path and through a LocalCluster with 2 workers: the same trajectories (same
 stamps, poses to 1e-9 m) and the adjustment's numbers (to 1e-9 relative). Not bit for bit: with
 num_threads: 1 and a solve time limit a loaded machine cannot reach, a run repeated with the same
@@ -48,7 +48,8 @@ def fleet_inputs(tmp_path_factory):
 
 def _drives(drive: pathlib.Path):
     return [fleet.FleetDrive(path=str(drive)),
-            fleet.FleetDrive.parse(f"{drive}::--gnss-outage 3:3")]
+            fleet.FleetDrive.parse(f"{drive}::--gnss-outage 3:3"),
+            fleet.FleetDrive.parse(f"{drive}::--gnss-outage 1:4")]
 
 
 def _run(drives, out, config, **kw) -> fleet.FleetResult:
@@ -124,14 +125,14 @@ def test_drive_specs_and_unique_names(tmp_path):
 def test_sequential_run(sequential_run):
     r = sequential_run
     assert r.ok, [d.message for d in r.drives] + [r.merge.message]
-    assert [d.status for d in r.drives] == ["done", "done"]
+    assert [d.status for d in r.drives] == ["done", "done", "done"]
     assert r.scheduler == "sequential" and r.workers == 1
     data = json.loads((pathlib.Path(r.out) / "fleet.json").read_text())
-    assert data["counts"] == {"done": 2, "resumed": 0, "failed": 0}
+    assert data["counts"] == {"done": 3, "resumed": 0, "failed": 0}
     assert data["merge_report"] == str(pathlib.Path(r.out) / "merged" / "report.json")
     assert data["stage1_wall_s"] > 0 and data["stage2_wall_s"] > 0
     assert all(d["worker"] == "local" and d["wall_s"] > 0 for d in data["drives"])
-    assert any("2/2 drives done (0 resumed, 0 failed)" in line for line in r.lines)
+    assert any("3/3 drives done (0 resumed, 0 failed)" in line for line in r.lines)
 
 
 def test_local_cluster_matches_sequential(fleet_inputs, sequential_run, tmp_path_factory):
@@ -155,10 +156,11 @@ def test_local_cluster_matches_sequential(fleet_inputs, sequential_run, tmp_path
         for f in (f"{d.name}.tum", f"{d.name}_before.tum"):
             _same_trajectory(seq / "merged" / f, dsk / "merged" / f)
             compared += 1
-    assert compared == 8
+    assert compared == 12
     rep_s = json.loads((seq / "merged" / "report.json").read_text())
     rep_d = json.loads((dsk / "merged" / "report.json").read_text())
-    assert len(rep_s["drives"]) == 2
+    assert len(rep_s["drives"]) == 3
+    assert rep_s["overlaps"]["accepted"] >= 3
     flat_s, flat_d = _flat(rep_s), _flat(rep_d)
     assert flat_s.keys() == flat_d.keys()
     nums = [k for k, v in flat_s.items() if isinstance(v, float)]
@@ -179,11 +181,11 @@ def test_resume_does_not_rerun_finished_drives(fleet_inputs, sequential_run, tmp
     drives_dir = out / "drives"
     before = _mtimes(drives_dir)
     r = _run(_drives(drive), out, config, scheduler="sequential", merge=False)
-    assert [d.status for d in r.drives] == ["resumed", "resumed"]
+    assert [d.status for d in r.drives] == ["resumed", "resumed", "resumed"]
     assert _mtimes(drives_dir) == before
     assert r.ok and r.merge.status == "not requested"
     data = json.loads((out / "fleet.json").read_text())
-    assert [d["status"] for d in data["drives"]] == ["resumed", "resumed"]
+    assert [d["status"] for d in data["drives"]] == ["resumed", "resumed", "resumed"]
     assert any("resumed (finished in an earlier run)" in line for line in r.lines)
 
     # Other options for the second drive: it runs again, the first stays.

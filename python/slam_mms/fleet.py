@@ -254,11 +254,8 @@ def run_drive_task(task: DriveTask) -> DriveOutcome:
         return outcome
     why = note or (f"exit status {rc}" if rc != 0 else "exit status 0 but no complete report.json "
                    "and drive_result/drive_result.json")
-    outcome.message = (f"drive {task.name} ({task.path}) failed on {host}: {why}; "
-                       f"log {log_stem}.stderr.txt")
-    tail = _tail(log_stem + ".stderr.txt")
-    if tail:
-        outcome.message += "\n" + tail
+    outcome.message = _failure_message(f"drive {task.name} ({task.path}) failed on {host}: {why}",
+                                       log_stem)
     return outcome
 
 
@@ -282,12 +279,16 @@ def merge_task(task: MergeTask) -> MergeOutcome:
         outcome.status = "done"
         outcome.report = report
         return outcome
-    outcome.message = (f"adjustment failed on {host}: {note or f'exit status {rc}'}; log "
-                       f"{log_stem}.stderr.txt")
-    tail = _tail(log_stem + ".stderr.txt")
-    if tail:
-        outcome.message += "\n" + tail
+    outcome.message = _failure_message(
+        f"adjustment failed on {host}: {note or f'exit status {rc}'}", log_stem)
     return outcome
+
+
+def _failure_message(what: str, log_stem: str) -> str:
+    """`what`, the log file to read and the end of its stderr."""
+    message = f"{what}; log {log_stem}.stderr.txt"
+    tail = _tail(log_stem + ".stderr.txt")
+    return message + "\n" + tail if tail else message
 
 
 # ---- planning --------------------------------------------------------------------------------

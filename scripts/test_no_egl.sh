@@ -17,13 +17,17 @@ if grep -q "^SLAM_MMS_WITH_EGL:BOOL=ON" "$BUILD_DIR/CMakeCache.txt"; then
   echo "test_no_egl: $BUILD_DIR was configured with EGL" >&2
   exit 1
 fi
-# Every library module, the surfel, registration and pipeline unit tests; the consumer builds
-# against the installed tree in its ctest.
-targets=(slam_mms_core slam_mms_io slam_mms_ins slam_mms_surfel slam_mms_registration
-         slam_mms_backend slam_mms_pipeline slam_mms_eval slam_mms_drive slam_mms_sim)
-if cmake --build "$BUILD_DIR" --target help | grep -q "slam_mms_rosbag$"; then
-  targets+=(slam_mms_rosbag)
-fi
+# Every library module built in this configuration (each slam_mms_add_module of the top
+# CMakeLists.txt whose target exists: no render_egl here, rosbag where found), the surfel,
+# registration and pipeline unit tests; the consumer builds against the installed tree in its
+# ctest.
+help=$(cmake --build "$BUILD_DIR" --target help)
+targets=()
+for m in $(grep -oE "slam_mms_add_module\(\s*\w+" CMakeLists.txt | sed -E 's/.*\(\s*//'); do
+  if grep -q "slam_mms_$m\$" <<<"$help"; then
+    targets+=("slam_mms_$m")
+  fi
+done
 tests=$(cd tests && ls surfel/*_test.cpp registration/*_test.cpp pipeline/*_test.cpp |
         sed -E 's#/#_#; s#\.cpp$##')
 cmake --build "$BUILD_DIR" -j"$JOBS" --target "${targets[@]}" $tests

@@ -94,7 +94,17 @@ DriveTruth LoadTruth(const fs::path& out_dir, const GeodeticPoint& origin) {
     t.why = (out_dir / "report.json").string() + " names no input.drive";
     return t;
   }
-  const fs::path drive = report["input"]["drive"].get<std::string>();
+  // input.drive is as slam_mms_run was given it: a relative path is relative to where that ran,
+  // tried here as is, then beside the output folder and inside it.
+  fs::path drive = report["input"]["drive"].get<std::string>();
+  if (drive.is_relative() && !fs::exists(drive)) {
+    for (const fs::path& base : {out_dir.parent_path(), out_dir}) {
+      if (fs::exists(base / drive)) {
+        drive = base / drive;
+        break;
+      }
+    }
+  }
   auto reader = OpenDrive(drive, DriveSourceOptions());
   if (!reader.ok()) {
     t.why = reader.status().ToString();

@@ -172,6 +172,12 @@ int MergeMainImpl(int argc, const char* const* argv) {
   app.add_option("--gnss-bias-sigma", options.gnss_bias_sigma_m,
                  "prior sigma of each drive's GNSS datum offset [m]; 0 = one datum for all")
       ->check(CLI::NonNegativeNumber);
+  app.add_option("--overlap-sigma-floor-rad", options.registration_sigma_floor_rad,
+                 "floor of an overlap factor's rotation sigma [rad] (default 0.001)")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--overlap-sigma-floor-m", options.registration_sigma_floor_m,
+                 "floor of an overlap factor's translation sigma [m] (default 0.02)")
+      ->check(CLI::PositiveNumber);
   bool no_pose_priors = false;
   app.add_flag("--no-pose-priors", no_pose_priors, "leave the drives' attitude priors out");
   app.add_option("--overlap-distance", options.overlap_distance_m,

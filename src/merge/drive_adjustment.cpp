@@ -62,6 +62,23 @@ void MoveDrive(const Eigen::Isometry3d& T_new_old, DriveResult* d) {
   }
 }
 
+// The submap `id` of `subs` (id order; the id is known to be there).
+std::vector<DriveSubmap>::const_iterator FindSubmap(const std::vector<DriveSubmap>& subs,
+                                                    SubmapId id) {
+  return std::lower_bound(subs.begin(), subs.end(), id,
+                          [](const DriveSubmap& s, SubmapId v) { return s.id < v; });
+}
+
+// T_a_b of an overlap's two submaps under the graph's current estimate.
+StatusOr<Eigen::Isometry3d> GraphRelativePose(const SubmapGraph& graph,
+                                              const DriveAdjustment::Overlap& ov) {
+  SLAM_MMS_ASSIGN_OR_RETURN(Eigen::Isometry3d T_world_a,
+                            graph.SubmapPose(GraphId(ov.drive_a, ov.submap_a)));
+  SLAM_MMS_ASSIGN_OR_RETURN(Eigen::Isometry3d T_world_b,
+                            graph.SubmapPose(GraphId(ov.drive_b, ov.submap_b)));
+  return T_world_a.inverse() * T_world_b;
+}
+
 Eigen::Vector3d MiddlePosition(const DriveSubmap& s) {
   return s.scans.empty() ? s.T_world_submap.translation()
                          : s.scans[s.scans.size() / 2].T_world_scan.translation();
@@ -98,7 +115,6 @@ struct Verifier {
   PointIcp fine;
   PointIcp self;  // a drive's own neighbouring submaps (the residual it fits itself with)
 
-  // Registers b's cloud against a's (set as the target of both ICPs) from each hypothesis.
   // The point-to-plane RMS of `s` registered against its neighbour `n` in its own drive, from
   // their relative pose (fine pass only); empty where that fails.
   std::optional<double> SelfRms(const DriveSubmap& n, const DriveSubmap& s) {
@@ -112,6 +128,7 @@ struct Verifier {
     return r->rms_residual_m;
   }
 
+  // Registers b's cloud against a's (set as the target of both ICPs) from each hypothesis.
   // `self_rms`: SelfRms of b (empty: not known).
   void Verify(const DriveSubmap& a, const DriveSubmap& b, std::optional<double> self_rms,
               DriveAdjustment::Overlap* ov) {
@@ -125,10 +142,7 @@ struct Verifier {
         }
       }
     }
-    struct Hyp {
-      RegistrationResult r;
-    };
-    std::vector<Hyp> hyps;
+    std::vector<RegistrationResult> hyps;
     const Eigen::Matrix3d R_a_world = a.T_world_submap.linear().transpose();
     for (const Eigen::Vector3d& shift : shifts) {
       Eigen::Isometry3d T0 = T_init;
@@ -137,7 +151,7 @@ struct Verifier {
       if (!rc.ok() || !rc->IsUsable()) continue;
       auto rf = fine.Align(b.registration_cloud.View(), rc->T_target_source);
       if (!rf.ok() || !rf->IsUsable()) continue;
-      hyps.push_back({std::move(rf).value()});
+      hyps.push_back(std::move(rf).value());
     }
     ov->hypotheses_converged = static_cast<int>(hyps.size());
     if (hyps.empty()) {
@@ -145,22 +159,22 @@ struct Verifier {
       return;
     }
     // The best: the lowest point-to-plane residual among the hypotheses with enough inliers.
-    auto by_rms = [](const Hyp& x, const Hyp& y) {
-      if (x.r.rms_residual_m != y.r.rms_residual_m) return x.r.rms_residual_m < y.r.rms_residual_m;
-      return x.r.inlier_ratio > y.r.inlier_ratio;
+    auto by_rms = [](const RegistrationResult& x, const RegistrationResult& y) {
+      if (x.rms_residual_m != y.rms_residual_m) return x.rms_residual_m < y.rms_residual_m;
+      return x.inlier_ratio > y.inlier_ratio;
     };
     std::sort(hyps.begin(), hyps.end(), by_rms);
-    auto first_ok = std::find_if(hyps.begin(), hyps.end(), [&](const Hyp& h) {
-      return h.r.inlier_ratio >= o.min_inlier_ratio;
+    auto first_ok = std::find_if(hyps.begin(), hyps.end(), [&](const RegistrationResult& h) {
+      return h.inlier_ratio >= o.min_inlier_ratio;
     });
     if (first_ok == hyps.end()) {
       double most = 0.0;
-      for (const Hyp& h : hyps) most = std::max(most, h.r.inlier_ratio);
+      for (const RegistrationResult& h : hyps) most = std::max(most, h.inlier_ratio);
       ov->inlier_ratio = most;
       ov->verdict = "too few inliers (" + std::to_string(most) + ")";
       return;
     }
-    const RegistrationResult best = first_ok->r;
+    const RegistrationResult best = *first_ok;
     ov->inlier_ratio = best.inlier_ratio;
     ov->rms_m = best.rms_residual_m;
     if (best.rms_residual_m > o.max_rms_m) {
@@ -175,14 +189,14 @@ struct Verifier {
       return;
     }
     // Ambiguous: another pose fits about as well (as many inliers, a residual not clearly worse).
-    for (const Hyp& h : hyps) {
-      const auto [dt, dr] = Offset(best.T_target_source, h.r.T_target_source);
+    for (const RegistrationResult& h : hyps) {
+      const auto [dt, dr] = Offset(best.T_target_source, h.T_target_source);
       if (dt <= o.hypothesis_agreement_m && dr <= o.hypothesis_agreement_rad) continue;
-      if (h.r.inlier_ratio >= o.ambiguity_ratio * best.inlier_ratio &&
-          h.r.rms_residual_m * o.ambiguity_ratio <= best.rms_residual_m) {
+      if (h.inlier_ratio >= o.ambiguity_ratio * best.inlier_ratio &&
+          h.rms_residual_m * o.ambiguity_ratio <= best.rms_residual_m) {
         ov->verdict = "ambiguous (a pose " + std::to_string(dt) + " m away fits as well: inliers " +
-                      std::to_string(h.r.inlier_ratio) + ", rms " +
-                      std::to_string(h.r.rms_residual_m) + " m)";
+                      std::to_string(h.inlier_ratio) + ", rms " + std::to_string(h.rms_residual_m) +
+                      " m)";
         return;
       }
     }
@@ -383,9 +397,7 @@ StatusOr<DriveAdjustment::Result> DriveAdjustment::Run(std::vector<Drive> drives
 
   // Verification: one target (submap a) at a time.
   auto find = [&](size_t d, SubmapId id) -> const DriveSubmap& {
-    const auto& subs = drives[d].result.submaps;
-    return *std::lower_bound(subs.begin(), subs.end(), id,
-                             [](const DriveSubmap& s, SubmapId v) { return s.id < v; });
+    return *FindSubmap(drives[d].result.submaps, id);
   };
   PointIcp::Options coarse_opt;
   static_cast<PointIcpOptions&>(coarse_opt) = options.icp;
@@ -402,8 +414,7 @@ StatusOr<DriveAdjustment::Result> DriveAdjustment::Run(std::vector<Drive> drives
     const auto key = std::make_pair(ov.drive_b, ov.submap_b);
     if (self_rms.count(key) != 0) continue;
     const auto& subs = drives[ov.drive_b].result.submaps;
-    const auto it = std::lower_bound(subs.begin(), subs.end(), ov.submap_b,
-                                     [](const DriveSubmap& s, SubmapId v) { return s.id < v; });
+    const auto it = FindSubmap(subs, ov.submap_b);
     std::optional<double> rms;
     if (subs.size() >= 2) {
       const auto n = it == subs.begin() ? std::next(it) : std::prev(it);
@@ -444,11 +455,8 @@ StatusOr<DriveAdjustment::Result> DriveAdjustment::Run(std::vector<Drive> drives
     bool rejected = false;
     for (Overlap& ov : out.overlaps) {
       if (!ov.accepted) continue;
-      SLAM_MMS_ASSIGN_OR_RETURN(Eigen::Isometry3d Ta,
-                                graph->SubmapPose(GraphId(ov.drive_a, ov.submap_a)));
-      SLAM_MMS_ASSIGN_OR_RETURN(Eigen::Isometry3d Tb,
-                                graph->SubmapPose(GraphId(ov.drive_b, ov.submap_b)));
-      const Vector6d e = se3::Log((Ta.inverse() * Tb).inverse() * ov.T_a_b);
+      SLAM_MMS_ASSIGN_OR_RETURN(const Eigen::Isometry3d T_a_b, GraphRelativePose(*graph, ov));
+      const Vector6d e = se3::Log(T_a_b.inverse() * ov.T_a_b);
       const double d2 = e.dot(ov.covariance.ldlt().solve(e));
       if (d2 > options.consistency_gate_chi2) {
         ov.accepted = false;
@@ -471,14 +479,8 @@ StatusOr<DriveAdjustment::Result> DriveAdjustment::Run(std::vector<Drive> drives
   }
   for (Overlap& ov : out.overlaps) {
     if (!ov.verified) continue;
-    const auto& subs_a = out.drives[ov.drive_a].result.submaps;
-    const auto& subs_b = out.drives[ov.drive_b].result.submaps;
-    const auto ia = std::lower_bound(subs_a.begin(), subs_a.end(), ov.submap_a,
-                                     [](const DriveSubmap& s, SubmapId v) { return s.id < v; });
-    const auto ib = std::lower_bound(subs_b.begin(), subs_b.end(), ov.submap_b,
-                                     [](const DriveSubmap& s, SubmapId v) { return s.id < v; });
-    std::tie(ov.offset_after_m, ov.rotation_after_rad) =
-        Offset(ia->T_world_submap.inverse() * ib->T_world_submap, ov.T_a_b);
+    SLAM_MMS_ASSIGN_OR_RETURN(const Eigen::Isometry3d T_a_b, GraphRelativePose(*graph, ov));
+    std::tie(ov.offset_after_m, ov.rotation_after_rad) = Offset(T_a_b, ov.T_a_b);
     if (ov.accepted) ov.verdict = "accepted";
   }
   SLAM_MMS_LOG(kInfo) << "DriveAdjustment: " << drives.size() << " drives, " << out.overlaps.size()

@@ -50,6 +50,10 @@ class GeoreferencedOutputsTest : public ::testing::Test {
       stamps_.scan_index.push_back(70000 + i % 10);  // > 65535: the source ID wraps
     }
   }
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(tmp_, ec);
+  }
   fs::path tmp_;
   Trajectory traj_;
   PointCloud map_;
@@ -131,7 +135,8 @@ TEST(GeoreferencedOutputsKittiTest, Wgs84CsvAgreesWithOxtsAndLasTimesWithTheScan
   const DriveRun run = RunDrive(**reader, o);
   ASSERT_TRUE(run.status.ok()) << run.status.ToString();
   ASSERT_EQ(run.trajectory.size(), 50u);
-  const fs::path out = ::slam_mms::testing::MakeTempDir("georef_kitti");
+  const ::slam_mms::testing::ScopedTempDir out_dir("georef_kitti");
+  const fs::path& out = out_dir.path;
   ASSERT_TRUE(WriteGeoreferencedOutputs("gnss_ins", run.mode, run.trajectory, run.map,
                                         run.map_stamps, run.origin, GeoOutputOptions(), out)
                   .ok());

@@ -66,6 +66,10 @@ double RotationAngle(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
 class GeorefTest : public ::testing::Test {
  protected:
   void SetUp() override { tmp_ = testing::MakeTempDir("georef"); }
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(tmp_, ec);
+  }
   fs::path tmp_;
 };
 

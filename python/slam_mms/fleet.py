@@ -49,10 +49,11 @@ Progress = Callable[[str], None]
 
 FLEET_JSON_VERSION = 1
 _STDERR_TAIL_LINES = 15
-# Dask's nanny sets these in its workers (thread counts 1, a malloc trim threshold). Both change
-# the last digits of the scan covariances in drive_result.json (and so the adjustment's numbers):
-# every path gives a drive process the client's values (thread counts 1 where unset, no trim
-# threshold where unset), so the sequential and the Dask path run under one environment.
+# Dask's nanny sets these in its workers (thread counts 1, a malloc trim threshold). A thread
+# count changes how sums are split, so the last digits of a run; the trim threshold changed them
+# only while the sliding window's factor order depended on heap addresses (fixed). Every path
+# gives a drive process the client's values (thread counts 1 where unset, no trim threshold where
+# unset), so the sequential and the Dask path run under one environment.
 _THREAD_ENV = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 _CLIENT_ENV = ("MALLOC_TRIM_THRESHOLD_",)
 

@@ -166,7 +166,16 @@ struct SlidingWindowGraph::Impl {
 
   void EraseState(State& s) {
     const std::vector<double*> blocks = BlocksOf(s);
-    PruneRecords(ResidualsOf(blocks));
+    const std::set<ceres::ResidualBlockId> rb_set = ResidualsOf(blocks);
+    // The factors go first, in the order they were added: RemoveParameterBlock would remove them
+    // in the order of Ceres's set of them (their addresses), and each removal moves the program's
+    // last residual block into the gap, so the Jacobian's row order, and with it the last bits of
+    // every later solve, would depend on where the heap put the factors (two runs of one drive
+    // differed by 4e-11 m).
+    for (const auto& [fid, r] : factors) {
+      if (rb_set.count(r.rb) != 0) problem->RemoveResidualBlock(r.rb);
+    }
+    PruneRecords(rb_set);
     for (double* p : blocks) {
       problem->RemoveParameterBlock(p);
       block_owner.erase(p);

@@ -23,12 +23,11 @@
 // InvalidArgument naming the stream and both times (nothing already computed is lost).
 //
 // World frame: local ENU at the first valid GNSS fix (or Options::origin); Origin() returns it so
-// outputs can be geo-referenced. Determinism: the same input and options give the same
-// trajectory and map, bit for bit (checked over repeated runs of the real KITTI frames and a 30 s
-// simulated drive; no sum depends on memory addresses). With num_threads > 1 the pose covariances
-// (LocalizationResult::cov_T_world_body) vary from run to run in their last digits (measured up to
-// 4e-13 relative; exact with num_threads = 1): a summation order between threads upstream of the
-// window's covariance, not yet found. A solve stopped by a wall-time limit (max_solve_time_s) on a
+// outputs can be geo-referenced. Determinism: the same input, options and num_threads give the
+// same trajectory, map and pose covariances, bit for bit, whatever the memory layout (checked over
+// repeated runs of the real KITTI frames and simulated drives, with the heap disturbed; no sum
+// depends on memory addresses). Another num_threads splits some sums differently (last digits). A
+// solve stopped by a wall-time limit (max_solve_time_s) on a
 // loaded machine can also end at another iteration.
 //
 // Ownership: owns every component; move-only through std::unique_ptr.

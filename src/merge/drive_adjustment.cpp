@@ -330,7 +330,11 @@ StatusOr<DriveAdjustment::Result> DriveAdjustment::Run(std::vector<Drive> drives
     MoveDrive(EnuToEnu(drives[d].result.origin, out.origin), &drives[d].result);
     drives[d].result.origin = out.origin;
   }
-  out.drives_input = drives;
+  for (const Drive& d : drives) {
+    std::vector<Eigen::Isometry3d> poses;
+    for (const DriveSubmap& s : d.result.submaps) poses.push_back(s.T_world_submap);
+    out.T_world_submap_input.push_back(std::move(poses));
+  }
 
   // Overlap candidates: a hash of every scan position, cells of overlap_distance_m.
   const double cell = options.overlap_distance_m;
@@ -468,7 +472,7 @@ StatusOr<DriveAdjustment::Result> DriveAdjustment::Run(std::vector<Drive> drives
   }
 
   // The adjusted drives.
-  out.drives = drives;
+  out.drives = std::move(drives);
   for (size_t d = 0; d < out.drives.size(); ++d) {
     for (DriveSubmap& s : out.drives[d].result.submaps) {
       SLAM_MMS_ASSIGN_OR_RETURN(s.T_world_submap, graph->SubmapPose(GraphId(d, s.id)));
@@ -483,9 +487,9 @@ StatusOr<DriveAdjustment::Result> DriveAdjustment::Run(std::vector<Drive> drives
     std::tie(ov.offset_after_m, ov.rotation_after_rad) = Offset(T_a_b, ov.T_a_b);
     if (ov.accepted) ov.verdict = "accepted";
   }
-  SLAM_MMS_LOG(kInfo) << "DriveAdjustment: " << drives.size() << " drives, " << out.overlaps.size()
-                      << " overlaps tested, " << out.num_accepted() << " accepted, "
-                      << out.rejection_rounds << " rejection rounds";
+  SLAM_MMS_LOG(kInfo) << "DriveAdjustment: " << out.drives.size() << " drives, "
+                      << out.overlaps.size() << " overlaps tested, " << out.num_accepted()
+                      << " accepted, " << out.rejection_rounds << " rejection rounds";
   return out;
 }
 

@@ -196,7 +196,17 @@ Status WriteDriveResult(const DriveResult& result, const fs::path& dir) {
   return OkStatus();
 }
 
-StatusOr<DriveResult> ReadDriveResult(const fs::path& dir) {
+StatusOr<PointCloud> ReadDriveResultCloud(const fs::path& dir, SubmapId id, DriveResultCloud kind) {
+  const std::string name = CloudName(id, kind == DriveResultCloud::kMap ? "map" : "reg");
+  auto cloud = ReadCloud(dir, name);
+  if (!cloud.ok()) {
+    return Status(cloud.status().code(), "ReadDriveResultCloud: " + (dir / name).string() + ": " +
+                                             cloud.status().message());
+  }
+  return cloud;
+}
+
+StatusOr<DriveResult> ReadDriveResult(const fs::path& dir, const DriveResultReadOptions& options) {
   const fs::path file = dir / kDriveResultFileName;
   std::ifstream in(file, std::ios::binary);
   if (!in) return NotFoundError("ReadDriveResult: cannot open " + file.string());
@@ -280,13 +290,26 @@ StatusOr<DriveResult> ReadDriveResult(const fs::path& dir) {
     for (const char* key : {"map_cloud", "registration_cloud"}) {
       SLAM_MMS_ASSIGN_OR_RETURN(const Json* name, r.Field(js, w, key));
       if (!name->is_string()) return r.Bad(w + "." + key, "not a string");
+      const bool is_map = std::string(key) == "map_cloud";
+      if (is_map && !options.map_clouds) {
+        // Loaded later by ReadDriveResultCloud, which knows the writer's names only.
+        if (name->get<std::string>() != CloudName(s.id, "map")) {
+          return r.Bad(w + "." + key, "'" + name->get<std::string>() + "' is not " +
+                                          CloudName(s.id, "map") + " (a renamed cloud file)");
+        }
+        std::error_code ec;
+        if (!fs::is_regular_file(dir / name->get<std::string>(), ec)) {
+          return NotFoundError(file.string() + ": " + w + "." + key + ": no file " +
+                               (dir / name->get<std::string>()).string());
+        }
+        continue;
+      }
       auto cloud = ReadCloud(dir, name->get<std::string>());
       if (!cloud.ok()) {
         return Status(cloud.status().code(),
                       file.string() + ": " + w + "." + key + ": " + cloud.status().message());
       }
-      (std::string(key) == "map_cloud" ? s.map_cloud : s.registration_cloud) =
-          std::move(cloud).value();
+      (is_map ? s.map_cloud : s.registration_cloud) = std::move(cloud).value();
     }
     out.submaps.push_back(std::move(s));
   }

@@ -150,5 +150,39 @@ TEST(DriveResultIoTest, BadFilesAreNamed) {
   fs::remove_all(dir);
 }
 
+TEST(DriveResultIoTest, MapCloudsCanBeReadOneAtATime) {
+  const testing::ScopedTempDir dir("drive_result_lazy");
+  const DriveResult a = Sample();
+  ASSERT_TRUE(WriteDriveResult(a, dir.path / "d").ok());
+  DriveResultReadOptions lazy;
+  lazy.map_clouds = false;
+  auto b = ReadDriveResult(dir.path / "d", lazy);
+  ASSERT_TRUE(b.ok()) << b.status().ToString();
+  ASSERT_EQ(b->submaps.size(), 3u);
+  for (size_t k = 0; k < 3; ++k) {
+    EXPECT_TRUE(b->submaps[k].map_cloud.empty());
+    EXPECT_EQ(b->submaps[k].registration_cloud.size(), 25u);  // still read
+    auto m = ReadDriveResultCloud(dir.path / "d", b->submaps[k].id, DriveResultCloud::kMap);
+    ASSERT_TRUE(m.ok()) << m.status().ToString();
+    EXPECT_EQ(m->points(), a.submaps[k].map_cloud.points());
+    EXPECT_EQ(m->intensities(), a.submaps[k].map_cloud.intensities());
+    auto r =
+        ReadDriveResultCloud(dir.path / "d", b->submaps[k].id, DriveResultCloud::kRegistration);
+    ASSERT_TRUE(r.ok());
+    EXPECT_EQ(r->points(), a.submaps[k].registration_cloud.points());
+  }
+  // A missing map cloud is found by the lazy read too, naming the field and the file.
+  fs::remove(dir.path / "d" / "submaps" / "000012_map.pcd");
+  auto c = ReadDriveResult(dir.path / "d", lazy);
+  ASSERT_FALSE(c.ok());
+  EXPECT_EQ(c.status().code(), StatusCode::kNotFound);
+  EXPECT_NE(c.status().message().find("submaps[2].map_cloud"), std::string::npos)
+      << c.status().ToString();
+  auto m = ReadDriveResultCloud(dir.path / "d", 12, DriveResultCloud::kMap);
+  ASSERT_FALSE(m.ok());
+  EXPECT_NE(m.status().message().find("000012_map.pcd"), std::string::npos)
+      << m.status().ToString();
+}
+
 }  // namespace
 }  // namespace slam_mms

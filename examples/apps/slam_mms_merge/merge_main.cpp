@@ -14,7 +14,6 @@
 #include <vector>
 
 #include "slam_mms/core/logging.hpp"
-#include "slam_mms/core/voxel_downsample.hpp"
 #include "slam_mms/drive/open_drive.hpp"
 #include "slam_mms/eval/ground_truth.hpp"
 #include "slam_mms/eval/map_entropy.hpp"
@@ -25,6 +24,7 @@
 #include "slam_mms/io/trajectory_io.hpp"
 #include "slam_mms/merge/drive_adjustment.hpp"
 #include "slam_mms/merge/drive_result_io.hpp"
+#include "slam_mms/merge/union_map.hpp"
 #include "slam_mms/version.hpp"
 
 namespace fs = std::filesystem;
@@ -38,30 +38,37 @@ int Fail(const std::string& message) {
   return 1;
 }
 
-Trajectory ScanTrajectory(const DriveResult& r) {
+// T_world_body of every scan, at the drive's submap poses or at `submap_poses` (per submap).
+Trajectory ScanTrajectory(const DriveResult& r,
+                          const std::vector<Eigen::Isometry3d>* submap_poses = nullptr) {
   Trajectory t;
-  for (const auto& [stamp, T] : r.ScanPoses()) {
-    if (!t.Add(stamp, T).ok()) continue;  // a duplicate stamp (cannot happen in one drive)
+  for (size_t k = 0; k < r.submaps.size(); ++k) {
+    const DriveSubmap& s = r.submaps[k];
+    const Eigen::Isometry3d& T = submap_poses != nullptr ? (*submap_poses)[k] : s.T_world_submap;
+    for (const SubmapScanPose& p : s.scans) {
+      if (!t.Add(p.stamp, T * p.T_submap_scan).ok()) continue;  // duplicate stamp: cannot happen
+    }
   }
   return t;
 }
 
-// The drives' map clouds at the given submap poses (one per submap, in drive order), downsampled.
-PointCloud UnionMap(const std::vector<DriveAdjustment::Drive>& drives,
-                    const std::vector<std::vector<Eigen::Isometry3d>>* poses, double voxel_m) {
-  PointCloud all;
+// The drives' map clouds (read one at a time from their drive-result folders) at the given submap
+// poses (per drive, per submap; null: the drives' own), voxel-downsampled.
+StatusOr<PointCloud> UnionMap(const std::vector<DriveAdjustment::Drive>& drives,
+                              const std::vector<std::string>& drive_dirs,
+                              const std::vector<std::vector<Eigen::Isometry3d>>* poses,
+                              double voxel_m) {
+  std::vector<UnionMapSubmap> submaps;
   for (size_t d = 0; d < drives.size(); ++d) {
     const auto& subs = drives[d].result.submaps;
     for (size_t k = 0; k < subs.size(); ++k) {
-      const Eigen::Isometry3d T = poses != nullptr ? (*poses)[d][k] : subs[k].T_world_submap;
-      const Eigen::Matrix3f R = T.linear().cast<float>();
-      const Eigen::Vector3f t = T.translation().cast<float>();
-      const PointCloud& c = subs[k].map_cloud;
-      for (size_t i = 0; i < c.size(); ++i) all.Add(R * c.points()[i] + t, c.intensities()[i]);
+      submaps.push_back({fs::path(drive_dirs[d]) / "drive_result", subs[k].id,
+                         poses != nullptr ? (*poses)[d][k] : subs[k].T_world_submap});
     }
   }
-  auto down = VoxelDownsample(all, voxel_m);
-  return down.ok() ? std::move(down).value() : all;
+  UnionMapOptions o;
+  o.voxel_m = voxel_m;
+  return DownsampledUnionMap(submaps, o);
 }
 
 std::optional<double> Entropy(const PointCloud& map, int threads) {
@@ -216,7 +223,9 @@ int MergeMainImpl(int argc, const char* const* argv) {
   std::vector<DriveAdjustment::Drive> drives;
   std::map<std::string, int> names;
   for (const std::string& dir : drive_dirs) {
-    auto r = ReadDriveResult(fs::path(dir) / "drive_result");
+    DriveResultReadOptions read;
+    read.map_clouds = false;  // read one at a time for the maps (UnionMap)
+    auto r = ReadDriveResult(fs::path(dir) / "drive_result", read);
     if (!r.ok()) {
       return Fail("--drive " + dir + ": " + r.status().ToString() +
                   " (run slam_mms_run with --drive-result)");
@@ -264,7 +273,8 @@ int MergeMainImpl(int argc, const char* const* argv) {
   bool all_truth = true;
   for (size_t d = 0; d < res.drives.size(); ++d) {
     const Trajectory after_traj = ScanTrajectory(res.drives[d].result);
-    const Trajectory before_traj = ScanTrajectory(res.drives_input[d].result);
+    const Trajectory before_traj =
+        ScanTrajectory(res.drives[d].result, &res.T_world_submap_input[d]);
     Status s = WriteTrajectoryTum(after_traj, merged / (res.drives[d].name + ".tum"));
     if (s.ok()) s = WriteTrajectoryTum(before_traj, merged / (res.drives[d].name + "_before.tum"));
     if (!s.ok()) return Fail(s.ToString());
@@ -304,16 +314,26 @@ int MergeMainImpl(int argc, const char* const* argv) {
 
   // Maps: merged, the union of the drives' own maps, the union at the true poses.
   const double voxel = 0.1;
-  const PointCloud merged_map = UnionMap(res.drives, nullptr, voxel);
+  // One map at a time in memory (each the output of DownsampledUnionMap).
+  std::optional<double> e_before, e_true;
+  {
+    auto before_map = UnionMap(res.drives, drive_dirs, &res.T_world_submap_input, voxel);
+    if (!before_map.ok()) return Fail(before_map.status().ToString());
+    e_before = Entropy(*before_map, threads);
+  }
+  if (all_truth) {
+    auto true_map = UnionMap(res.drives, drive_dirs, &true_submap_poses, voxel);
+    if (!true_map.ok()) return Fail(true_map.status().ToString());
+    e_true = Entropy(*true_map, threads);
+  }
+  auto merged_or = UnionMap(res.drives, drive_dirs, nullptr, voxel);
+  if (!merged_or.ok()) return Fail(merged_or.status().ToString());
+  const PointCloud& merged_map = *merged_or;
   const std::optional<double> e_merged = Entropy(merged_map, threads);
-  const std::optional<double> e_before =
-      Entropy(UnionMap(res.drives_input, nullptr, voxel), threads);
-  std::optional<double> e_true;
-  if (all_truth) e_true = Entropy(UnionMap(res.drives, &true_submap_poses, voxel), threads);
   auto geo = GeoReference::Create(res.origin, crs);
   if (!geo.ok()) return Fail("--crs: " + geo.status().ToString());
   MapCloud map;
-  map.cloud = merged_map;
+  map.cloud = std::move(merged_or).value();
   auto tiles = WriteLasTiles(map, *geo, merged / "map", las_tile_size, LasWriteOptions());
   if (!tiles.ok()) return Fail(tiles.status().ToString());
 
@@ -343,7 +363,7 @@ int MergeMainImpl(int argc, const char* const* argv) {
   report["solve"] = {{"usable", res.summary.usable()},
                      {"iterations", res.summary.iterations},
                      {"termination", SolveTerminationName(res.summary.termination)}};
-  report["map_points"] = merged_map.size();
+  report["map_points"] = map.cloud.size();
   report["las_tiles"] = tiles->size();
   report["adjust_wall_s"] = adjust_s;
   report["wall_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -127,9 +127,11 @@ class DriveAdjustment {
   };
 
   struct Result {
-    GeodeticPoint origin;                      ///< The common world: the first drive's.
-    std::vector<Drive> drives;                 ///< In the common world, adjusted submap poses.
-    std::vector<Drive> drives_input;           ///< In the common world, as given.
+    GeodeticPoint origin;       ///< The common world: the first drive's.
+    std::vector<Drive> drives;  ///< In the common world, adjusted submap poses.
+    /// Per drive, per submap (in Result::drives' order): the pose as given, in the common world
+    /// (the "before"; the clouds are held once, in `drives`).
+    std::vector<std::vector<Eigen::Isometry3d>> T_world_submap_input;
     std::vector<Overlap> overlaps;             ///< Every pair tested.
     std::vector<Eigen::Vector3d> gnss_bias_m;  ///< Per drive (zero without biases).
     SolveSummary summary;

@@ -27,8 +27,25 @@ inline constexpr char kDriveResultFileName[] = "drive_result.json";
 
 /// Writes `result` into `dir` (created if missing; existing files replaced).
 [[nodiscard]] Status WriteDriveResult(const DriveResult& result, const std::filesystem::path& dir);
+/// What ReadDriveResult loads.
+struct DriveResultReadOptions {
+  /// Load every submap's map cloud. false: DriveSubmap::map_cloud stays empty (the files are
+  /// checked to exist); ReadDriveResultCloud loads one when it is needed. The map clouds are most
+  /// of a drive result (220 of 238 MB for a 3-minute drive): an adjustment over many drives reads
+  /// them one at a time (DownsampledUnionMap) rather than all at once.
+  bool map_clouds = true;
+};
+
 /// Reads a folder written by WriteDriveResult. NotFound / InvalidArgument / DataLoss naming the
 /// file and the field.
-[[nodiscard]] StatusOr<DriveResult> ReadDriveResult(const std::filesystem::path& dir);
+[[nodiscard]] StatusOr<DriveResult> ReadDriveResult(
+    const std::filesystem::path& dir,
+    const DriveResultReadOptions& options = DriveResultReadOptions());
+
+enum class DriveResultCloud { kMap, kRegistration };
+/// One submap's cloud of a drive-result folder (as ReadDriveResult loads it into DriveSubmap).
+/// NotFound / DataLoss naming the file.
+[[nodiscard]] StatusOr<PointCloud> ReadDriveResultCloud(const std::filesystem::path& dir,
+                                                        SubmapId id, DriveResultCloud kind);
 
 }  // namespace slam_mms

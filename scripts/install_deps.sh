@@ -12,7 +12,7 @@ PACKAGES=(
   libcli11-dev nlohmann-json3-dev libproj-dev proj-data
   librosbag-storage-dev libsensor-msgs-dev python3-rosbag python3-sensor-msgs python3-geometry-msgs
   python3-dev pybind11-dev python3-numpy python3-pytest python3-venv python3-matplotlib
-  python3-setuptools python3-wheel python3-pip python3-distributed
+  python3-setuptools python3-wheel python3-pip python3-distributed python3-fsspec
 )
 if [[ "${SLAM_MMS_WITH_CLANG:-0}" == "1" ]]; then
   PACKAGES+=(clang libclang-rt-14-dev)

@@ -9,6 +9,14 @@ worker's interpreter, or the ``--run-exe`` binary), so a crash or a signal handl
 process. Stage 2 is the adjustment, ``slam_mms_merge --drive DIR/drives/<a> ... --out DIR``, over
 the drives that finished (at least two), writing DIR/merged/. DIR/fleet.json records the run.
 
+Output: DIR is a file system path (local, or shared by every worker), or an fsspec URL of an
+object store (``s3://bucket/city``, ``gs://...``, ``file:///...``, ``memory://`` for the
+sequential path): each task then works in a local scratch folder (``--scratch``, default the
+system temp folder) and copies its results to the store when it is done (a drive's whole output
+folder, its logs), the adjustment fetches what it reads (each drive's report.json and
+drive_result/) and puts DIR/merged/ back; resume reads the store. The store's credentials come
+from fsspec's own configuration (environment variables, config files) on each worker.
+
 Schedulers: ``local`` (a dask.distributed LocalCluster with N single-threaded worker processes),
 a scheduler address such as ``tcp://host:8786`` (an existing Dask cluster; every worker must see
 the drives and DIR at the same paths, docs/fleet.md), or ``sequential`` (no Dask: the same tasks
@@ -41,6 +49,7 @@ import shutil
 import socket
 import subprocess
 import sys
+import tempfile
 import time
 from typing import Any, Callable, Dict, Iterable, List, Optional, Sequence, Tuple, Union
 
@@ -91,6 +100,9 @@ class DriveTask:
     run_exe: Optional[str] = None
     timeout_s: Optional[float] = None
     env: Dict[str, Optional[str]] = dataclasses.field(default_factory=dict)  # None: unset
+    # An object store: out_dir and log_dir are URLs there; the run works in a local scratch
+    # folder under `scratch` (None: the system temp folder) and copies its files up at the end.
+    scratch: Optional[str] = None
 
 
 @dataclasses.dataclass
@@ -124,6 +136,7 @@ class MergeTask:
     merge_exe: Optional[str] = None
     timeout_s: Optional[float] = None
     env: Dict[str, Optional[str]] = dataclasses.field(default_factory=dict)
+    scratch: Optional[str] = None  # as DriveTask.scratch
 
 
 @dataclasses.dataclass
@@ -231,63 +244,130 @@ def _run_logged(cmd: List[str], log_stem: str, timeout_s: Optional[float],
     return proc.returncode, ""
 
 
+def _swap_out(args: Sequence[str], out: str) -> List[str]:
+    """args with the value of --out replaced."""
+    res, i = [], 0
+    while i < len(args):
+        if args[i] == "--out" and i + 1 < len(args):
+            res += ["--out", out]
+            i += 2
+            continue
+        res.append(args[i])
+        i += 1
+    return res
+
+
+def _upload_logs(local_logs: str, url: str) -> None:
+    fs, root = _url_fs(url)
+    fs.makedirs(root, exist_ok=True)
+    for name in sorted(os.listdir(local_logs)):
+        fs.put_file(os.path.join(local_logs, name), root.rstrip("/") + "/" + name)
+
+
 def run_drive_task(task: DriveTask) -> DriveOutcome:
     """Stage 1 for one drive: slam_mms_run in a subprocess; never raises for a failed drive."""
     worker, host = _where()
-    cmd = _program(task.run_exe, "run") + list(task.args)
+    store = _is_url(task.out_dir)
+    scratch = _scratch(task.scratch, task.name) if store else None
+    out_dir = os.path.join(scratch, "out") if scratch else task.out_dir
+    log_dir = os.path.join(scratch, "logs") if scratch else task.log_dir
+    cmd = _program(task.run_exe, "run") + (_swap_out(task.args, out_dir) if store
+                                           else list(task.args))
     outcome = DriveOutcome(name=task.name, path=task.path, status="failed", out_dir=task.out_dir,
                            worker=worker, host=host, command=cmd)
     t0 = time.monotonic()
-    if not os.path.exists(task.path):
-        outcome.message = f"drive {task.name}: input {task.path} not found on {host}"
-        return outcome
-    os.makedirs(task.log_dir, exist_ok=True)
-    # A rerun starts clean: no stale submaps or files of an earlier, unfinished run.
-    shutil.rmtree(task.out_dir, ignore_errors=True)
-    log_stem = os.path.join(task.log_dir, task.name)
-    rc, note = _run_logged(cmd, log_stem, task.timeout_s, task.env)
-    outcome.wall_s = time.monotonic() - t0
-    outcome.returncode = rc
-    if rc == 0 and _finished(task.out_dir):
-        outcome.status = "done"
-        _write_json(os.path.join(task.out_dir, "fleet_task.json"),
-                    {"input": task.path, "args": _resume_key(task.args)})
-        return outcome
-    why = note or (f"exit status {rc}" if rc != 0 else "exit status 0 but no complete report.json "
-                   "and drive_result/drive_result.json")
-    outcome.message = _failure_message(f"drive {task.name} ({task.path}) failed on {host}: {why}",
-                                       log_stem)
+    try:
+        if not os.path.exists(task.path):
+            outcome.message = f"drive {task.name}: input {task.path} not found on {host}"
+            return outcome
+        os.makedirs(log_dir, exist_ok=True)
+        # A rerun starts clean: no stale submaps or files of an earlier, unfinished run.
+        shutil.rmtree(out_dir, ignore_errors=True)
+        log_stem = os.path.join(log_dir, task.name)
+        rc, note = _run_logged(cmd, log_stem, task.timeout_s, task.env)
+        outcome.returncode = rc
+        shown_log = _join(task.log_dir, task.name) if store else log_stem
+        if rc == 0 and _finished(out_dir):
+            _write_json(os.path.join(out_dir, "fleet_task.json"),
+                        {"input": task.path, "args": _resume_key(task.args)})
+            if store:
+                _put_tree(out_dir, task.out_dir)
+            outcome.status = "done"
+        else:
+            why = note or (f"exit status {rc}" if rc != 0 else "exit status 0 but no complete "
+                           "report.json and drive_result/drive_result.json")
+            outcome.message = _failure_message(
+                f"drive {task.name} ({task.path}) failed on {host}: {why}", log_stem, shown_log)
+        if store:
+            _upload_logs(log_dir, task.log_dir)
+    except (OSError, FleetError) as e:  # the store refused a copy
+        outcome.status = "failed"
+        outcome.message = f"drive {task.name}: copying to {task.out_dir} failed on {host}: {e}"
+    finally:
+        outcome.wall_s = time.monotonic() - t0
+        if scratch:
+            shutil.rmtree(scratch, ignore_errors=True)
     return outcome
 
 
 def merge_task(task: MergeTask) -> MergeOutcome:
     """Stage 2: slam_mms_merge over the finished drives in a subprocess; never raises."""
     worker, host = _where()
-    cmd = _program(task.merge_exe, "merge")
-    for d in task.drive_dirs:
-        cmd += ["--drive", d]
-    cmd += ["--out", task.out_dir, *task.args]
-    outcome = MergeOutcome(status="failed", worker=worker, host=host, command=cmd)
-    os.makedirs(task.log_dir, exist_ok=True)
-    shutil.rmtree(os.path.join(task.out_dir, "merged"), ignore_errors=True)
-    log_stem = os.path.join(task.log_dir, "merge")
+    store = _is_url(task.out_dir)
+    scratch = _scratch(task.scratch, "merge") if store else None
+    out_dir = os.path.join(scratch, "out") if scratch else task.out_dir
+    log_dir = os.path.join(scratch, "logs") if scratch else task.log_dir
+    outcome = MergeOutcome(status="failed", worker=worker, host=host)
     t0 = time.monotonic()
-    rc, note = _run_logged(cmd, log_stem, task.timeout_s, task.env)
-    outcome.wall_s = time.monotonic() - t0
-    outcome.returncode = rc
-    report = os.path.join(task.out_dir, "merged", "report.json")
-    if rc == 0 and os.path.isfile(report):
-        outcome.status = "done"
-        outcome.report = report
-        return outcome
-    outcome.message = _failure_message(
-        f"adjustment failed on {host}: {note or f'exit status {rc}'}", log_stem)
+    try:
+        drive_dirs = list(task.drive_dirs)
+        if store:
+            # What the adjustment reads of each drive: its report (ground truth, outages) and
+            # its drive result, under the drive's name (the merge names drives by folder).
+            drive_dirs = []
+            for url in task.drive_dirs:
+                local = os.path.join(scratch, "drives", url.rstrip("/").rsplit("/", 1)[-1])
+                os.makedirs(local, exist_ok=True)
+                fs, p = _url_fs(_join(url, "report.json"))
+                fs.get_file(p, os.path.join(local, "report.json"))
+                _get_tree(_join(url, "drive_result"), os.path.join(local, "drive_result"))
+                drive_dirs.append(local)
+        cmd = _program(task.merge_exe, "merge")
+        for d in drive_dirs:
+            cmd += ["--drive", d]
+        cmd += ["--out", out_dir, *task.args]
+        outcome.command = cmd
+        os.makedirs(log_dir, exist_ok=True)
+        shutil.rmtree(os.path.join(out_dir, "merged"), ignore_errors=True)
+        log_stem = os.path.join(log_dir, "merge")
+        rc, note = _run_logged(cmd, log_stem, task.timeout_s, task.env)
+        outcome.returncode = rc
+        report = os.path.join(out_dir, "merged", "report.json")
+        if rc == 0 and os.path.isfile(report):
+            if store:
+                _put_tree(os.path.join(out_dir, "merged"), _join(task.out_dir, "merged"))
+                report = _join(task.out_dir, "merged", "report.json")
+            outcome.status = "done"
+            outcome.report = report
+        else:
+            outcome.message = _failure_message(
+                f"adjustment failed on {host}: {note or f'exit status {rc}'}", log_stem,
+                _join(task.log_dir, "merge") if store else log_stem)
+        if store:
+            _upload_logs(log_dir, task.log_dir)
+    except (OSError, FleetError) as e:
+        outcome.status = "failed"
+        outcome.message = f"adjustment: copying from or to {task.out_dir} failed on {host}: {e}"
+    finally:
+        outcome.wall_s = time.monotonic() - t0
+        if scratch:
+            shutil.rmtree(scratch, ignore_errors=True)
     return outcome
 
 
-def _failure_message(what: str, log_stem: str) -> str:
-    """`what`, the log file to read and the end of its stderr."""
-    message = f"{what}; log {log_stem}.stderr.txt"
+def _failure_message(what: str, log_stem: str, shown_stem: Optional[str] = None) -> str:
+    """`what`, the log file to read (shown_stem, default log_stem) and the end of its stderr."""
+    message = f"{what}; log {shown_stem or log_stem}.stderr.txt"
     tail = _tail(log_stem + ".stderr.txt")
     return message + "\n" + tail if tail else message
 
@@ -295,14 +375,25 @@ def _failure_message(what: str, log_stem: str) -> str:
 # ---- planning --------------------------------------------------------------------------------
 
 
-def _finished(out_dir: str) -> bool:
-    """A drive output with a complete report.json and drive_result/drive_result.json."""
+def _exists(url_or_path: str) -> bool:
+    if not _is_url(url_or_path):
+        return os.path.isfile(url_or_path)
     try:
-        with open(os.path.join(out_dir, "report.json")) as f:
-            complete = json.load(f).get("complete") is True
-    except (OSError, ValueError, AttributeError):
+        fs, p = _url_fs(url_or_path)
+        return bool(fs.exists(p))
+    except (OSError, FleetError):
         return False
-    return complete and os.path.isfile(os.path.join(out_dir, "drive_result", "drive_result.json"))
+
+
+def _finished(out_dir: str) -> bool:
+    """A drive output (folder or URL) with a complete report.json and
+    drive_result/drive_result.json."""
+    data = _store_read(_join(out_dir, "report.json"))
+    try:
+        complete = data is not None and json.loads(data).get("complete") is True
+    except (ValueError, AttributeError):
+        return False
+    return complete and _exists(_join(out_dir, "drive_result", "drive_result.json"))
 
 
 def _resume_key(args: Sequence[str]) -> List[str]:
@@ -319,10 +410,10 @@ def _resume_key(args: Sequence[str]) -> List[str]:
 
 
 def _recorded_args(out_dir: str) -> Optional[List[str]]:
+    data = _store_read(_join(out_dir, "fleet_task.json"))
     try:
-        with open(os.path.join(out_dir, "fleet_task.json")) as f:
-            return list(json.load(f)["args"])
-    except (OSError, ValueError, KeyError, TypeError):
+        return list(json.loads(data)["args"]) if data is not None else None
+    except (ValueError, KeyError, TypeError):
         return None
 
 
@@ -395,11 +486,86 @@ def read_drives_file(path: PathLike) -> List[FleetDrive]:
 
 
 def _write_json(path: str, data: Any) -> None:
+    text = json.dumps(data, indent=2, sort_keys=True) + "\n"
+    if _is_url(path):
+        fs, p = _url_fs(path)
+        fs.makedirs(p.rsplit("/", 1)[0], exist_ok=True)
+        fs.pipe_file(p, text.encode())
+        return
     tmp = path + ".tmp"
     with open(tmp, "w") as f:
-        json.dump(data, f, indent=2, sort_keys=True)
-        f.write("\n")
+        f.write(text)
     os.replace(tmp, path)
+
+
+# ---- an object store as DIR (fsspec) -----------------------------------------------------------
+
+
+def _is_url(path: str) -> bool:
+    return "://" in path
+
+
+def _url_fs(url: str):
+    """(fsspec file system, path in it) of a URL; FleetError where fsspec cannot open it."""
+    try:
+        import fsspec
+    except ImportError as e:
+        raise FleetError(f"{url}: an object store needs fsspec (apt-get install python3-fsspec)"
+                         ) from e
+    try:
+        return fsspec.core.url_to_fs(url)
+    except (ImportError, ValueError) as e:  # an unknown protocol, or its package is missing
+        raise FleetError(f"{url}: {e}") from e
+
+
+def _join(base: str, *parts: str) -> str:
+    """A path or URL joined with '/' (os.path.join for paths)."""
+    if not _is_url(base):
+        return os.path.join(base, *parts)
+    return "/".join([base.rstrip("/"), *parts])
+
+
+def _store_read(url_or_path: str) -> Optional[bytes]:
+    """A file's bytes from a path or a URL; None where it cannot be read."""
+    try:
+        if _is_url(url_or_path):
+            fs, p = _url_fs(url_or_path)
+            return fs.cat_file(p)
+        return pathlib.Path(url_or_path).read_bytes()
+    except (OSError, FileNotFoundError, FleetError):
+        return None
+
+
+def _put_tree(local_dir: str, url: str) -> None:
+    """Copies every file under local_dir to url/<relative path>, replacing what was there. File by
+    file: fsspec's recursive put nests or not by version and trailing slash."""
+    fs, root = _url_fs(url)
+    if fs.exists(root):
+        fs.rm(root, recursive=True)
+    for dirpath, _dirs, files in os.walk(local_dir):
+        rel = os.path.relpath(dirpath, local_dir)
+        target = root if rel == "." else root.rstrip("/") + "/" + rel.replace(os.sep, "/")
+        fs.makedirs(target, exist_ok=True)
+        for name in sorted(files):
+            fs.put_file(os.path.join(dirpath, name), target.rstrip("/") + "/" + name)
+
+
+def _get_tree(url: str, local_dir: str) -> None:
+    """Copies every file under url into local_dir (the same relative paths)."""
+    fs, root = _url_fs(url)
+    root = root.rstrip("/")
+    for remote in sorted(fs.find(root)):
+        rel = remote[len(root):].lstrip("/")
+        local = os.path.join(local_dir, *rel.split("/"))
+        os.makedirs(os.path.dirname(local), exist_ok=True)
+        fs.get_file(remote, local)
+
+
+def _scratch(base: Optional[str], what: str) -> str:
+    """A fresh local folder for one task's files (removed by the task)."""
+    root = base or tempfile.gettempdir()
+    os.makedirs(root, exist_ok=True)
+    return tempfile.mkdtemp(prefix=f"slam_mms_fleet_{what}_", dir=root)
 
 
 # ---- the fleet -------------------------------------------------------------------------------
@@ -421,11 +587,14 @@ def run_fleet(drives: Sequence[Union[PathLike, FleetDrive]], out: PathLike,
               client: Any = None, progress: Optional[Progress] = None,
               run_exe: Optional[str] = None, merge_exe: Optional[str] = None,
               timeout_s: Optional[float] = None,
-              dashboard_address: Optional[str] = ":8787") -> FleetResult:
+              dashboard_address: Optional[str] = ":8787",
+              scratch: Optional[PathLike] = None) -> FleetResult:
     """Runs each drive as a task (stage 1), then the adjustment over the finished drives.
 
     ``drives``: paths or :class:`FleetDrive`; ``out``: the output folder DIR (a local or shared
-    file system path: DIR/drives/<name>/, DIR/logs/, DIR/merged/, DIR/fleet.json);
+    file system path, or an fsspec URL of an object store: DIR/drives/<name>/, DIR/logs/,
+    DIR/merged/, DIR/fleet.json); ``scratch``: with an object store, the local folder under
+    which each task stages its files (default the system temp folder);
     ``scheduler``: ``"local"`` (LocalCluster, ``workers`` processes, default one per CPU up to
     the number of drives), a scheduler address (``tcp://host:8786``), or ``"sequential"``/None
     (no Dask); ``client``: an existing ``distributed.Client`` instead (not closed here);
@@ -438,22 +607,34 @@ def run_fleet(drives: Sequence[Union[PathLike, FleetDrive]], out: PathLike,
     """
     say = progress or (lambda _line: None)
     out_s = os.fspath(out)
-    if "://" in out_s:
-        raise FleetError(f"--out {out_s}: only a file system path is supported (a shared file "
-                         "system such as NFS for a cluster; docs/fleet.md)")
-    out_dir = os.path.abspath(out_s)
     fleet = _as_drives(drives)
     if not fleet:
         raise FleetError("no drives given")
-    drives_dir = os.path.join(out_dir, "drives")
-    log_dir = os.path.join(out_dir, "logs")
-    os.makedirs(drives_dir, exist_ok=True)
+    scratch_s = os.path.abspath(os.fspath(scratch)) if scratch is not None else None
+    if _is_url(out_s):
+        out_dir = out_s.rstrip("/")
+        # The store first: an unknown protocol, a missing package or no write access fails here,
+        # before any drive runs.
+        fs, root = _url_fs(out_dir)
+        probe = root.rstrip("/") + "/.slam_mms_fleet_write_test"
+        try:
+            fs.makedirs(root, exist_ok=True)  # a folder where the store has them (file://)
+            fs.pipe_file(probe, b"")
+            fs.rm(probe)
+        except Exception as e:  # the store's own exception types
+            raise FleetError(f"--out {out_dir}: cannot write into it: {e}") from e
+    else:
+        out_dir = os.path.abspath(out_s)
+    drives_dir = _join(out_dir, "drives")
+    log_dir = _join(out_dir, "logs")
+    if not _is_url(out_dir):
+        os.makedirs(drives_dir, exist_ok=True)
 
     # Plan: which drives are finished already (resume), which run.
     outcomes: Dict[str, DriveOutcome] = {}
     tasks: List[DriveTask] = []
     for d in fleet:
-        drive_out = os.path.join(drives_dir, d.name)
+        drive_out = _join(drives_dir, d.name)
         args = [_input_flag(d.path), d.path, "--out", drive_out, "--mode", "full",
                 "--drive-result", *run_args, *d.run_args]
         if _finished(drive_out) and _recorded_args(drive_out) == _resume_key(args):
@@ -466,7 +647,7 @@ def run_fleet(drives: Sequence[Union[PathLike, FleetDrive]], out: PathLike,
             say(f"fleet: {d.name} runs again (its options or input changed)")
         tasks.append(DriveTask(name=d.name, path=d.path, out_dir=drive_out, log_dir=log_dir,
                                args=args, run_exe=run_exe, timeout_s=timeout_s,
-                               env=_task_env()))
+                               env=_task_env(), scratch=scratch_s))
 
     sched = "sequential" if scheduler in (None, "sequential") else str(scheduler)
     own_cluster = None
@@ -542,7 +723,7 @@ def run_fleet(drives: Sequence[Union[PathLike, FleetDrive]], out: PathLike,
             r = FleetResult(out=out_dir, scheduler=sched, workers=n_workers, drives=ordered,
                             stage1_wall_s=stage1, stage2_wall_s=stage2, merge=m,
                             dashboard=dashboard)
-            _write_json(os.path.join(out_dir, "fleet.json"), r.to_json())
+            _write_json(_join(out_dir, "fleet.json"), r.to_json())
             return r
 
         ok = [o for o in ordered if o.ok]
@@ -557,7 +738,7 @@ def run_fleet(drives: Sequence[Union[PathLike, FleetDrive]], out: PathLike,
         say(f"fleet: adjustment of {len(ok)} drives")
         mt = MergeTask(drive_dirs=[o.out_dir for o in ok], out_dir=out_dir, log_dir=log_dir,
                        args=list(merge_args), merge_exe=merge_exe, timeout_s=timeout_s,
-                       env=_task_env())
+                       env=_task_env(), scratch=scratch_s)
         t1 = time.monotonic()
         if client is None:
             m = merge_task(mt)
@@ -595,7 +776,10 @@ def _parser(prog: str) -> argparse.ArgumentParser:
     p.add_argument("--drives-file", metavar="FILE", help="a JSON list of drives: \"PATH\" or "
                    "{\"path\": ..., \"name\": ..., \"run_args\": [...]}")
     p.add_argument("--out", required=True, metavar="DIR", help="output folder (shared by all "
-                   "workers on a cluster)")
+                   "workers on a cluster), or an fsspec URL of an object store (s3://bucket/"
+                   "path, ...)")
+    p.add_argument("--scratch", metavar="DIR", help="with an object store: the local folder "
+                   "where each task stages its files (default: the system temp folder)")
     p.add_argument("--scheduler", default="local", metavar="S", help="local (default; a "
                    "LocalCluster), sequential (no Dask) or a scheduler address tcp://HOST:8786")
     p.add_argument("--workers", type=int, default=None, metavar="N", help="LocalCluster workers "
@@ -638,7 +822,7 @@ def main(argv: Optional[Sequence[str]] = None, prog: str = "slam_mms_fleet") -> 
                       run_args=run_args, merge=not a.no_merge, merge_args=a.merge_arg,
                       progress=lambda line: print(line, flush=True), run_exe=a.run_exe,
                       merge_exe=a.merge_exe, timeout_s=a.timeout,
-                      dashboard_address=a.dashboard_address)
+                      dashboard_address=a.dashboard_address, scratch=a.scratch)
     except FleetError as e:
         print(f"{prog}: error: {e}", file=sys.stderr)
         return 2
@@ -647,7 +831,7 @@ def main(argv: Optional[Sequence[str]] = None, prog: str = "slam_mms_fleet") -> 
         return 130
     print(f"fleet: {sum(d.ok for d in r.drives)}/{len(r.drives)} drives finished, stage 1 "
           f"{r.stage1_wall_s:.1f} s, adjustment {r.merge.status} ({r.stage2_wall_s:.1f} s); "
-          f"{os.path.join(r.out, 'fleet.json')}", flush=True)
+          f"{_join(r.out, 'fleet.json')}", flush=True)
     return 0 if r.ok else 1
 
 

@@ -264,69 +264,93 @@ def _upload_logs(local_logs: str, url: str) -> None:
         fs.put_file(os.path.join(local_logs, name), root.rstrip("/") + "/" + name)
 
 
+class _Stage:
+    """Where a task's process writes: the task's own folders, or, with an object store, a local
+    scratch folder (``close`` copies the logs up and removes it)."""
+
+    def __init__(self, out_dir: str, log_dir: str, scratch: Optional[str], what: str) -> None:
+        self.store = _is_url(out_dir)
+        self.out_url, self.log_url = out_dir, log_dir
+        self.scratch = _scratch(scratch, what) if self.store else None
+        self.out_dir = os.path.join(self.scratch, "out") if self.scratch else out_dir
+        self.log_dir = os.path.join(self.scratch, "logs") if self.scratch else log_dir
+
+    def logs(self, name: str) -> Tuple[str, str]:
+        """(local log stem, the stem to show: in the store where there is one)."""
+        local = os.path.join(self.log_dir, name)
+        return local, (_join(self.log_url, name) if self.store else local)
+
+    def close(self) -> None:
+        try:
+            if self.store and os.path.isdir(self.log_dir):
+                _upload_logs(self.log_dir, self.log_url)
+        finally:
+            if self.scratch:
+                shutil.rmtree(self.scratch, ignore_errors=True)
+
+
+def _staged(stage: _Stage, outcome: Any, what: str, body: Callable[[], None]) -> None:
+    """Runs body, then stage.close(); a store that refuses a copy fails the outcome."""
+    t0 = time.monotonic()
+    try:
+        try:
+            body()
+        finally:
+            stage.close()
+    except (OSError, FleetError) as e:
+        outcome.status = "failed"
+        outcome.message = f"{what}: copying from or to {stage.out_url} failed: {e}"
+    outcome.wall_s = time.monotonic() - t0
+
+
 def run_drive_task(task: DriveTask) -> DriveOutcome:
     """Stage 1 for one drive: slam_mms_run in a subprocess; never raises for a failed drive."""
     worker, host = _where()
-    store = _is_url(task.out_dir)
-    scratch = _scratch(task.scratch, task.name) if store else None
-    out_dir = os.path.join(scratch, "out") if scratch else task.out_dir
-    log_dir = os.path.join(scratch, "logs") if scratch else task.log_dir
-    cmd = _program(task.run_exe, "run") + (_swap_out(task.args, out_dir) if store
-                                           else list(task.args))
+    st = _Stage(task.out_dir, task.log_dir, task.scratch, task.name)
+    cmd = _program(task.run_exe, "run") + _swap_out(task.args, st.out_dir)
     outcome = DriveOutcome(name=task.name, path=task.path, status="failed", out_dir=task.out_dir,
                            worker=worker, host=host, command=cmd)
-    t0 = time.monotonic()
-    try:
+
+    def body() -> None:
         if not os.path.exists(task.path):
             outcome.message = f"drive {task.name}: input {task.path} not found on {host}"
-            return outcome
-        os.makedirs(log_dir, exist_ok=True)
+            return
+        os.makedirs(st.log_dir, exist_ok=True)
         # A rerun starts clean: no stale submaps or files of an earlier, unfinished run.
-        shutil.rmtree(out_dir, ignore_errors=True)
-        log_stem = os.path.join(log_dir, task.name)
+        shutil.rmtree(st.out_dir, ignore_errors=True)
+        log_stem, shown = st.logs(task.name)
         rc, note = _run_logged(cmd, log_stem, task.timeout_s, task.env)
         outcome.returncode = rc
-        shown_log = _join(task.log_dir, task.name) if store else log_stem
-        if rc == 0 and _finished(out_dir):
-            _write_json(os.path.join(out_dir, "fleet_task.json"),
+        if rc == 0 and _finished(st.out_dir):
+            _write_json(os.path.join(st.out_dir, "fleet_task.json"),
                         {"input": task.path, "args": _resume_key(task.args)})
-            if store:
-                _put_tree(out_dir, task.out_dir)
+            if st.store:
+                _put_tree(st.out_dir, task.out_dir)
             outcome.status = "done"
-        else:
-            why = note or (f"exit status {rc}" if rc != 0 else "exit status 0 but no complete "
-                           "report.json and drive_result/drive_result.json")
-            outcome.message = _failure_message(
-                f"drive {task.name} ({task.path}) failed on {host}: {why}", log_stem, shown_log)
-        if store:
-            _upload_logs(log_dir, task.log_dir)
-    except (OSError, FleetError) as e:  # the store refused a copy
-        outcome.status = "failed"
-        outcome.message = f"drive {task.name}: copying to {task.out_dir} failed on {host}: {e}"
-    finally:
-        outcome.wall_s = time.monotonic() - t0
-        if scratch:
-            shutil.rmtree(scratch, ignore_errors=True)
+            return
+        why = note or (f"exit status {rc}" if rc != 0 else "exit status 0 but no complete "
+                       "report.json and drive_result/drive_result.json")
+        outcome.message = _failure_message(
+            f"drive {task.name} ({task.path}) failed on {host}: {why}", log_stem, shown)
+
+    _staged(st, outcome, f"drive {task.name} on {host}", body)
     return outcome
 
 
 def merge_task(task: MergeTask) -> MergeOutcome:
     """Stage 2: slam_mms_merge over the finished drives in a subprocess; never raises."""
     worker, host = _where()
-    store = _is_url(task.out_dir)
-    scratch = _scratch(task.scratch, "merge") if store else None
-    out_dir = os.path.join(scratch, "out") if scratch else task.out_dir
-    log_dir = os.path.join(scratch, "logs") if scratch else task.log_dir
+    st = _Stage(task.out_dir, task.log_dir, task.scratch, "merge")
     outcome = MergeOutcome(status="failed", worker=worker, host=host)
-    t0 = time.monotonic()
-    try:
+
+    def body() -> None:
         drive_dirs = list(task.drive_dirs)
-        if store:
+        if st.store:
             # What the adjustment reads of each drive: its report (ground truth, outages) and
             # its drive result, under the drive's name (the merge names drives by folder).
             drive_dirs = []
             for url in task.drive_dirs:
-                local = os.path.join(scratch, "drives", url.rstrip("/").rsplit("/", 1)[-1])
+                local = os.path.join(st.scratch, "drives", url.rstrip("/").rsplit("/", 1)[-1])
                 os.makedirs(local, exist_ok=True)
                 fs, p = _url_fs(_join(url, "report.json"))
                 fs.get_file(p, os.path.join(local, "report.json"))
@@ -335,33 +359,25 @@ def merge_task(task: MergeTask) -> MergeOutcome:
         cmd = _program(task.merge_exe, "merge")
         for d in drive_dirs:
             cmd += ["--drive", d]
-        cmd += ["--out", out_dir, *task.args]
+        cmd += ["--out", st.out_dir, *task.args]
         outcome.command = cmd
-        os.makedirs(log_dir, exist_ok=True)
-        shutil.rmtree(os.path.join(out_dir, "merged"), ignore_errors=True)
-        log_stem = os.path.join(log_dir, "merge")
+        os.makedirs(st.log_dir, exist_ok=True)
+        shutil.rmtree(os.path.join(st.out_dir, "merged"), ignore_errors=True)
+        log_stem, shown = st.logs("merge")
         rc, note = _run_logged(cmd, log_stem, task.timeout_s, task.env)
         outcome.returncode = rc
-        report = os.path.join(out_dir, "merged", "report.json")
+        report = os.path.join(st.out_dir, "merged", "report.json")
         if rc == 0 and os.path.isfile(report):
-            if store:
-                _put_tree(os.path.join(out_dir, "merged"), _join(task.out_dir, "merged"))
+            if st.store:
+                _put_tree(os.path.join(st.out_dir, "merged"), _join(task.out_dir, "merged"))
                 report = _join(task.out_dir, "merged", "report.json")
             outcome.status = "done"
             outcome.report = report
-        else:
-            outcome.message = _failure_message(
-                f"adjustment failed on {host}: {note or f'exit status {rc}'}", log_stem,
-                _join(task.log_dir, "merge") if store else log_stem)
-        if store:
-            _upload_logs(log_dir, task.log_dir)
-    except (OSError, FleetError) as e:
-        outcome.status = "failed"
-        outcome.message = f"adjustment: copying from or to {task.out_dir} failed on {host}: {e}"
-    finally:
-        outcome.wall_s = time.monotonic() - t0
-        if scratch:
-            shutil.rmtree(scratch, ignore_errors=True)
+            return
+        outcome.message = _failure_message(
+            f"adjustment failed on {host}: {note or f'exit status {rc}'}", log_stem, shown)
+
+    _staged(st, outcome, f"adjustment on {host}", body)
     return outcome
 
 

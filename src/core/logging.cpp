@@ -27,6 +27,16 @@ const char* LogLevelName(LogLevel level) {
   return "?";
 }
 
+bool ParseLogLevel(std::string_view name, LogLevel* level) {
+  for (LogLevel l : {LogLevel::kDebug, LogLevel::kInfo, LogLevel::kWarning, LogLevel::kError}) {
+    if (name == LogLevelName(l)) {
+      *level = l;
+      return true;
+    }
+  }
+  return false;
+}
+
 LogSink SetLogSink(LogSink sink) {
   std::lock_guard<std::mutex> lock(SinkMutex());
   LogSink old = std::move(Sink());

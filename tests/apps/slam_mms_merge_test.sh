@@ -5,7 +5,7 @@
 # (two drives of one street with their own outage drift), merged: the overlaps are found and
 # accepted, the offset between the drives where they overlap shrinks to <= 3 cm, the merged map is
 # sharper than the union of the two maps, every drive's ATE and outage error are reported against
-# the simulator's ground truth; the outputs exist; a folder without a drive result and an unwritable --out fail with a message naming them.
+# the simulator's ground truth; the outputs exist; a folder without a drive result, an unwritable --out and an unknown --log-level fail with a message naming them.
 set -uo pipefail
 merge=$1
 run=$2
@@ -58,4 +58,8 @@ touch "$tmp/file"
 "$merge" --drive "$tmp/a" --drive "$tmp/b" --out "$tmp/file/x" >"$tmp/unw.log" 2>&1
 [[ $? -eq 1 ]] || fail "an unwritable --out must exit 1"
 grep -q "\-\-out" "$tmp/unw.log" || fail "the error must name --out"
+"$merge" --drive "$tmp/a" --drive "$tmp/b" --out "$tmp/m3" --log-level chatty >"$tmp/lvl.log" 2>&1
+[[ $? -eq 2 ]] || fail "--log-level chatty: expected exit status 2"
+grep -q -- "--log-level chatty: expected debug, info, warning or error" "$tmp/lvl.log" ||
+  fail "--log-level message: $(cat "$tmp/lvl.log")"
 echo "PASS"

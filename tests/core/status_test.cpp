@@ -57,6 +57,19 @@ TEST(LoggingTest, SinkReceivesMessagesAboveLevelOnly) {
   EXPECT_EQ(got[0], "warning:skipping 3");
 }
 
+TEST(LoggingTest, LevelNamesParseBackAndNothingElseDoes) {
+  for (LogLevel l : {LogLevel::kDebug, LogLevel::kInfo, LogLevel::kWarning, LogLevel::kError}) {
+    LogLevel parsed = l == LogLevel::kDebug ? LogLevel::kError : LogLevel::kDebug;
+    ASSERT_TRUE(ParseLogLevel(LogLevelName(l), &parsed)) << LogLevelName(l);
+    EXPECT_EQ(parsed, l);
+  }
+  LogLevel untouched = LogLevel::kInfo;
+  for (const char* bad : {"chatty", "", "Debug", "warn", "error "}) {
+    EXPECT_FALSE(ParseLogLevel(bad, &untouched)) << "'" << bad << "'";
+  }
+  EXPECT_EQ(untouched, LogLevel::kInfo);
+}
+
 TEST(TimestampTest, SecondsAndKittiString) {
   const Timestamp t = Timestamp::FromNanoseconds(1317034945964389445LL);
   EXPECT_EQ(t.ToKittiString(), "2011-09-26 11:02:25.964389445");

@@ -197,17 +197,12 @@ int MergeMainImpl(int argc, const char* const* argv) {
     return app.exit(e) == 0 ? 0 : 2;  // help and version: 0; a bad command line: 2
   }
   LogLevel level = LogLevel::kWarning;
-  if (log_level == "debug")
-    level = LogLevel::kDebug;
-  else if (log_level == "info")
-    level = LogLevel::kInfo;
-  else if (log_level == "error")
-    level = LogLevel::kError;
-  else if (log_level != "warning")
-    return Fail("--log-level: unknown level '" + log_level + "'");
-  SetLogSink([level](LogLevel l, const std::string& m) {
-    if (l >= level) std::fprintf(stderr, "%s\n", m.c_str());
-  });
+  if (!ParseLogLevel(log_level, &level)) {
+    Fail("--log-level " + log_level + ": expected debug, info, warning or error");
+    return 2;  // a bad command line, as CLI11's own errors
+  }
+  SetLogSink(StderrLogSink());
+  SetMinLogLevel(level);
   const auto t0 = std::chrono::steady_clock::now();
 
   // The output folder first: an unwritable one fails before any work.
@@ -396,11 +391,13 @@ int MergeMainImpl(int argc, const char* const* argv) {
 }  // namespace
 
 int MergeMain(int argc, const char* const* argv) {
-  // The log sink is set per run and the caller's put back (python -m slam_mms merge).
+  // The log sink and level are set per run and the caller's put back (python -m slam_mms merge).
   LogSink previous = SetLogSink(nullptr);
   SetLogSink(previous);
+  const LogLevel previous_level = MinLogLevel();
   const int code = MergeMainImpl(argc, argv);
   SetLogSink(previous);
+  SetMinLogLevel(previous_level);
   return code;
 }
 

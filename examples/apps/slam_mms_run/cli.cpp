@@ -264,19 +264,9 @@ StatusOr<RunArgs> ParseRunArgs(int argc, const char* const* argv) {
     }
     args.sim_seed = static_cast<uint64_t>(seed);
   }
-  if (given("--log-level")) {
-    if (log_level == "debug") {
-      args.log_level = LogLevel::kDebug;
-    } else if (log_level == "info") {
-      args.log_level = LogLevel::kInfo;
-    } else if (log_level == "warning") {
-      args.log_level = LogLevel::kWarning;
-    } else if (log_level == "error") {
-      args.log_level = LogLevel::kError;
-    } else {
-      return InvalidArgumentError("--log-level " + log_level +
-                                  ": expected debug, info, warning or error");
-    }
+  if (given("--log-level") && !ParseLogLevel(log_level, &args.log_level)) {
+    return InvalidArgumentError("--log-level " + log_level +
+                                ": expected debug, info, warning or error");
   }
   if (given("--las-tile-size") &&
       (!ParseDouble(las_tile_size, &args.las_tile_size_m) || args.las_tile_size_m < 0.0)) {

@@ -8,12 +8,16 @@
 #include <functional>
 #include <sstream>
 #include <string>
+#include <string_view>
 
 namespace slam_mms {
 
 enum class LogLevel { kDebug = 0, kInfo = 1, kWarning = 2, kError = 3 };
 
 const char* LogLevelName(LogLevel level);
+/// The level of one of LogLevelName's names ("debug", "info", "warning", "error"); false for any
+/// other (the apps' --log-level).
+bool ParseLogLevel(std::string_view name, LogLevel* level);
 
 /// The sink: receives the level and one formatted message (no trailing newline).
 using LogSink = std::function<void(LogLevel level, const std::string& message)>;

@@ -64,9 +64,17 @@ StatusOr<PointCloud> DownsampledUnionMap(const std::vector<UnionMapSubmap>& subm
     const auto& pts = p.cloud.points();
     for (const Eigen::Vector3f& q : pts) {
       internal::VoxelCell c;
-      // Points VoxelDownsample would skip (not finite) or refuse (too far out) are left to it:
-      // the strip of the first such point gets them (below).
-      if (!grid.CellOf(PlaceInWorld(p.R, p.t, q), &c)) continue;
+      const Eigen::Vector3f w = PlaceInWorld(p.R, p.t, q);
+      if (!grid.CellOf(w, &c)) {
+        // Not finite: VoxelDownsample skips it. Too far out for the grid: its error.
+        if (!w.allFinite()) continue;
+        PointCloud one;
+        one.Add(w);
+        return VoxelDownsample(one, options.voxel_m)
+            .status()
+            .WithContext("DownsampledUnionMap: submap " + std::to_string(submaps[k].id) + " of " +
+                         submaps[k].drive_result_dir.string());
+      }
       for (int a = 0; a < 2; ++a) {
         ranges[k].lo[a] = std::min<int64_t>(ranges[k].lo[a], c[a]);
         ranges[k].hi[a] = std::max<int64_t>(ranges[k].hi[a], c[a]);
@@ -98,17 +106,10 @@ StatusOr<PointCloud> DownsampledUnionMap(const std::vector<UnionMapSubmap>& subm
       for (size_t i = 0; i < pts.size(); ++i) {
         const Eigen::Vector3f w = PlaceInWorld(p.R, p.t, pts[i]);
         internal::VoxelCell c;
-        if (!grid.CellOf(w, &c)) {
-          // Not finite: VoxelDownsample skips it. Too far out: it names the error.
-          if (!w.allFinite()) continue;
-          PointCloud one;
-          one.Add(w);
-          return VoxelDownsample(one, options.voxel_m)
-              .status()
-              .WithContext("DownsampledUnionMap: submap " + std::to_string(submaps[k].id) + " of " +
-                           submaps[k].drive_result_dir.string());
+        // A point without a cell is not finite (pass 1 refused the others): skipped.
+        if (grid.CellOf(w, &c) && FloorDiv(c[axis], voxels_per_strip) == strip) {
+          gathered.Add(w, in[i]);
         }
-        if (FloorDiv(c[axis], voxels_per_strip) == strip) gathered.Add(w, in[i]);
       }
     }
     if (gathered.empty()) continue;

@@ -117,6 +117,12 @@ TEST(UnionMapTest, ErrorsNameTheFileOrTheOption) {
   EXPECT_NE(r.status().message().find("000042_map.pcd"), std::string::npos)
       << r.status().ToString();
   EXPECT_TRUE(DownsampledUnionMap({}, UnionMapOptions()).ok());  // nothing: an empty map
+  submaps[3].id = 3;
+  submaps[4].T_world_submap.translation().x() = 1e12;  // beyond the voxel grid
+  r = DownsampledUnionMap(submaps, UnionMapOptions());
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.status().message().find("too far"), std::string::npos) << r.status().ToString();
+  EXPECT_NE(r.status().message().find("submap 4 of"), std::string::npos) << r.status().ToString();
 }
 
 }  // namespace

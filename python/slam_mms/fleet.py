@@ -548,7 +548,7 @@ def _store_read(url_or_path: str) -> Optional[bytes]:
             fs, p = _url_fs(url_or_path)
             return fs.cat_file(p)
         return pathlib.Path(url_or_path).read_bytes()
-    except (OSError, FileNotFoundError, FleetError):
+    except (OSError, FleetError):  # FileNotFoundError is an OSError
         return None
 
 

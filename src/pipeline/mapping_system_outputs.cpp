@@ -187,12 +187,15 @@ StatusOr<DriveResult> MappingSystem::ExportDriveResult() const {
   return out;
 }
 
-std::vector<std::pair<Timestamp, Eigen::Isometry3d>> DriveResult::ScanPoses() const {
+std::vector<std::pair<Timestamp, Eigen::Isometry3d>> DriveResult::ScanPoses(
+    const std::vector<Eigen::Isometry3d>* T_world_submap) const {
   std::vector<std::pair<Timestamp, Eigen::Isometry3d>> out;
-  for (const DriveSubmap& sub : submaps) {
-    for (const SubmapScanPose& s : sub.scans) {
-      out.emplace_back(s.stamp, sub.T_world_submap * s.T_submap_scan);
-    }
+  for (size_t k = 0; k < submaps.size(); ++k) {
+    const DriveSubmap& sub = submaps[k];
+    const Eigen::Isometry3d& T = T_world_submap != nullptr && k < T_world_submap->size()
+                                     ? (*T_world_submap)[k]
+                                     : sub.T_world_submap;
+    for (const SubmapScanPose& s : sub.scans) out.emplace_back(s.stamp, T * s.T_submap_scan);
   }
   std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
   return out;

@@ -38,16 +38,13 @@ int Fail(const std::string& message) {
   return 1;
 }
 
-// T_world_body of every scan, at the drive's submap poses or at `submap_poses` (per submap).
+// T_world_body of every scan (DriveResult::ScanPoses: at the drive's submap poses, or at
+// `submap_poses`).
 Trajectory ScanTrajectory(const DriveResult& r,
                           const std::vector<Eigen::Isometry3d>* submap_poses = nullptr) {
   Trajectory t;
-  for (size_t k = 0; k < r.submaps.size(); ++k) {
-    const DriveSubmap& s = r.submaps[k];
-    const Eigen::Isometry3d& T = submap_poses != nullptr ? (*submap_poses)[k] : s.T_world_submap;
-    for (const SubmapScanPose& p : s.scans) {
-      if (!t.Add(p.stamp, T * p.T_submap_scan).ok()) continue;  // duplicate stamp: cannot happen
-    }
+  for (const auto& [stamp, T] : r.ScanPoses(submap_poses)) {
+    if (!t.Add(stamp, T).ok()) continue;  // a duplicate stamp (cannot happen in one drive)
   }
   return t;
 }

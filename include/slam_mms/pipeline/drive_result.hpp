@@ -38,8 +38,10 @@ struct DriveResult {
   std::vector<SubmapGraphFactor> factors;  ///< Level 2's factors, as added.
   std::vector<GnssAvailabilityInterval> gnss_availability;
 
-  /// T_world_body of every scan (T_world_submap * T_submap_scan) in time order.
-  std::vector<std::pair<Timestamp, Eigen::Isometry3d>> ScanPoses() const;
+  /// T_world_body of every scan (T_world_submap * T_submap_scan) in time order; with
+  /// `T_world_submap` (one per submap, in `submaps` order), at those submap poses instead.
+  std::vector<std::pair<Timestamp, Eigen::Isometry3d>> ScanPoses(
+      const std::vector<Eigen::Isometry3d>* T_world_submap = nullptr) const;
 };
 
 }  // namespace slam_mms

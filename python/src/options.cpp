@@ -313,6 +313,8 @@ void RegisterOptions(py::module_& m) {
       .Field("per_submap_surfels", &LO::per_submap_surfels, "")
       .Field("lidar_only_initial_velocity", &LO::lidar_only_initial_velocity,
              "lidar_only starts from the POS's velocity as well as its pose")
+      .Field("refine_constant_velocity_deskew", &LO::refine_constant_velocity_deskew,
+             "a constant-velocity de-skew is refined from the registration (second pass)")
       .Field("archive_surfels", &LO::archive_surfels, "")
       .Field("spill_dir", &LO::spill_dir, "Finished submaps' clouds go here; '' = memory.")
       .Validated()

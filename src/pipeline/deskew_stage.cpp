@@ -19,16 +19,22 @@ StatusOr<DeskewStage> DeskewStage::Create(const Localizer::Options& options,
 }
 
 Status DeskewStage::Deskew(const Scan& scan, const ScanMotionInput& motion,
-                           const MotionPrior& prior, const ScanStep& step, const Vector6d& bias,
+                           const MotionPrior& prior, const Vector6d& bias, ScanStep* step,
                            DeskewedScan* out, LocalizationResult* res) {
-  const auto t0 = Clock::now();
   // The scan's own motion input: MotionPrior::DeskewMotion switches by motion.type, not by the
   // motion factor of step.pred.
-  const Eigen::Isometry3d T_bstart_bend =
-      prior.DeskewMotion(scan, motion, step.pred.T_submap, step.pred.v_submap, step.g_submap, bias);
+  step->T_bstart_bend = prior.DeskewMotion(scan, motion, step->pred.T_submap, step->pred.v_submap,
+                                           step->g_submap, bias, &step->constant_velocity_deskew);
+  res->timings.deskew_ms = 0.0;
+  return DeskewWith(scan, step->T_bstart_bend, out, res);
+}
+
+Status DeskewStage::DeskewWith(const Scan& scan, const Eigen::Isometry3d& T_bstart_bend,
+                               DeskewedScan* out, LocalizationResult* res) {
+  const auto t0 = Clock::now();
   SLAM_MMS_RETURN_IF_ERROR(deskewer_.Deskew(scan, T_bstart_bend, T_body_lidar_, &out->cloud));
   range_image_->ComputeVertexNormalMap(projection_, out->cloud.View(), &out->vnm);
-  res->timings.deskew_ms = MsSince(t0);
+  res->timings.deskew_ms += MsSince(t0);
   return OkStatus();
 }
 

@@ -34,11 +34,14 @@ class DeskewStage {
                                       const Eigen::Isometry3d& T_body_lidar);
 
   /// De-skews `scan` into out->cloud (lidar frame at the scan start) and computes out->vnm, with
-  /// the motion `prior` gives from step.pred (and the IMU biases `bias`); the time into `res`.
+  /// the motion `prior` gives from step->pred (and the IMU biases `bias`), which it keeps in
+  /// step->T_bstart_bend and step->constant_velocity_deskew; the time into `res`.
   /// InvalidArgument from ScanDeskewer::Deskew.
   Status Deskew(const Scan& scan, const ScanMotionInput& motion, const MotionPrior& prior,
-                const ScanStep& step, const Vector6d& bias, DeskewedScan* out,
-                LocalizationResult* res);
+                const Vector6d& bias, ScanStep* step, DeskewedScan* out, LocalizationResult* res);
+  /// The same with a given body motion over the scan (the time is added to `res`'s).
+  Status DeskewWith(const Scan& scan, const Eigen::Isometry3d& T_bstart_bend, DeskewedScan* out,
+                    LocalizationResult* res);
 
  private:
   ScanDeskewer deskewer_;

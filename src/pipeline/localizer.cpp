@@ -136,12 +136,14 @@ StatusOr<LocalizationResult> Localizer::ProcessScan(const Scan& scan,
   m.PredictStage(scan, motion, &step, &res);
   // 1. de-skew
   SLAM_MMS_RETURN_IF_ERROR(
-      m.deskew.Deskew(scan, motion, m.motion_prior, step, m.prev.bias, &m.deskewed, &res));
+      m.deskew.Deskew(scan, motion, m.motion_prior, m.prev.bias, &step, &m.deskewed, &res));
   // 3. render the model at the prediction
   SLAM_MMS_RETURN_IF_ERROR(m.model.Render(scan, m.current(), m.num_processed, &m.map, &step, &res));
   // 4. register (eq 15), moving objects masked out first
   SLAM_MMS_RETURN_IF_ERROR(
       m.registration.Register(scan, m.model.model(), &m.deskewed, &m.map, &step, &res));
+  // 4b. a constant-velocity de-skew refined from the registration (LiDAR only)
+  SLAM_MMS_RETURN_IF_ERROR(m.RefineConstantVelocityDeskew(scan, &step, &res));
   // 5. add factors (F_Odom / F_Prein / CV, F_Reg eq 16), 6. optimize the window
   SLAM_MMS_RETURN_IF_ERROR(m.window.AddFactors(scan, motion, m.prev, &step, &res));
   SLAM_MMS_RETURN_IF_ERROR(m.window.Optimize(scan, &step, &m.prev, &res));

@@ -61,6 +61,10 @@ struct Localizer::Impl {
   ScanStep BeginScan(const Scan& scan, const ScanMotionInput& motion);
   void PredictStage(const Scan& scan, const ScanMotionInput& motion, ScanStep* step,
                     LocalizationResult* res) const;
+  /// 4b. A constant-velocity de-skew refined (Options::refine_constant_velocity_deskew): the
+  /// scan de-skewed again at the motion between the middles of the previous sweep and this one
+  /// (this one's from the first registration), and registered again from there.
+  Status RefineConstantVelocityDeskew(const Scan& scan, ScanStep* step, LocalizationResult* res);
   /// Bookkeeping: the scan's pose into its submap record, the state the next scan starts from.
   void RecordScan(const Scan& scan, const ScanMotionInput& motion, const ScanStep& step,
                   LocalizationResult* res);

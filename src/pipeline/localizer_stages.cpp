@@ -69,6 +69,47 @@ void Localizer::Impl::PredictStage(const Scan& scan, const ScanMotionInput& moti
   res->timings.predict_ms = MsSince(t0);
 }
 
+Status Localizer::Impl::RefineConstantVelocityDeskew(const Scan& scan, ScanStep* step,
+                                                     LocalizationResult* res) {
+  const double duration = scan.DurationSeconds();
+  if (!opt.refine_constant_velocity_deskew || !step->constant_velocity_deskew ||
+      !step->T_submap_reg || num_processed == 0 || !(prev.duration_s > 0.0) || !(duration > 0.0)) {
+    return OkStatus();
+  }
+  // The registration holds the middle of the sweep (a wrong de-skew rate shears the scan
+  // symmetrically about it); the previous scan's middle from its pose and its de-skew motion.
+  const Eigen::Isometry3d T_submap_mid_prev =
+      prev.T_submap * internal::ScalePose(prev.T_bstart_bend, 0.5);
+  const Eigen::Isometry3d T_submap_mid =
+      *step->T_submap_reg * internal::ScalePose(step->T_bstart_bend, 0.5);
+  const double dt = scan.stamp_start.PlusSeconds(0.5 * duration)
+                        .SecondsSince(prev.stamp.PlusSeconds(0.5 * prev.duration_s));
+  if (!(dt > 1e-3)) return OkStatus();
+  const Eigen::Isometry3d T_bstart_bend =
+      internal::ScalePose(T_submap_mid_prev.inverse() * T_submap_mid, duration / dt);
+  if (!T_bstart_bend.matrix().allFinite()) return OkStatus();
+  // Registered again from the start pose that keeps the middle where it is.
+  const Eigen::Isometry3d T_submap_start =
+      T_submap_mid * internal::ScalePose(T_bstart_bend, 0.5).inverse();
+  const Eigen::Isometry3d T_lidar_pred_lidar =
+      step->T_world_lidar_pred.inverse() * step->T_world_submap * T_submap_start * T_body_lidar;
+  const ScanStep first_step = *step;
+  const LocalizationResult first_res = *res;
+  SLAM_MMS_RETURN_IF_ERROR(deskew.DeskewWith(scan, T_bstart_bend, &deskewed, res));
+  SLAM_MMS_RETURN_IF_ERROR(
+      registration.Reregister(scan, model.model(), T_lidar_pred_lidar, &deskewed, &map, step, res));
+  if (step->T_submap_reg) {
+    step->T_bstart_bend = T_bstart_bend;
+    return OkStatus();
+  }
+  // Not usable the second time: the first de-skew and registration stand.
+  const StageTimings timings = res->timings;
+  *step = first_step;
+  *res = first_res;
+  res->timings = timings;
+  return deskew.DeskewWith(scan, step->T_bstart_bend, &deskewed, res);
+}
+
 void Localizer::Impl::RecordScan(const Scan& scan, const ScanMotionInput& motion,
                                  const ScanStep& step, LocalizationResult* res) {
   const Eigen::Isometry3d& T_submap_cur = step.T_submap_cur;
@@ -81,6 +122,8 @@ void Localizer::Impl::RecordScan(const Scan& scan, const ScanMotionInput& motion
   window.Advance(step.cur_state);
   prev.has_pos = motion.type == MotionFactorType::kOdometry;
   prev.pos_start = motion.T_world_body_pos_start;
+  prev.T_bstart_bend = step.T_bstart_bend;
+  prev.duration_s = scan.DurationSeconds();
   if (!window.use_imu_states() && motion.type == MotionFactorType::kOdometry) {
     prev.v_submap = step.T_world_submap.linear().transpose() * motion.v_world_pos;
   }

@@ -6,15 +6,6 @@
 #include "slam_mms/core/logging.hpp"
 
 namespace slam_mms::internal {
-namespace {
-
-/// Pose T scaled along its twist: Exp(s * Log(T)).
-Eigen::Isometry3d ScalePose(const Eigen::Isometry3d& T, double s) {
-  return se3::Exp(s * se3::Log(T));
-}
-
-}  // namespace
-
 Prediction MotionPrior::Predict(const Scan& scan, const ScanMotionInput& motion, bool is_reference,
                                 const PreviousScan& prev, const Eigen::Isometry3d& T_world_submap,
                                 const Eigen::Vector3d& g_submap) const {
@@ -57,9 +48,10 @@ Prediction MotionPrior::Predict(const Scan& scan, const ScanMotionInput& motion,
 Eigen::Isometry3d MotionPrior::DeskewMotion(const Scan& scan, const ScanMotionInput& motion,
                                             const Eigen::Isometry3d& T_submap_pred,
                                             const Eigen::Vector3d& v_submap_pred,
-                                            const Eigen::Vector3d& g_submap,
-                                            const Vector6d& bias) const {
+                                            const Eigen::Vector3d& g_submap, const Vector6d& bias,
+                                            bool* constant_velocity) const {
   const double duration = scan.DurationSeconds();
+  if (constant_velocity) *constant_velocity = false;
   switch (motion.type) {
     case MotionFactorType::kOdometry:
       return motion.T_world_body_pos_start.inverse() * motion.T_world_body_pos_end;
@@ -74,6 +66,7 @@ Eigen::Isometry3d MotionPrior::DeskewMotion(const Scan& scan, const ScanMotionIn
       [[fallthrough]];
     }
     default:
+      if (constant_velocity) *constant_velocity = true;
       return ConstantVelocityMotion(duration, kDeskewVelocityIntervals)
           .value_or(Eigen::Isometry3d::Identity());
   }

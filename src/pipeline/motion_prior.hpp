@@ -31,6 +31,11 @@ namespace slam_mms::internal {
 /// Scan intervals over which the constant-velocity de-skew measures the velocity.
 inline constexpr size_t kDeskewVelocityIntervals = 3;
 
+/// Pose T scaled along its twist: Exp(s * Log(T)).
+inline Eigen::Isometry3d ScalePose(const Eigen::Isometry3d& T, double s) {
+  return se3::Exp(s * se3::Log(T));
+}
+
 /// What the motion prior predicts for a scan before it is registered.
 struct Prediction {
   Eigen::Isometry3d T_submap = Eigen::Isometry3d::Identity();  ///< T_submap_body.
@@ -48,6 +53,9 @@ struct PreviousScan {
   /// The previous scan had the POS pose pos_start (T_world_body at its start): F_Odom possible.
   bool has_pos = false;
   Eigen::Isometry3d pos_start = Eigen::Isometry3d::Identity();
+  /// The body motion over the scan it was de-skewed with (T_bstart_bend) and its duration [s].
+  Eigen::Isometry3d T_bstart_bend = Eigen::Isometry3d::Identity();
+  double duration_s = 0.0;
 };
 
 class MotionPrior {
@@ -66,11 +74,13 @@ class MotionPrior {
                      const Eigen::Vector3d& g_submap) const;
 
   /// T_bstart_bend, the body motion over the scan for its de-skew, from the predicted pose and
-  /// velocity at its start (and the biases `bias` for preintegration).
+  /// velocity at its start (and the biases `bias` for preintegration). `constant_velocity`
+  /// (optional): set to whether it came from the constant-velocity model.
   Eigen::Isometry3d DeskewMotion(const Scan& scan, const ScanMotionInput& motion,
                                  const Eigen::Isometry3d& T_submap_pred,
                                  const Eigen::Vector3d& v_submap_pred,
-                                 const Eigen::Vector3d& g_submap, const Vector6d& bias) const;
+                                 const Eigen::Vector3d& g_submap, const Vector6d& bias,
+                                 bool* constant_velocity = nullptr) const;
 
   /// Body motion over `duration` seconds at the mean velocity of the last `intervals` scan
   /// intervals (fewer at the start); empty before two poses.

@@ -43,12 +43,21 @@ class RegistrationStage {
   /// old surfels removed from `map`.
   Status Register(const Scan& raw, const VertexNormalMap& model, DeskewedScan* scan, SurfelMap* map,
                   ScanStep* step, LocalizationResult* res);
+  /// Registers the scan again (de-skewed anew) from the relative pose `T_lidar_pred_lidar` (lidar
+  /// at the prediction to lidar), without the moving-object filter: replaces what Register set
+  /// (step->T_submap_reg is empty where this result is not usable); the time is added to res's.
+  Status Reregister(const Scan& raw, const VertexNormalMap& model,
+                    const Eigen::Isometry3d& T_lidar_pred_lidar, DeskewedScan* scan, SurfelMap* map,
+                    ScanStep* step, LocalizationResult* res);
 
   /// A processed scan's stamp and body position (world): the path the filter's model age is
   /// measured along.
   void RecordPose(int64_t stamp_ns, const Eigen::Vector3d& p_world);
 
  private:
+  Status Align(const Scan& raw, const VertexNormalMap& model,
+               const Eigen::Isometry3d& T_lidar_pred_lidar, bool filter_moving, DeskewedScan* scan,
+               SurfelMap* map, ScanStep* step, LocalizationResult* res);
   /// The moving-object filter on the scan, at the prediction.
   void FilterMovingObjects(const VertexNormalMap& model, DeskewedScan* scan, SurfelMap* map,
                            const ScanStep& step, LocalizationResult* res);

@@ -37,6 +37,10 @@ struct ScanStep {
   Eigen::Vector3d g_submap = Eigen::Vector3d::Zero();                ///< Gravity in the submap.
   bool is_reference = false;  ///< The scan is its submap's reference (first scan).
   Prediction pred;            ///< 2. predict
+  /// 1. de-skew: the body motion over the scan it was de-skewed with (T_bstart_bend), and
+  /// whether that came from the constant-velocity model (no POS, no IMU).
+  Eigen::Isometry3d T_bstart_bend = Eigen::Isometry3d::Identity();
+  bool constant_velocity_deskew = false;
   Eigen::Isometry3d T_world_lidar_pred = Eigen::Isometry3d::Identity();  ///< 3. render
   bool have_model = false;                                               ///< 3. render
   std::optional<Eigen::Isometry3d> T_submap_reg;  ///< 4. register: the usable result

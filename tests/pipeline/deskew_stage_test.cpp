@@ -59,7 +59,7 @@ TEST_F(DeskewStageTest, AScanWithoutMotionIsUnchangedAndItsImageIsTheCloudsImage
   DeskewedScan out;
   LocalizationResult res;
   ScanMotionInput cv;
-  ASSERT_TRUE(stage_.Deskew(scan, cv, prior_, step, Vector6d::Zero(), &out, &res).ok());
+  ASSERT_TRUE(stage_.Deskew(scan, cv, prior_, Vector6d::Zero(), &step, &out, &res).ok());
   ASSERT_EQ(out.cloud.size(), scan.cloud.size());
   for (size_t i = 0; i < scan.cloud.size(); ++i) {
     EXPECT_LT((out.cloud.points()[i] - scan.cloud.points()[i]).norm(), 1e-5f) << i;
@@ -83,7 +83,7 @@ TEST_F(DeskewStageTest, PosPosesDeskewAScanWhoseFactorIsNotFOdom) {
   step.pred.factor = MotionFactorType::kNone;  // a submap reference: no motion factor
   DeskewedScan out;
   LocalizationResult res;
-  ASSERT_TRUE(stage_.Deskew(scan, pos, prior_, step, Vector6d::Zero(), &out, &res).ok());
+  ASSERT_TRUE(stage_.Deskew(scan, pos, prior_, Vector6d::Zero(), &step, &out, &res).ok());
   // The oracle: the de-skewer with the POS relative motion.
   auto deskewer = ScanDeskewer::Create(ScanDeskewer::Options()).value();
   PointCloud expected;
@@ -105,7 +105,7 @@ TEST_F(DeskewStageTest, ATimeOffsetOutsideTheScanIsRefused) {
   ScanStep step;
   DeskewedScan out;
   LocalizationResult res;
-  const Status st = stage_.Deskew(scan, pos, prior_, step, Vector6d::Zero(), &out, &res);
+  const Status st = stage_.Deskew(scan, pos, prior_, Vector6d::Zero(), &step, &out, &res);
   EXPECT_EQ(st.code(), StatusCode::kInvalidArgument);
   EXPECT_NE(st.message().find("ring"), std::string::npos) << st.message();
 }

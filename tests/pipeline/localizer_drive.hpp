@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <random>
@@ -99,16 +100,18 @@ inline double RotErrDeg(const Eigen::Isometry3d& truth, const Eigen::Isometry3d&
 }
 
 /// A skewed scan: column c fired at (c + 0.5) / cols * kSweepS after the scan start, from the
-/// LiDAR pose of that time (the ray casting of testing::SimulateScan, one pose per column).
-inline PointCloud SimulateSkewedScan(const testing::Scene& scene, const RangeProjection& proj,
-                                     int k, uint32_t seed) {
+/// LiDAR pose of that time (the ray casting of testing::SimulateScan, one pose per column), on the
+/// body trajectory `body` (T_world_body at t seconds after the first scan; default TrueBody).
+inline PointCloud SimulateSkewedScan(
+    const testing::Scene& scene, const RangeProjection& proj, int k, uint32_t seed,
+    const std::function<Eigen::Isometry3d(double)>& body = TrueBody) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<float> jitter(0.02f, 0.98f);
   std::normal_distribution<double> noise(0.0, kNoiseM);
   PointCloud cloud;
   for (int col = 0; col < proj.cols(); ++col) {
     const double dt = (col + 0.5) / proj.cols() * kSweepS;
-    const Eigen::Isometry3d T = TrueBody(k * kScanPeriodS + dt) * BodyLidar();
+    const Eigen::Isometry3d T = body(k * kScanPeriodS + dt) * BodyLidar();
     for (int row = 0; row < proj.rows(); ++row) {
       const Eigen::Vector3d d = proj.Unproject(static_cast<float>(col) + jitter(rng),
                                                static_cast<float>(row) + jitter(rng), 1.0f)

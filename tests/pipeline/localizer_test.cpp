@@ -223,6 +223,83 @@ TEST(LocalizerTest, LidarOnlyStartedAtItsVelocityHasNoStartupOffset) {
   RecordErrors(e);
 }
 
+// LiDAR only on a vehicle that rolls and pitches as real ones do (OXTS: 1-4 deg/s, changing from
+// one scan to the next): the constant velocity of the last intervals lags that motion, so the
+// de-skew is off by the change of rate and the scan-start pose by half of it over a sweep.
+// Localizer::Options::refine_constant_velocity_deskew de-skews each scan again at the motion
+// between the middles of the previous sweep and this one (the registration fixes the middle).
+// Measured (32 x 512 image of the synthetic street): scan-to-scan rotation error RMS 0.082 deg
+// with it against 0.219 deg without; largest rotation drift over the 30 scans 0.27 against
+// 0.51 deg (translation 5.4 against 5.5 cm).
+TEST(LocalizerTest, LidarOnlyRefinedDeskewFollowsRollAndPitchOscillations) {
+  constexpr int kScans = 30;
+  // 0.4 deg of roll at 1.7 Hz and 0.3 deg of pitch at 1.3 Hz (peak rates 4.3 and 2.5 deg/s).
+  const auto body = [](double t) {
+    const double deg = M_PI / 180.0;
+    Eigen::Isometry3d T = TrueBody(t);
+    T.rotate(Eigen::AngleAxisd(0.4 * deg * std::sin(2.0 * M_PI * 1.7 * t + 0.3),
+                               Eigen::Vector3d::UnitX()));
+    T.rotate(Eigen::AngleAxisd(0.3 * deg * std::sin(2.0 * M_PI * 1.3 * t + 1.1),
+                               Eigen::Vector3d::UnitY()));
+    return T;
+  };
+  const testing::Scene scene = testing::MakeStreetScene();
+  const RangeProjection proj = RangeProjection::Create(SmallProjection()).value();
+  std::vector<Scan> scans;
+  std::vector<Eigen::Isometry3d> truth;
+  for (int k = 0; k < kScans; ++k) {
+    Scan scan;
+    scan.index = k;
+    scan.stamp_start = ScanStart(k);
+    scan.stamp_end = Timestamp::FromNanoseconds(scan.stamp_start.nanoseconds() + kScanPeriodNs);
+    scan.source = "oscillating_" + std::to_string(k);
+    scan.cloud = SimulateSkewedScan(scene, proj, k, 3000u + static_cast<uint32_t>(k), body);
+    scans.push_back(std::move(scan));
+    truth.push_back(body(k * kScanPeriodS));
+  }
+  auto run = [&](bool refine) {
+    Localizer::Options o = SmallOptions(MappingMode::kLidarOnly);
+    o.refine_constant_velocity_deskew = refine;
+    auto loc = Localizer::Create(o, BodyLidar());
+    EXPECT_TRUE(loc.ok()) << loc.status().ToString();
+    std::vector<Eigen::Isometry3d> poses;
+    if (!loc.ok()) return poses;
+    (*loc)->SetInitialPose(truth[0]);
+    for (int k = 0; k < kScans; ++k) {
+      ScanMotionInput m = ConstantVelocity();
+      if (k == 0) m.v_world_pos = TrueVelocityWorld(0.0);
+      auto r = (*loc)->ProcessScan(scans[static_cast<size_t>(k)], m);
+      EXPECT_TRUE(r.ok()) << "scan " << k << ": " << r.status().ToString();
+      if (!r.ok()) break;
+      poses.push_back(r->T_world_body);
+    }
+    return poses;
+  };
+  // The error of each scan-to-scan motion (drift-free; an error of one pose counts twice).
+  auto rms_rot_deg = [&](const std::vector<Eigen::Isometry3d>& poses) {
+    double sum = 0.0;
+    for (size_t k = 1; k < poses.size(); ++k) {
+      sum += std::pow(
+          RotErrDeg(truth[k - 1].inverse() * truth[k], poses[k - 1].inverse() * poses[k]), 2);
+    }
+    return std::sqrt(sum / static_cast<double>(poses.size() - 1));
+  };
+  const std::vector<Eigen::Isometry3d> refined = run(true), cv_only = run(false);
+  ASSERT_EQ(refined.size(), static_cast<size_t>(kScans));
+  ASSERT_EQ(cv_only.size(), static_cast<size_t>(kScans));
+  const double e_refined = rms_rot_deg(refined), e_cv = rms_rot_deg(cv_only);
+  std::printf(
+      "lidar_only, rolling and pitching vehicle: rotation RMS %.3f deg refined, %.3f deg "
+      "constant velocity only\n",
+      e_refined, e_cv);
+  EXPECT_LT(e_refined, 0.6 * e_cv);
+  const TrackingError e = RelativeError(refined, truth), e0 = RelativeError(cv_only, truth);
+  std::printf("  drift: %.3f m / %.3f deg refined, %.3f m / %.3f deg constant velocity only\n",
+              e.max_trans_m, e.max_rot_deg, e0.max_trans_m, e0.max_rot_deg);
+  EXPECT_LT(e.max_rot_deg, 0.75 * e0.max_rot_deg);
+  EXPECT_LT(e.max_trans_m, 1.5 * kTolTransM);
+}
+
 // Full mode with F_Odom from exact POS poses, skewed scans (the POS start/end poses de-skew them
 // exactly: the trajectory is a constant twist). Measured: 1.5 cm / 0.07 deg after 25 scans.
 TEST(LocalizerTest, OdometryWithExactPosTracksSkewedScans) {

@@ -343,6 +343,8 @@ const std::vector<std::pair<std::string, KeyHandler>>& Handlers() {
     SLAM_MMS_KEY_B("localizer.per_submap_surfels", o->system.localizer.per_submap_surfels);
     SLAM_MMS_KEY_B("localizer.lidar_only_initial_velocity",
                    o->system.localizer.lidar_only_initial_velocity);
+    SLAM_MMS_KEY_B("localizer.refine_constant_velocity_deskew",
+                   o->system.localizer.refine_constant_velocity_deskew);
     SLAM_MMS_KEY_B("localizer.archive_surfels", o->system.localizer.archive_surfels);
     h.emplace_back("localizer.spill_dir",
                    Path([](Options* o) { return &o->system.localizer.spill_dir; }));

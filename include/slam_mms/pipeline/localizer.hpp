@@ -120,6 +120,15 @@ struct Level1Options {
   /// costs 0.15-0.4 m of drift on drives that start moving (docs/sweep.md, session 18). After
   /// that, LiDAR only.
   bool lidar_only_initial_velocity = true;
+  /// A scan de-skewed at constant velocity (lidar_only; no POS and no IMU) is registered twice:
+  /// the first registration fixes the pose at the middle of the sweep (a wrong rate shears the
+  /// scan symmetrically about it), and the scan is de-skewed again at the motion between the
+  /// middles of the previous sweep and this one, and registered again. The velocity of the last
+  /// three intervals alone lags the motion by two scans: on vehicles that pitch and roll at 1-4
+  /// deg/s (real OXTS motion) the scan-start poses were 70 mdeg off in roll and pitch, against
+  /// 18 mdeg with the motion between the middles (docs/pipeline.md). Costs a second de-skew and
+  /// registration of each such scan.
+  bool refine_constant_velocity_deskew = true;
   /// Bounded memory on long drives: where finished submaps' point clouds go. Empty (default):
   /// they stay in memory. Otherwise a private folder is created inside it (an error at Create
   /// when that fails) and removed with the Localizer; a submap's map cloud is written there when

@@ -44,18 +44,27 @@ def _parse_frames(frames: Frames) -> Tuple[int, int]:
 
 def open_drive(path: PathLike, frames: Frames = None, kind: str = "auto",
                lidar_topic: str = "", imu_topic: str = "", gnss_topic: str = "",
-               extrinsics: PathLike = "") -> "_C.DriveReader":
+               extrinsics: PathLike = "",
+               kitti_vertical_correction_deg: float = 0.0) -> "_C.DriveReader":
     """Opens a drive as a :class:`DriveReader` through the C++ ``OpenDrive``: a KITTI raw drive
     folder, a plain drive folder (with scans.csv) or a ROS 1 bag (``.bag``; where the library was
     built with it). ``frames``: ``"A:B"`` or ``(A, B)``, inclusive (KITTI file numbers, else scan
-    numbers). Errors name the file: FileNotFoundError, ValueError, :class:`slam_mms.Error`."""
+    numbers). ``kitti_vertical_correction_deg``: KITTI's own recordings only, every point rotated
+    up by this angle (0.205, as KISS-ICP; see ``slam_mms_run --kitti-vertical-correction``).
+    Errors name the file: FileNotFoundError, ValueError, :class:`slam_mms.Error`."""
     first, last = _parse_frames(frames)
     if _C.HAVE_OPEN_DRIVE:
         return _C._open_drive(os.fspath(path), kind, first, last, lidar_topic, imu_topic,
-                              gnss_topic, os.fspath(extrinsics))
+                              gnss_topic, os.fspath(extrinsics),
+                              float(kitti_vertical_correction_deg))
     if kind not in ("auto", "kitti_raw"):
         raise ValueError(f"kind = {kind!r}: this build reads KITTI raw drives only")
-    return _C.KittiRawReader(os.fspath(path), first_frame=first, last_frame=last)
+    options = _C.KittiRawReaderOptions()
+    options.first_frame, options.last_frame = first, last
+    if kitti_vertical_correction_deg:
+        options.vertical_angle_correction = True
+        options.vertical_correction_deg = float(kitti_vertical_correction_deg)
+    return _C.KittiRawReader(os.fspath(path), options)
 
 
 @dataclass

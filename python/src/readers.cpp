@@ -288,7 +288,7 @@ void RegisterReaders(py::module_& m) {
       "_open_drive",
       [](const std::filesystem::path& path, const std::string& kind, int64_t first_frame,
          int64_t last_frame, std::string lidar_topic, std::string imu_topic, std::string gnss_topic,
-         std::filesystem::path extrinsics) {
+         std::filesystem::path extrinsics, double kitti_vertical_correction_deg) {
         DriveSourceOptions o;
         if (kind == "auto") {
           o.kind = DriveSourceKind::kAuto;
@@ -307,11 +307,13 @@ void RegisterReaders(py::module_& m) {
         o.imu_topic = std::move(imu_topic);
         o.gnss_topic = std::move(gnss_topic);
         o.extrinsics = std::move(extrinsics);
+        o.kitti_vertical_correction_deg = kitti_vertical_correction_deg;
         return ValueOrThrow(WithoutGil([&] { return OpenDrive(path, o); }));
       },
       py::arg("path"), py::arg("kind") = "auto", py::arg("first_frame") = 0,
       py::arg("last_frame") = -1, py::arg("lidar_topic") = "", py::arg("imu_topic") = "",
       py::arg("gnss_topic") = "", py::arg("extrinsics") = "",
+      py::arg("kitti_vertical_correction_deg") = 0.0,
       "The C++ OpenDrive: a KITTI raw folder, a plain drive folder or a ROS 1 bag as a "
       "DriveReader (kind 'auto' detects it).");
   m.attr("HAVE_OPEN_DRIVE") = true;

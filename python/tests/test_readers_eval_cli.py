@@ -47,6 +47,20 @@ def test_reader_frame_range_and_errors(sim_drive, tmp_path):
         slam_mms.KittiRawReader(tmp_path / "no_such_drive")
 
 
+def test_open_drive_kitti_vertical_correction(sim_drive):
+    # Every point raised by the angle (KITTI's HDL-64E defect), ranges kept.
+    plain = slam_mms.open_drive(sim_drive, frames="0:0")[0].points.astype(np.float64)
+    raised = slam_mms.open_drive(sim_drive, frames="0:0",
+                                 kitti_vertical_correction_deg=0.205)[0].points.astype(np.float64)
+    np.testing.assert_allclose(np.linalg.norm(raised, axis=1), np.linalg.norm(plain, axis=1),
+                               atol=1e-4)
+    def elevation(p):
+        return np.degrees(np.arctan2(p[:, 2], np.linalg.norm(p[:, :2], axis=1)))
+    np.testing.assert_allclose(elevation(raised) - elevation(plain), 0.205, atol=1e-3)
+    with pytest.raises((ValueError, slam_mms.Error)):
+        slam_mms.open_drive(sim_drive, kitti_vertical_correction_deg=7.0)
+
+
 def test_kitti_calibration_file_overrides_and_run_drive_calibrates(sim_drive, tmp_path):
     # A calib_imu_to_velo.txt with a LiDAR clock offset (what slam_mms_run
     # --calibrate-extrinsics writes) taken by open_drive over a KITTI drive's own calibration.

@@ -130,6 +130,8 @@ StatusOr<std::unique_ptr<DriveReader>> OpenDrive(const std::filesystem::path& pa
       KittiRawReader::Options ro;
       ro.first_frame = options.first_frame;
       ro.last_frame = options.last_frame;
+      ro.vertical_angle_correction = options.kitti_vertical_correction_deg != 0.0;
+      ro.vertical_correction_deg = options.kitti_vertical_correction_deg;
       SLAM_MMS_ASSIGN_OR_RETURN(std::unique_ptr<KittiDriveReader> reader,
                                 KittiDriveReader::Open(path, ro));
       return with_overrides(std::move(reader));
@@ -139,11 +141,19 @@ StatusOr<std::unique_ptr<DriveReader>> OpenDrive(const std::filesystem::path& pa
       fo.first_frame = options.first_frame;
       fo.last_frame = options.last_frame;
       fo.allow_missing_extrinsics = extrinsics.has_value();
+      fo.vertical_angle_correction = options.kitti_vertical_correction_deg != 0.0;
+      fo.vertical_correction_deg = options.kitti_vertical_correction_deg;
       SLAM_MMS_ASSIGN_OR_RETURN(std::unique_ptr<FolderDriveReader> folder,
                                 FolderDriveReader::Open(path, fo));
       return with_overrides(std::move(folder));
     }
     case DriveSourceKind::kRosbag: {
+      if (options.kitti_vertical_correction_deg != 0.0) {
+        return InvalidArgumentError(
+            "DriveSourceOptions::kitti_vertical_correction_deg is for KITTI raw drives and "
+            "folders of KITTI .bin scans, not for a bag ('" +
+            path.string() + "')");
+      }
 #if defined(SLAM_MMS_HAVE_ROSBAG)
       RosbagDriveReader::Options bo;
       bo.lidar_topic = options.lidar_topic;

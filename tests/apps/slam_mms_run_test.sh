@@ -234,6 +234,14 @@ case $case_name in
     run "$tmp/log" --bogus=3 --out "$tmp/out"
     [[ $? == 2 ]] || fail "--bogus=3: expected exit status 2"
     grep -q -- "--bogus" "$tmp/log" || fail "--bogus=3 message: $(cat "$tmp/log")"
+    run "$tmp/log" --kitti-raw "$tmp/x" --out "$tmp/out" --kitti-vertical-correction 9
+    [[ $? == 2 ]] || fail "--kitti-vertical-correction 9: expected exit status 2"
+    grep -q -- "--kitti-vertical-correction 9: expected degrees within \[-5, 5\]" "$tmp/log" ||
+      fail "--kitti-vertical-correction message: $(cat "$tmp/log")"
+    run "$tmp/log" --out "$tmp/out" --kitti-vertical-correction 0.205
+    [[ $? == 2 ]] || fail "--kitti-vertical-correction on the simulated drive: expected exit status 2"
+    grep -q -- "is for KITTI's own recordings" "$tmp/log" ||
+      fail "--kitti-vertical-correction without KITTI input: $(cat "$tmp/log")"
     run "$tmp/log" --version
     [[ $? == 0 ]] || fail "--version: expected exit status 0"
     ;;

@@ -155,6 +155,17 @@ TEST(SweepRulesTest, RealFramesAgainstThePeer) {
   EXPECT_EQ(EvaluateRealRule(real).verdict, "pass");
   real.result["real"]["r_rel_deg_per_100m_by_length"]["25"] = 0.95;
   EXPECT_EQ(EvaluateRealRule(real).verdict, "FAIL");
+  // The rule judges the frames read as the peer reads them (KITTI's vertical correction); the
+  // uncorrected figures are named beside them and do not decide.
+  real.result["real"]["r_rel_deg_per_100m_by_length"]["25"] = 0.85;
+  real.result["real"]["kitti_vertical_correction_deg"] = 0.205;
+  real.result["real_uncorrected"]["t_rel_pct_by_length"]["10"] = 3.1;
+  real.result["real_uncorrected"]["r_rel_deg_per_100m_by_length"]["25"] = 0.93;
+  const RuleOutcome corrected = EvaluateRealRule(real);
+  EXPECT_EQ(corrected.verdict, "pass");
+  EXPECT_NE(corrected.reason.find("correction 0.205 deg"), std::string::npos) << corrected.reason;
+  EXPECT_NE(corrected.reason.find("uncorrected: 3.10 %, 0.93 deg/100 m"), std::string::npos)
+      << corrected.reason;
   RunRecord crashed;
   crashed.process_error = "crash: signal 6";
   EXPECT_EQ(EvaluateRealRule(crashed).verdict, "FAIL");

@@ -4,6 +4,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "io/folder_test_util.hpp"
@@ -171,6 +172,45 @@ TEST_F(OpenDriveOverrideTest, OpenDriveOnAFolderKeepsItsAntennaWhereTheFileGives
   EXPECT_EQ(*(*r)->streams().t_body_antenna_m, *folder_calib.t_body_antenna_m);
   EXPECT_NEAR((*r)->streams().T_body_lidar.translation().z(), -0.5, 1e-12);
   ExpectShiftedScans(**base, **r, 20345679);
+}
+
+// DriveSourceOptions::kitti_vertical_correction_deg: every point of a KITTI raw drive rotated
+// up by the angle (range and azimuth kept), as KittiRawReader's own correction does; refused for
+// a bag and for angles beyond 5 deg.
+TEST_F(OpenDriveOverrideTest, KittiVerticalCorrectionRaisesEveryPointByTheAngle) {
+  const double kDeg = 0.205;
+  DriveSourceOptions o;
+  o.kitti_vertical_correction_deg = kDeg;
+  auto corrected = OpenDrive(drive_, o);
+  ASSERT_TRUE(corrected.ok()) << corrected.status().ToString();
+  std::unique_ptr<DriveReader> plain = OpenKitti();
+  ASSERT_NE(plain, nullptr);
+  auto a = plain->ReadScan(0);
+  auto b = (*corrected)->ReadScan(0);
+  ASSERT_TRUE(a.ok() && b.ok());
+  ASSERT_EQ(a->cloud.size(), b->cloud.size());
+  ASSERT_GT(a->cloud.size(), 0u);
+  double max_err_deg = 0.0;
+  for (size_t i = 0; i < a->cloud.size(); ++i) {
+    const Eigen::Vector3d p = a->cloud.points()[i].cast<double>();
+    const Eigen::Vector3d q = b->cloud.points()[i].cast<double>();
+    EXPECT_NEAR(q.norm(), p.norm(), 1e-4);
+    const double elevation_p = std::atan2(p.z(), p.head<2>().norm());
+    const double elevation_q = std::atan2(q.z(), q.head<2>().norm());
+    max_err_deg =
+        std::max(max_err_deg, std::abs((elevation_q - elevation_p) * 180.0 / M_PI - kDeg));
+  }
+  EXPECT_LT(max_err_deg, 1e-3);
+  o.kitti_vertical_correction_deg = 6.0;
+  auto too_far = OpenDrive(drive_, o);
+  ASSERT_FALSE(too_far.ok());
+  EXPECT_EQ(too_far.status().code(), StatusCode::kInvalidArgument);
+  DriveSourceOptions bag;
+  bag.kind = DriveSourceKind::kRosbag;
+  bag.kitti_vertical_correction_deg = kDeg;
+  auto refused = OpenDrive(dir_ / "drive.bag", bag);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_THAT(refused.status().message(), ::testing::HasSubstr("kitti_vertical_correction_deg"));
 }
 
 }  // namespace

@@ -103,6 +103,11 @@ Options:
                           over the input's own imu_noise.yaml (used where config
                           use_stated_imu_noise is on; --imu-noise turns it on). Otherwise the
                           filter's defaults, an IMU of unknown grade.
+  --kitti-vertical-correction DEG
+                          KITTI's own recordings: every point rotated up by DEG (0.205, as
+                          KISS-ICP and CT-ICP do: KITTI's HDL-64E writes points about 0.2 deg too
+                          low, which tilts LiDAR-only odometry in pitch). KITTI raw drives and
+                          folders of KITTI .bin scans; not for other sensors or the simulator.
   --calibrate-extrinsics  estimate the LiDAR boresight, lever arm and clock offset from the drive
                           against the offline POS first, write DIR/calib_imu_to_velo_estimated.txt
                           and report.json "extrinsics", and run with the estimate (config key
@@ -172,7 +177,8 @@ StatusOr<RunArgs> ParseRunArgs(int argc, const char* const* argv) {
   app.set_help_flag();  // --help is a flag of RunArgs (main prints RunUsage()).
   app.allow_windows_style_options(false);
   std::string kitti_raw, folder, rosbag, extrinsics, imu_noise, out, mode, pos, frames, config,
-      sim_duration, sim_seed, log_level, dump_config, las_tile_size, checkpoint_every, preset;
+      sim_duration, sim_seed, log_level, dump_config, las_tile_size, checkpoint_every, preset,
+      vertical_correction;
   std::vector<std::string> outages;
   app.add_flag("-h,--help", args.help);
   app.add_flag("--version", args.version);
@@ -185,6 +191,7 @@ StatusOr<RunArgs> ParseRunArgs(int argc, const char* const* argv) {
   app.add_option("--gnss-topic", args.gnss_topic);
   app.add_option("--extrinsics", extrinsics);
   app.add_option("--imu-noise", imu_noise);
+  app.add_option("--kitti-vertical-correction", vertical_correction);
   app.add_option("--out", out);
   app.add_option("--mode", mode);
   app.add_option("--pos", pos);
@@ -247,6 +254,17 @@ StatusOr<RunArgs> ParseRunArgs(int argc, const char* const* argv) {
     return InvalidArgumentError("--pos " + pos + ": expected smoothed or forward");
   }
   if (given("--frames")) SLAM_MMS_RETURN_IF_ERROR(ParseFrames(frames, &args));
+  if (given("--kitti-vertical-correction") &&
+      (!ParseDouble(vertical_correction, &args.kitti_vertical_correction_deg) ||
+       !(std::abs(args.kitti_vertical_correction_deg) <= 5.0))) {
+    return InvalidArgumentError("--kitti-vertical-correction " + vertical_correction +
+                                ": expected degrees within [-5, 5] (KITTI: 0.205)");
+  }
+  if (args.kitti_vertical_correction_deg != 0.0 && args.kitti_raw.empty() && args.folder.empty()) {
+    return InvalidArgumentError(
+        "--kitti-vertical-correction is for KITTI's own recordings (--kitti-raw, or --folder "
+        "with KITTI .bin scans), not for a bag or the simulated drive");
+  }
   for (const std::string& o : outages) SLAM_MMS_RETURN_IF_ERROR(ParseOutage(o, &args));
   if (args.sim_scenario != "demo" && args.sim_scenario != "default" &&
       args.sim_scenario != "long") {

@@ -32,6 +32,8 @@ struct RunArgs {
   std::filesystem::path extrinsics;  ///< Empty: none (bags: identity, logged).
   /// --imu-noise FILE (io/imu_noise_yaml.hpp): the IMU's datasheet, over the input's own.
   std::filesystem::path imu_noise;
+  /// --kitti-vertical-correction DEG (DriveSourceOptions::kitti_vertical_correction_deg); 0: none.
+  double kitti_vertical_correction_deg = 0.0;
   std::filesystem::path out_dir;
   /// In run order (all = full, gnss_ins, gnss_ins_smoothed, lidar_only).
   std::vector<MappingMode> modes;

@@ -23,6 +23,7 @@ StatusOr<std::unique_ptr<DriveReader>> OpenRunInput(const RunArgs& args,
   o.gnss_topic = args.gnss_topic;
   o.extrinsics = args.extrinsics;
   o.imu_noise = args.imu_noise;
+  o.kitti_vertical_correction_deg = args.kitti_vertical_correction_deg;
   return OpenDrive(path, o);
 }
 

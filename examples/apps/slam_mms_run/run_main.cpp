@@ -235,6 +235,11 @@ RunFingerprint MakeFingerprint(const RunArgs& args, const fs::path& input,
                 quote(args.gnss_topic) + "]";
   f["extrinsics"] = quote(args.extrinsics.string());
   f["imu_noise"] = quote(args.imu_noise.string());
+  if (args.kitti_vertical_correction_deg != 0.0) {
+    char v[40];
+    std::snprintf(v, sizeof(v), "%.17g", args.kitti_vertical_correction_deg);
+    f["kitti_vertical_correction_deg"] = v;
+  }
   f["options"] = options_json;
   std::string outages = "[";
   for (const auto& [start, duration] : args.gnss_outages) {

@@ -178,11 +178,27 @@ RuleOutcome EvaluateRealRule(const RunRecord& real) {
   const Json& t = j["t_rel_pct_by_length"]["10"];
   const Json& r = j["r_rel_deg_per_100m_by_length"]["25"];
   if (!t.is_number() || !r.is_number()) return Outcome(rule, false, "no 10 m / 25 m segment");
-  char why[160];
+  char why[320];
   std::snprintf(why, sizeof(why),
                 "t_rel(10 m) %.2f %% (peer 3.28), r_rel(25 m) %.2f deg/100 m (peer 0.89)",
                 t.get<double>(), r.get<double>());
-  return Outcome(rule, t.get<double>() <= 3.28 && r.get<double>() <= 0.89, why);
+  std::string reason = why;
+  if (j.contains("kitti_vertical_correction_deg") &&
+      j["kitti_vertical_correction_deg"].is_number()) {
+    std::snprintf(why, sizeof(why), ", KITTI vertical correction %.3f deg as the peer's",
+                  j["kitti_vertical_correction_deg"].get<double>());
+    reason += why;
+  }
+  const Json& raw =
+      real.result.contains("real_uncorrected") ? real.result["real_uncorrected"] : Json();
+  if (raw.is_object() && raw["t_rel_pct_by_length"]["10"].is_number() &&
+      raw["r_rel_deg_per_100m_by_length"]["25"].is_number()) {
+    std::snprintf(why, sizeof(why), " (uncorrected: %.2f %%, %.2f deg/100 m)",
+                  raw["t_rel_pct_by_length"]["10"].get<double>(),
+                  raw["r_rel_deg_per_100m_by_length"]["25"].get<double>());
+    reason += why;
+  }
+  return Outcome(rule, t.get<double>() <= 3.28 && r.get<double>() <= 0.89, reason);
 }
 
 Status WriteSweepTables(const std::vector<RunRecord>& runs, const RunRecord* real,

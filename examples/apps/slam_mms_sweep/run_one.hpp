@@ -16,8 +16,11 @@
 //
 // The real-frame check (slam_mms_sweep --real-one DIR): lidar_only on the real KITTI frames,
 // relative error over 10..50 m segments against the OXTS poses, into DIR/result.json as
-//   {"real": {"drive", "frames", "t_rel_pct_by_length": {...}, "r_rel_deg_per_100m_by_length":
-//   {...}, "status"}}.
+//   {"real": {"drive", "kitti_vertical_correction_deg", "frames", "path_m", "t_rel_pct",
+//   "r_rel_deg_per_100m", "t_rel_pct_by_length": {...}, "r_rel_deg_per_100m_by_length": {...},
+//   "scans_per_s"}, "real_uncorrected": {the same}}.
+// "real" reads the frames as the public peer does (KISS-ICP corrects every KITTI scan's vertical
+// angle by kKittiVerticalCorrectionDeg); "real_uncorrected" as recorded, for the record.
 
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -28,6 +31,10 @@
 #include "slam_mms_sweep/plan.hpp"
 
 namespace slam_mms::sweep {
+
+/// KITTI's HDL-64E vertical-angle correction [deg] (DriveSourceOptions), the published value the
+/// peer applies (KISS-ICP, CT-ICP); not fitted to the frames here.
+inline constexpr double kKittiVerticalCorrectionDeg = 0.205;
 
 /// What a child process needs besides the run.
 struct RunSettings {

@@ -47,6 +47,13 @@ struct DriveSourceOptions {
   /// (DriveStreams::imu_noise) for every kind through OverrideImuNoise: how a bag, which holds
   /// none, or a KITTI drive gets its IMU's datasheet.
   std::filesystem::path imu_noise;
+  /// KITTI's HDL-64E recordings have every point about 0.2 deg too low (a defect of the
+  /// dataset's intrinsic calibration; KISS-ICP and CT-ICP correct it by 0.205 deg). Nonzero: each
+  /// point of a KITTI raw drive, or of a folder's KITTI .bin scans, is rotated up by this angle
+  /// [deg] about p x z (KittiRawReader::Options::vertical_angle_correction); 0 (default): the
+  /// points as recorded. For KITTI's own drives only: other sensors and the simulator (without
+  /// --elevation-bias) have no such defect. InvalidArgument beyond +-5 deg.
+  double kitti_vertical_correction_deg = 0.0;
 };
 
 /// The kind kAuto would pick for `path` (kKittiRaw where nothing else fits).

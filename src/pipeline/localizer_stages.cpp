@@ -97,7 +97,7 @@ Status Localizer::Impl::RefineConstantVelocityDeskew(const Scan& scan, ScanStep*
   const LocalizationResult first_res = *res;
   SLAM_MMS_RETURN_IF_ERROR(deskew.DeskewWith(scan, T_bstart_bend, &deskewed, res));
   SLAM_MMS_RETURN_IF_ERROR(
-      registration.Reregister(scan, model.model(), T_lidar_pred_lidar, &deskewed, &map, step, res));
+      registration.Reregister(scan, model.model(), T_lidar_pred_lidar, &deskewed, step, res));
   if (step->T_submap_reg) {
     step->T_bstart_bend = T_bstart_bend;
     return OkStatus();

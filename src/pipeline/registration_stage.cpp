@@ -59,25 +59,22 @@ Status RegistrationStage::Register(const Scan& raw, const VertexNormalMap& model
                                    DeskewedScan* scan, SurfelMap* map, ScanStep* step,
                                    LocalizationResult* res) {
   step->T_submap_reg.reset();
-  return Align(raw, model, Eigen::Isometry3d::Identity(), /*filter_moving=*/true, scan, map, step,
-               res);
+  return Align(raw, model, Eigen::Isometry3d::Identity(), scan, map, step, res);
 }
 
 Status RegistrationStage::Reregister(const Scan& raw, const VertexNormalMap& model,
                                      const Eigen::Isometry3d& T_lidar_pred_lidar,
-                                     DeskewedScan* scan, SurfelMap* map, ScanStep* step,
-                                     LocalizationResult* res) {
+                                     DeskewedScan* scan, ScanStep* step, LocalizationResult* res) {
   step->T_submap_reg.reset();
-  return Align(raw, model, T_lidar_pred_lidar, /*filter_moving=*/false, scan, map, step, res);
+  return Align(raw, model, T_lidar_pred_lidar, scan, /*map=*/nullptr, step, res);
 }
 
 Status RegistrationStage::Align(const Scan& raw, const VertexNormalMap& model,
-                                const Eigen::Isometry3d& T_lidar_pred_lidar, bool filter_moving,
-                                DeskewedScan* scan, SurfelMap* map, ScanStep* step,
-                                LocalizationResult* res) {
+                                const Eigen::Isometry3d& T_lidar_pred_lidar, DeskewedScan* scan,
+                                SurfelMap* map, ScanStep* step, LocalizationResult* res) {
   const auto t0 = Clock::now();
   if (step->have_model && !step->is_reference) {
-    if (filter_moving) FilterMovingObjects(model, scan, map, *step, res);
+    if (map != nullptr) FilterMovingObjects(model, scan, map, *step, res);
     auto reg = icp_.Align(scan->vnm, model, T_lidar_pred_lidar);
     if (!reg.ok()) return reg.status().WithContext("Localizer: scan " + std::to_string(raw.index));
     const RegistrationResult& r = *reg;

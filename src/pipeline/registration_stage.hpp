@@ -47,17 +47,19 @@ class RegistrationStage {
   /// at the prediction to lidar), without the moving-object filter: replaces what Register set
   /// (step->T_submap_reg is empty where this result is not usable); the time is added to res's.
   Status Reregister(const Scan& raw, const VertexNormalMap& model,
-                    const Eigen::Isometry3d& T_lidar_pred_lidar, DeskewedScan* scan, SurfelMap* map,
-                    ScanStep* step, LocalizationResult* res);
+                    const Eigen::Isometry3d& T_lidar_pred_lidar, DeskewedScan* scan, ScanStep* step,
+                    LocalizationResult* res);
 
   /// A processed scan's stamp and body position (world): the path the filter's model age is
   /// measured along.
   void RecordPose(int64_t stamp_ns, const Eigen::Vector3d& p_world);
 
  private:
+  /// Register and Reregister: ICP from `T_lidar_pred_lidar`, after the moving-object filter
+  /// where `map` is given (its surfels seen through moving objects are removed).
   Status Align(const Scan& raw, const VertexNormalMap& model,
-               const Eigen::Isometry3d& T_lidar_pred_lidar, bool filter_moving, DeskewedScan* scan,
-               SurfelMap* map, ScanStep* step, LocalizationResult* res);
+               const Eigen::Isometry3d& T_lidar_pred_lidar, DeskewedScan* scan, SurfelMap* map,
+               ScanStep* step, LocalizationResult* res);
   /// The moving-object filter on the scan, at the prediction.
   void FilterMovingObjects(const VertexNormalMap& model, DeskewedScan* scan, SurfelMap* map,
                            const ScanStep& step, LocalizationResult* res);

@@ -47,18 +47,13 @@ class MomentAccumulator {
   bool full() const { return true; }
   float worstDist() const { return radius_sq_; }
   bool addPoint(float dist_sq, uint32_t index) {
-    if (dist_sq < radius_sq_) {
-      const Eigen::Vector3d d = (points_[index] - query_).cast<double>();
-      s_ += d;
-      xx_ += d.x() * d.x();
-      xy_ += d.x() * d.y();
-      xz_ += d.x() * d.z();
-      yy_ += d.y() * d.y();
-      yz_ += d.y() * d.z();
-      zz_ += d.z() * d.z();
-      ++n_;
-    }
+    if (dist_sq < radius_sq_) Accumulate(index);
     return true;
+  }
+  /// Adds the points `indices[0..n)`, already known to lie within the radius, in that order: the
+  /// same sums as addPoint on each of them.
+  void addInside(const uint32_t* indices, size_t n) {
+    for (size_t k = 0; k < n; ++k) Accumulate(indices[k]);
   }
 
   /// Maximum-likelihood covariance (divided by N) of the accumulated neighbours.
@@ -73,6 +68,18 @@ class MomentAccumulator {
   }
 
  private:
+  void Accumulate(uint32_t index) {
+    const Eigen::Vector3d d = (points_[index] - query_).cast<double>();
+    s_ += d;
+    xx_ += d.x() * d.x();
+    xy_ += d.x() * d.y();
+    xz_ += d.x() * d.z();
+    yy_ += d.y() * d.y();
+    yz_ += d.y() * d.z();
+    zz_ += d.z() * d.z();
+    ++n_;
+  }
+
   float radius_sq_;
   Eigen::Vector3f query_;
   const std::vector<Eigen::Vector3f>& points_;

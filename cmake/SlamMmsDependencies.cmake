@@ -2,7 +2,10 @@
 find_package(Threads REQUIRED)
 find_package(Eigen3 3.3 REQUIRED NO_MODULE)
 find_package(Ceres 2.1 REQUIRED)
+# Plots and simulator pictures are drawn with OpenCV (core, imgproc); imgcodecs only reads PNGs
+# back in the tests (the library writes them with libpng, io, private).
 find_package(OpenCV 4 REQUIRED COMPONENTS core imgproc imgcodecs)
+find_package(PNG REQUIRED)
 find_package(GeographicLib REQUIRED)
 find_package(embree 3 REQUIRED)
 if(SLAM_MMS_WITH_EGL)

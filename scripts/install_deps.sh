@@ -9,7 +9,7 @@ PACKAGES=(
   libnanoflann-dev libopencv-dev libgeographiclib-dev libembree-dev
   libgtest-dev libgmock-dev libbenchmark-dev libyaml-cpp-dev
   libegl-dev libgl-dev libgl1-mesa-dev libegl-mesa0 libgl1-mesa-dri libgbm1
-  libcli11-dev nlohmann-json3-dev libproj-dev proj-data
+  libcli11-dev nlohmann-json3-dev libproj-dev proj-data libpng-dev
   librosbag-storage-dev libsensor-msgs-dev python3-rosbag python3-sensor-msgs python3-geometry-msgs
   python3-dev pybind11-dev python3-numpy python3-pytest python3-venv python3-matplotlib
   python3-setuptools python3-wheel python3-pip python3-distributed python3-fsspec

@@ -4,8 +4,9 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+
+#include "io/png_file.hpp"
 
 namespace slam_mms::eval::internal {
 namespace {
@@ -457,25 +458,13 @@ void PlotCanvas::LegendAt(const std::vector<LegendEntry>& entries, int corner) {
 }
 
 Status SavePng(const cv::Mat& image, const std::filesystem::path& file) {
-  bool ok = false;
-  try {
-    ok = cv::imwrite(file.string(), image);
-  } catch (const cv::Exception&) {
-    ok = false;
+  if (image.depth() != CV_8U) {
+    return InvalidArgumentError("cannot write PNG " + file.string() + ": not an 8-bit image");
   }
-  if (!ok) {
-    return NotFoundError("cannot write PNG " + file.string() +
-                         " (missing folder, no permission, or no PNG support in OpenCV)");
-  }
-  return OkStatus();
+  return io_internal::WritePng(file, image.ptr<uint8_t>(0), image.cols, image.rows,
+                               image.channels(), image.step[0]);
 }
 
-bool PlotCanvas::Save(const std::string& path) const {
-  try {
-    return cv::imwrite(path, image_);
-  } catch (const cv::Exception&) {
-    return false;
-  }
-}
+bool PlotCanvas::Save(const std::string& path) const { return SavePng(image_, path).ok(); }
 
 }  // namespace slam_mms::eval::internal

@@ -5,8 +5,9 @@
 #include <cmath>
 #include <numeric>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+
+#include "io/png_file.hpp"
 
 namespace slam_mms::sim {
 namespace {
@@ -89,11 +90,11 @@ void Label(cv::Mat& img, const std::string& text, cv::Point at) {
 Status Write(const cv::Mat& img, const std::filesystem::path& png) {
   try {
     if (!png.parent_path().empty()) std::filesystem::create_directories(png.parent_path());
-    if (!cv::imwrite(png.string(), img)) return InternalError("cannot write " + png.string());
   } catch (const std::exception& e) {
     return InternalError("cannot write " + png.string() + ": " + e.what());
   }
-  return OkStatus();
+  return io_internal::WritePng(png, img.ptr<uint8_t>(0), img.cols, img.rows, img.channels(),
+                               img.step[0]);
 }
 
 cv::Vec3b ClassColor(SurfaceClass c) {  // BGR

@@ -26,6 +26,13 @@ struct VoxelKey {
 // are sorted: a third of the time of the three-way comparison.
 void SortVoxelKeys(std::vector<VoxelKey>* keys) {
   if (keys->empty()) return;
+  // A cloud already in cell order (one that VoxelDownsample wrote, downsampled again at the same
+  // size: the map entropy of a final map) needs no sort; the check is one pass.
+  if (std::is_sorted(keys->begin(), keys->end(), [](const VoxelKey& x, const VoxelKey& y) {
+        return x.cell < y.cell;
+      })) {
+    return;
+  }
   VoxelCell lo = keys->front().cell;
   for (const VoxelKey& k : *keys) {
     lo.x = std::min(lo.x, k.cell.x);

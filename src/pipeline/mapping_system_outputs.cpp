@@ -92,33 +92,57 @@ PointCloud MappingSystem::FinalMap(MapPointStamps* stamps) const {
   MapPointStamps merged_stamps;
   bool all_stamped = stamps != nullptr;
   size_t total = 0;
-  for (const SubmapRecord& rec : m.loc->submaps()) total += rec.cloud_size;
+  const std::vector<SubmapRecord>& records = m.loc->submaps();
+  for (const SubmapRecord& rec : records) total += rec.cloud_size;
   merged.reserve(total);
-  MapPointStamps submap_stamps;
-  for (const SubmapRecord& rec : m.loc->submaps()) {
-    // From memory, or read back from the spill folder (Localizer::Options::spill_dir).
-    auto cloud = m.loc->SubmapCloud(rec.id, Localizer::CloudKind::kMap,
-                                    stamps != nullptr ? &submap_stamps : nullptr);
-    if (!cloud.ok()) {
+  // One submap's cloud read (from memory, or back from the spill folder:
+  // Localizer::Options::spill_dir) on a second thread while the previous one is placed.
+  struct Loaded {
+    StatusOr<PointCloud> cloud = PointCloud();
+    MapPointStamps stamps;
+  };
+  auto load = [&](size_t k) {
+    Loaded l;
+    l.cloud = m.loc->SubmapCloud(records[k].id, Localizer::CloudKind::kMap,
+                                 stamps != nullptr ? &l.stamps : nullptr);
+    return l;
+  };
+  const bool prefetch = m.opt.num_threads > 1 && records.size() > 1;
+  Loaded next;
+  std::thread reader;
+  if (!records.empty()) next = load(0);
+  for (size_t k = 0; k < records.size(); ++k) {
+    if (reader.joinable()) reader.join();
+    Loaded cur = std::move(next);
+    if (k + 1 < records.size()) {
+      if (prefetch) {
+        reader = std::thread([&next, &load, k] { next = load(k + 1); });
+      } else {
+        next = load(k + 1);
+      }
+    }
+    const SubmapRecord& rec = records[k];
+    if (!cur.cloud.ok()) {
       SLAM_MMS_LOG(kError) << "MappingSystem::FinalMap: submap " << rec.id
-                           << " left out: " << cloud.status().ToString();
+                           << " left out: " << cur.cloud.status().ToString();
       continue;
     }
+    const PointCloud& cloud = *cur.cloud;
     const Eigen::Matrix3f R = rec.T_world_submap.linear().cast<float>();
     const Eigen::Vector3f t = rec.T_world_submap.translation().cast<float>();
-    for (size_t i = 0; i < cloud->size(); ++i) {
-      merged.Add(R * cloud->points()[i] + t, cloud->intensities()[i]);
+    for (size_t i = 0; i < cloud.size(); ++i) {
+      merged.Add(R * cloud.points()[i] + t, cloud.intensities()[i]);
     }
-    if (all_stamped && submap_stamps.size() == cloud->size()) {
-      merged_stamps.time_ns.insert(merged_stamps.time_ns.end(), submap_stamps.time_ns.begin(),
-                                   submap_stamps.time_ns.end());
-      merged_stamps.scan_index.insert(merged_stamps.scan_index.end(),
-                                      submap_stamps.scan_index.begin(),
-                                      submap_stamps.scan_index.end());
+    if (all_stamped && cur.stamps.size() == cloud.size()) {
+      merged_stamps.time_ns.insert(merged_stamps.time_ns.end(), cur.stamps.time_ns.begin(),
+                                   cur.stamps.time_ns.end());
+      merged_stamps.scan_index.insert(merged_stamps.scan_index.end(), cur.stamps.scan_index.begin(),
+                                      cur.stamps.scan_index.end());
     } else {
       all_stamped = false;
     }
   }
+  if (reader.joinable()) reader.join();
   // The centroids and the stamps are two independent sorts of the merged cloud: the stamps on a
   // second thread where asked for.
   MapPointStamps earliest;

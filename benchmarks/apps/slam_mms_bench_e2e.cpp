@@ -31,6 +31,7 @@
 #include <string>
 #include <vector>
 
+#include "app_common/huge_page_malloc.hpp"
 #include "slam_mms/core/logging.hpp"
 #include "slam_mms/drive/drive_runner.hpp"
 #include "slam_mms/drive/open_drive.hpp"
@@ -490,6 +491,8 @@ Status FeedDrive(const slam_mms::DriveReader& reader, MappingMode mode, const Ar
 }  // namespace
 
 int main(int argc, char** argv) {
+  // As slam_mms_run (SLAM_MMS_HUGE_PAGES=0 measures without).
+  slam_mms::app::ReexecWithHugePageMalloc(argv);
   // Warnings and errors go to stderr; of the info lines only the Localizer's, which names the
   // surfel renderer it runs on, is read (for the report).
   Report report;

@@ -47,6 +47,7 @@
 #include <string>
 #include <vector>
 
+#include "app_common/huge_page_malloc.hpp"
 #include "slam_mms/core/logging.hpp"
 #include "slam_mms/sim/drive_simulator.hpp"
 #include "slam_mms/version.hpp"
@@ -121,6 +122,7 @@ bool SplitNumbers(const std::string& text, char sep, std::vector<double>* out) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  slam_mms::app::ReexecWithHugePageMalloc(argv);
   slam_mms::SetLogSink(slam_mms::StderrLogSink());
   DriveSimulator::Options o;
   fs::path out;

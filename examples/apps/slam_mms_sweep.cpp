@@ -34,6 +34,7 @@
 #include <thread>
 #include <vector>
 
+#include "app_common/huge_page_malloc.hpp"
 #include "slam_mms/version.hpp"
 #include "slam_mms_run/json_file.hpp"
 #include "slam_mms_sweep/plan.hpp"
@@ -147,6 +148,7 @@ int Usage(const std::string& error) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  slam_mms::app::ReexecWithHugePageMalloc(argv);  // the child runs inherit it
   // The child modes.
   if (argc >= 3 && std::string(argv[1]) == "--run-one") return RunOne(argv[2]);
   if (argc >= 4 && std::string(argv[1]) == "--real-one") {

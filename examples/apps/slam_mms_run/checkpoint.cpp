@@ -279,12 +279,22 @@ StatusOr<ModeRun> Checkpoint::LoadFinished(const std::string& name) const {
   return run;
 }
 
-Status Checkpoint::SaveFinished(const ModeRun& run) {
+Status Checkpoint::SaveFinished(const ModeRun& run, const fs::path& written_map_ply) {
   SLAM_MMS_RETURN_IF_ERROR(WriteJsonFile(RunJson(run), dir_ / (run.name + ".json"), 1));
   if (!run.map.empty()) {
-    MapCloud map;
-    map.cloud = run.map;
-    SLAM_MMS_RETURN_IF_ERROR(WritePly(map, dir_ / (run.name + "_map.ply")));
+    const fs::path file = dir_ / (run.name + "_map.ply");
+    std::error_code ec;
+    fs::remove(file, ec);
+    bool linked = false;
+    if (!written_map_ply.empty()) {
+      fs::create_hard_link(written_map_ply, file, ec);
+      linked = !ec;
+    }
+    if (!linked) {
+      MapCloud map;
+      map.cloud = run.map;
+      SLAM_MMS_RETURN_IF_ERROR(WritePly(map, file));
+    }
   }
   Json m = Json::parse(methods_json_);
   m[run.name] = Json{{"state", "complete"}, {"scans_fed", run.scans_total}};

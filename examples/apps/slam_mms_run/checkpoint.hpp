@@ -50,7 +50,10 @@ class Checkpoint {
   /// Reads a finished method back (its map from <name>_map.ply).
   StatusOr<ModeRun> LoadFinished(const std::string& name) const;
   /// Records a finished method (writes <name>.json and <name>_map.ply, then run.json).
-  Status SaveFinished(const ModeRun& run);
+  /// `written_map_ply`: where the method's map was just written as a PLY of the same content
+  /// (WriteMethodFiles' map_<name>.ply), hard-linked instead of written again; empty, or where
+  /// the link fails (another file system), the map is written.
+  Status SaveFinished(const ModeRun& run, const std::filesystem::path& written_map_ply = {});
   /// Records the progress of a running method (run.json only).
   Status SaveProgress(const std::string& name, size_t scans_fed, int submaps);
   /// Removes the checkpoint folder (at the end of a run that completed).

@@ -360,7 +360,10 @@ Status RunMethods(const RunArgs& args, const MappingSystem::Options& options,
     if (!run.status.ok()) *fatal = run.status;
     if (fatal->ok() && !written.ok()) *fatal = written;
     if (run.complete && written.ok()) {
-      const Status c = checkpoint->SaveFinished(run);
+      // WriteMethodFiles wrote the map as map_<name>.ply (not for lidar_only): the same file.
+      const fs::path map_ply = args.out_dir / ("map_" + name + ".ply");
+      const bool map_written = mode != MappingMode::kLidarOnly && !run.map.empty();
+      const Status c = checkpoint->SaveFinished(run, map_written ? map_ply : fs::path());
       if (!c.ok()) warn("checkpoint: " + c.message() + " (--resume would run " + name + " again)");
     }
     runs->push_back(std::move(run));

@@ -83,6 +83,9 @@ std::string UtmZoneWkt(int zone, bool north) {
 namespace {
 
 // The projected coordinates and adjusted GPS times (empty without times) of every point.
+// Edge of the cells of GeoReference::EnuToProjectedInterpolated for the LAS coordinates.
+constexpr double kProjectionCellM = 8.0;
+
 Status ProjectMap(const MapCloud& map, const GeoReference& geo, std::vector<Eigen::Vector3d>* enh,
                   std::vector<double>* gps_time) {
   SLAM_MMS_RETURN_IF_ERROR(map.Validate());
@@ -95,7 +98,10 @@ Status ProjectMap(const MapCloud& map, const GeoReference& geo, std::vector<Eige
     }
     p_world[i] = p.cast<double>();
   }
-  SLAM_MMS_RETURN_IF_ERROR(geo.EnuToProjected(p_world, enh).WithContext("WriteLas"));
+  // Exact at the corners of 8 m cells, trilinear inside (a few micrometres against the exact
+  // projection per point, at a tenth of its cost; the file keeps millimetres).
+  SLAM_MMS_RETURN_IF_ERROR(
+      geo.EnuToProjectedInterpolated(p_world, enh, kProjectionCellM).WithContext("WriteLas"));
   gps_time->clear();
   if (!map.time_ns.empty()) {
     gps_time->resize(n);

@@ -36,9 +36,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   }
   std::optional<InsState> state;
   std::string source;
-  if (io_internal::ParseInitialStateCsv(bytes, "initial_state.csv", &state, &source).ok() &&
-      state && !state->T_world_body.matrix().allFinite()) {
-    __builtin_trap();
+  std::optional<Eigen::Vector3d> sigma_rpy_rad;
+  if (io_internal::ParseInitialStateCsv(bytes, "initial_state.csv", &state, &source, &sigma_rpy_rad)
+          .ok()) {
+    if (state && !state->T_world_body.matrix().allFinite()) __builtin_trap();
+    if (sigma_rpy_rad && !(sigma_rpy_rad->array() > 0.0).all()) __builtin_trap();
   }
   std::vector<PosRecord> pos;
   if (io_internal::ParsePosCsv(bytes, "pos.csv", &pos, &sources).ok()) {

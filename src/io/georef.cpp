@@ -9,12 +9,10 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <exception>
 #include <fstream>
-#include <limits>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <utility>
@@ -302,102 +300,6 @@ Status GeoReference::EnuToProjected(const std::vector<Eigen::Vector3d>& p_world,
           " m ENU) cannot be expressed in " + crs_name_);
     }
     q.z() = h[i];
-  }
-  return OkStatus();
-}
-
-Status GeoReference::EnuToProjectedInterpolated(const std::vector<Eigen::Vector3d>& p_world,
-                                                std::vector<Eigen::Vector3d>* out,
-                                                double cell_m) const {
-  if (!(cell_m > 0.0) || !std::isfinite(cell_m)) {
-    return InvalidArgumentError("GeoReference: interpolation cell " + std::to_string(cell_m) +
-                                " m; must be finite and > 0");
-  }
-  const size_t n = p_world.size();
-  out->resize(n);
-  if (n == 0) return OkStatus();
-  // The cell of each point, as integer coordinates relative to the lowest cell.
-  const double inv = 1.0 / cell_m;
-  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
-  Eigen::Vector3d hi = -lo;
-  for (size_t i = 0; i < n; ++i) {
-    const Eigen::Vector3d& p = p_world[i];
-    if (!p.allFinite()) {
-      return InvalidArgumentError("GeoReference: point " + std::to_string(i) + " is not finite");
-    }
-    lo = lo.cwiseMin(p);
-    hi = hi.cwiseMax(p);
-  }
-  const Eigen::Vector3d base = (lo * inv).array().floor().matrix();
-  const Eigen::Vector3d span = (hi * inv).array().floor().matrix() - base;
-  constexpr double kMaxSpan = double((int64_t{1} << 20) - 2);  // 20 bits an axis, +1 corner
-  if (span.maxCoeff() > kMaxSpan) return EnuToProjected(p_world, out);  // beyond the key range
-  auto key = [](int64_t x, int64_t y, int64_t z) {
-    return static_cast<uint64_t>(x) | (static_cast<uint64_t>(y) << 21) |
-           (static_cast<uint64_t>(z) << 42);
-  };
-  // Occupied cells (open addressing on the packed key), each with the index of its first corner
-  // node in `nodes` (8 per cell: the corners in x, y, z bit order).
-  std::vector<uint32_t> point_cell(n);
-  std::vector<uint64_t> cell_keys;
-  // At most one cell a point, at most the cells of the bounding box.
-  const double box_cells = (span.x() + 1.0) * (span.y() + 1.0) * (span.z() + 1.0);
-  const size_t max_cells =
-      std::min<size_t>(n, box_cells < 1e9 ? static_cast<size_t>(box_cells) : n);
-  size_t capacity = 64;
-  while (capacity < 2 * std::min<size_t>(max_cells, size_t{1} << 26)) capacity *= 2;
-  std::vector<uint32_t> table(capacity, std::numeric_limits<uint32_t>::max());
-  const int shift = 64 - __builtin_ctzll(capacity);
-  for (size_t i = 0; i < n; ++i) {
-    const Eigen::Vector3d c = (p_world[i] * inv).array().floor().matrix() - base;
-    const uint64_t k =
-        key(static_cast<int64_t>(c.x()), static_cast<int64_t>(c.y()), static_cast<int64_t>(c.z()));
-    size_t slot = static_cast<size_t>((k * 0x9E3779B97F4A7C15ull) >> shift);
-    while (true) {
-      const uint32_t found = table[slot];
-      if (found == std::numeric_limits<uint32_t>::max()) {
-        table[slot] = static_cast<uint32_t>(cell_keys.size());
-        point_cell[i] = table[slot];
-        cell_keys.push_back(k);
-        if (2 * cell_keys.size() > capacity) return EnuToProjected(p_world, out);
-        break;
-      }
-      if (cell_keys[found] == k) {
-        point_cell[i] = found;
-        break;
-      }
-      slot = (slot + 1) & (capacity - 1);
-    }
-  }
-  // The corners of every occupied cell, exactly (corners shared by neighbouring cells are
-  // computed once per cell: simpler, and still a few per cent of the points).
-  std::vector<Eigen::Vector3d> corners_world;
-  corners_world.reserve(8 * cell_keys.size());
-  const uint64_t mask = (uint64_t{1} << 21) - 1;
-  for (const uint64_t k : cell_keys) {
-    const double cx = base.x() + static_cast<double>(k & mask);
-    const double cy = base.y() + static_cast<double>((k >> 21) & mask);
-    const double cz = base.z() + static_cast<double>((k >> 42) & mask);
-    for (int c = 0; c < 8; ++c) {
-      corners_world.emplace_back((cx + (c & 1)) * cell_m, (cy + ((c >> 1) & 1)) * cell_m,
-                                 (cz + ((c >> 2) & 1)) * cell_m);
-    }
-  }
-  std::vector<Eigen::Vector3d> corners;
-  SLAM_MMS_RETURN_IF_ERROR(EnuToProjected(corners_world, &corners));
-  // Trilinear inside each cell, as offsets from its first corner (E and N are ~1e5..1e7 m).
-  for (size_t i = 0; i < n; ++i) {
-    const size_t c0 = 8 * static_cast<size_t>(point_cell[i]);
-    const Eigen::Vector3d f = (p_world[i] - corners_world[c0]) * inv;
-    const Eigen::Vector3d* v = &corners[c0];
-    const Eigen::Vector3d d1 = v[1] - v[0], d2 = v[2] - v[0], d3 = v[3] - v[0];
-    const Eigen::Vector3d d4 = v[4] - v[0], d5 = v[5] - v[0], d6 = v[6] - v[0];
-    const Eigen::Vector3d d7 = v[7] - v[0];
-    const double x = f.x(), y = f.y(), z = f.z();
-    const Eigen::Vector3d lower = (1.0 - y) * (x * d1) + y * ((1.0 - x) * d2 + x * d3);
-    const Eigen::Vector3d upper =
-        (1.0 - y) * ((1.0 - x) * d4 + x * d5) + y * ((1.0 - x) * d6 + x * d7);
-    (*out)[i] = v[0] + ((1.0 - z) * lower + z * upper);
   }
   return OkStatus();
 }

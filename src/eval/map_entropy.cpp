@@ -264,7 +264,7 @@ StatusOr<MapEntropyResult> ComputeMapEntropy(const PointCloudView& map,
     const float prune_sq = radius_sq * (1.0f + 1e-3f);
     constexpr size_t kCellsPerChunk = 512;
     // The neighbours of a query are selected without a branch (an index is written for every
-    // point tested and kept only where it lies within r: about half of the tested points are,
+    // point tested and kept only where it lies within r: about a third of the tested points are,
     // and the branch mispredicted), then accumulated in the same order as before: the same sums.
     run((grid.num_cells() + kCellsPerChunk - 1) / kCellsPerChunk, [&](size_t c, ChunkSums* sums) {
       NeighbourGrid::Block block;
@@ -292,9 +292,9 @@ StatusOr<MapEntropyResult> ComputeMapEntropy(const PointCloudView& map,
           size_t n = 0;
           for (int b = 0; b < num_columns; ++b) {
             const NeighbourGrid::Column& col = block[static_cast<size_t>(b)];
-            const float dx = std::max({col.x0 - query.x(), query.x() - col.x1, 0.0f});
-            const float dy = std::max({col.y0 - query.y(), query.y() - col.y1, 0.0f});
-            if (dx * dx + dy * dy > prune_sq) continue;
+            const float gap_x = std::max({col.x0 - qx, qx - col.x1, 0.0f});
+            const float gap_y = std::max({col.y0 - qy, qy - col.y1, 0.0f});
+            if (gap_x * gap_x + gap_y * gap_y > prune_sq) continue;
             // |query - p|^2 as nanoflann's L2_Simple_Adaptor computes it (float, the dimensions in
             // order), so that the grid keeps exactly the neighbours the k-d tree keeps; over
             // coordinate arrays, which the compiler vectorises.

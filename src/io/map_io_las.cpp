@@ -82,10 +82,10 @@ std::string UtmZoneWkt(int zone, bool north) {
 
 namespace {
 
-// The projected coordinates and adjusted GPS times (empty without times) of every point.
 // Edge of the cells of GeoReference::EnuToProjectedInterpolated for the LAS coordinates.
 constexpr double kProjectionCellM = 8.0;
 
+// The projected coordinates and adjusted GPS times (empty without times) of every point.
 Status ProjectMap(const MapCloud& map, const GeoReference& geo, std::vector<Eigen::Vector3d>* enh,
                   std::vector<double>* gps_time) {
   SLAM_MMS_RETURN_IF_ERROR(map.Validate());
@@ -125,16 +125,12 @@ std::vector<size_t> FileOrder(const MapCloud& map, const std::vector<size_t>* su
     for (size_t i = 0; i < order.size(); ++i) order[i] = i;
   }
   if (options.sort_by_time && !map.time_ns.empty()) {
-    // By time, ties in index order (a stable sort by time), sorted as contiguous (time, index)
-    // pairs: a comparison that looks the times up costs a cache miss each.
+    // A stable sort by time, of contiguous (time, index) pairs: a comparison that looks the
+    // times up costs a cache miss each.
     std::vector<std::pair<int64_t, size_t>> keyed(order.size());
     for (size_t k = 0; k < order.size(); ++k) keyed[k] = {map.time_ns[order[k]], order[k]};
-    if (subset != nullptr) {
-      std::stable_sort(keyed.begin(), keyed.end(),
-                       [](const auto& a, const auto& b) { return a.first < b.first; });
-    } else {
-      std::sort(keyed.begin(), keyed.end());  // indices ascending and unique: the same order
-    }
+    std::stable_sort(keyed.begin(), keyed.end(),
+                     [](const auto& a, const auto& b) { return a.first < b.first; });
     for (size_t k = 0; k < order.size(); ++k) order[k] = keyed[k].second;
   }
   return order;

@@ -42,6 +42,7 @@
 #include "slam_mms/drive/open_drive.hpp"
 #include "slam_mms/eval/ground_truth.hpp"
 #include "slam_mms/eval/map_entropy.hpp"
+#include "slam_mms/eval/oxts_reference.hpp"
 #include "slam_mms/eval/relative_error.hpp"
 #include "slam_mms/eval/scan_statistics.hpp"
 #include "slam_mms/io/trajectory_io.hpp"
@@ -70,7 +71,12 @@ struct DriveMeasures {
   size_t scans = 0;
   double path_m = 0.0;
   eval::ScanStatistics stats;
-  std::optional<eval::RelativeErrorResult> icp, lidar_only;
+  std::optional<eval::RelativeErrorResult> icp, lidar_only;  // against the ground truth
+  // Against the drive's OXTS records (for the real drive the ground truth itself), with recorded
+  // and with velocity-integrated positions (eval/oxts_reference.hpp), and how the two agree.
+  std::optional<eval::RelativeErrorResult> icp_oxts, lidar_only_oxts;
+  std::optional<eval::RelativeErrorResult> icp_oxts_velocity, lidar_only_oxts_velocity;
+  std::optional<eval::IncrementAgreement> oxts_agreement;
   size_t icp_unusable = 0;
   double icp_rms_m = 0.0;
   std::optional<eval::MapEntropyResult> gt_map;
@@ -231,6 +237,36 @@ StatusOr<DriveMeasures> Measure(const std::string& label, const fs::path& dir,
     m.icp = *r;
   }
 
+  // The same odometry against the drive's OXTS, its recorded positions and its velocities
+  // integrated: like for like between the real drive and the copy (whose OXTS carries the
+  // simulated GNSS/INS errors).
+  for (const eval::OxtsPositions kind :
+       {eval::OxtsPositions::kRecorded, eval::OxtsPositions::kVelocityIntegrated}) {
+    const bool velocity = kind == eval::OxtsPositions::kVelocityIntegrated;
+    SLAM_MMS_ASSIGN_OR_RETURN(const eval::GroundTruth ref,
+                              eval::LoadOxtsGroundTruth(*reader, *origin, kind));
+    StatusOr<eval::RelativeErrorResult> r =
+        eval::ComputeRelativeError(icp.T_world_body, ref.T_world_body, segments);
+    if (!r.ok()) return r.status().WithContext(label + ": ICP-only against " + ref.kind);
+    (velocity ? m.icp_oxts_velocity : m.icp_oxts) = *r;
+    if (args.lidar_only) {
+      r = eval::ComputeRelativeError(lidar_only, ref.T_world_body, segments);
+      if (!r.ok()) return r.status().WithContext(label + ": lidar_only against " + ref.kind);
+      (velocity ? m.lidar_only_oxts_velocity : m.lidar_only_oxts) = *r;
+    }
+  }
+  {
+    SLAM_MMS_ASSIGN_OR_RETURN(
+        const eval::GroundTruth rec,
+        eval::LoadOxtsGroundTruth(*reader, *origin, eval::OxtsPositions::kRecorded));
+    SLAM_MMS_ASSIGN_OR_RETURN(
+        const eval::GroundTruth vel,
+        eval::LoadOxtsGroundTruth(*reader, *origin, eval::OxtsPositions::kVelocityIntegrated));
+    StatusOr<eval::IncrementAgreement> a =
+        eval::CompareIncrements(rec.T_world_body, vel.T_world_body, 1.0, 5.0);
+    if (a.ok()) m.oxts_agreement = *a;  // none on a drive that stands or crawls
+  }
+
   Progress(label + ": map entropy from the ground-truth poses");
   SLAM_MMS_ASSIGN_OR_RETURN(m.gt_map,
                             GroundTruthMapEntropy(*reader, gt.T_world_body, 1, args.threads));
@@ -370,6 +406,21 @@ int main(int argc, char** argv) {
   report["scan_statistics"] = st;
   report["scan_statistics_met"] = {{"met", stats_met}, {"of", stats.size()}};
   json od;
+  auto pair_json = [](const std::optional<eval::RelativeErrorResult>& r,
+                      const std::optional<eval::RelativeErrorResult>& s) -> json {
+    if (!r || !s) return nullptr;
+    return {{"real", RelJson(r)},
+            {"sim", RelJson(s)},
+            {"t_rel", RatioJson(r->t_rel_pct, s->t_rel_pct)},
+            {"r_rel", RatioJson(r->r_rel_deg_per_100m, s->r_rel_deg_per_100m)}};
+  };
+  od["against_oxts"] = {
+      {"icp_only", pair_json(real->icp_oxts, simulated->icp_oxts)},
+      {"lidar_only", pair_json(real->lidar_only_oxts, simulated->lidar_only_oxts)}};
+  od["against_oxts_velocity"] = {
+      {"icp_only", pair_json(real->icp_oxts_velocity, simulated->icp_oxts_velocity)},
+      {"lidar_only",
+       pair_json(real->lidar_only_oxts_velocity, simulated->lidar_only_oxts_velocity)}};
   od["icp_only"] = {
       {"real", RelJson(real->icp)},
       {"sim", RelJson(simulated->icp)},
@@ -386,6 +437,20 @@ int main(int argc, char** argv) {
                             simulated->lidar_only->r_rel_deg_per_100m)}};
   }
   report["odometry"] = od;
+  auto agreement_json = [](const std::optional<eval::IncrementAgreement>& a) -> json {
+    if (!a) return nullptr;
+    return {{"window_s", a->window_s},
+            {"windows", a->windows},
+            {"mean_distance_m", a->mean_distance_m},
+            {"rms_pct", a->rms_pct},
+            {"along_mean_pct", a->along_mean_pct},
+            {"along_std_pct", a->along_std_pct},
+            {"cross_mean_pct", a->cross_mean_pct},
+            {"cross_std_pct", a->cross_std_pct},
+            {"vertical_rms_pct", a->vertical_rms_pct}};
+  };
+  report["oxts_position_vs_velocity"] = {{"real", agreement_json(real->oxts_agreement)},
+                                         {"sim", agreement_json(simulated->oxts_agreement)}};
   report["ground_truth_map_entropy"] = {
       {"real", real->gt_map->mean_map_entropy},
       {"sim", simulated->gt_map->mean_map_entropy},
@@ -421,6 +486,29 @@ int main(int argc, char** argv) {
   };
   row("ICP-only", real->icp, simulated->icp);
   row("lidar_only", real->lidar_only, simulated->lidar_only);
+  md << "\nLike for like, both drives against their own OXTS records (the copy's carry its "
+        "simulated GNSS/INS errors), with recorded positions and with the positions integrated "
+        "from the records' velocities:\n\n| method, reference | real t_rel [%] | sim t_rel [%] | "
+        "ratio | real r_rel [deg/100 m] | sim r_rel | ratio |\n|---|---|---|---|---|---|---|\n";
+  row("ICP-only, OXTS positions", real->icp_oxts, simulated->icp_oxts);
+  row("lidar_only, OXTS positions", real->lidar_only_oxts, simulated->lidar_only_oxts);
+  row("ICP-only, OXTS velocities", real->icp_oxts_velocity, simulated->icp_oxts_velocity);
+  row("lidar_only, OXTS velocities", real->lidar_only_oxts_velocity,
+      simulated->lidar_only_oxts_velocity);
+  md << "\nThe OXTS reference itself: its position increments over 1 s against its integrated "
+        "velocities, in % of the distance (RMS; along and across the motion, mean +- std):\n\n"
+        "| drive | windows | RMS | along | across | vertical RMS |\n|---|---|---|---|---|---|\n";
+  for (const DriveMeasures* d : {&*real, &*simulated}) {
+    if (!d->oxts_agreement) {
+      md << "| " << d->label << " | 0 | - | - | - | - |\n";
+      continue;
+    }
+    const eval::IncrementAgreement& a = *d->oxts_agreement;
+    md << "| " << d->label << " | " << a.windows << " | " << Fmt("%.2f", a.rms_pct) << " | "
+       << Fmt("%.2f", a.along_mean_pct) << " +- " << Fmt("%.2f", a.along_std_pct) << " | "
+       << Fmt("%.2f", a.cross_mean_pct) << " +- " << Fmt("%.2f", a.cross_std_pct) << " | "
+       << Fmt("%.2f", a.vertical_rms_pct) << " |\n";
+  }
   md << "\nMap entropy from ground-truth poses (r 0.5 m, voxel 0.1 m): real "
      << Fmt("%.3f", real->gt_map->mean_map_entropy) << ", sim "
      << Fmt("%.3f", simulated->gt_map->mean_map_entropy) << ".\n\n";

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "slam_mms/core/geodesy.hpp"
+#include "slam_mms/eval/oxts_reference.hpp"
 #include "slam_mms/io/kitti_drive_reader.hpp"
 #include "slam_mms/io/oxts_record.hpp"
 #include "slam_mms/io/trajectory_io.hpp"
@@ -105,7 +106,8 @@ StatusOr<GroundTruth> LoadSimulator(const std::filesystem::path& drive_dir,
   return gt;
 }
 
-StatusOr<GroundTruth> LoadOxts(const KittiRawReader& reader, const GeodeticPoint& run_origin) {
+StatusOr<GroundTruth> LoadOxts(const KittiRawReader& reader, const GeodeticPoint& run_origin,
+                               OxtsPositions positions) {
   // The denser stream when the drive has 100 Hz records.
   const std::vector<StampedOxts>& records =
       reader.HasImu100Hz() ? reader.ImuOxtsRecords() : reader.OxtsRecords();
@@ -114,24 +116,14 @@ StatusOr<GroundTruth> LoadOxts(const KittiRawReader& reader, const GeodeticPoint
         reader.drive_dir().string() +
         ": no ground truth (no ground_truth/ folder and fewer than 2 OXTS records)");
   }
-  const GeographicLib::LocalCartesian run_lc(run_origin.latitude_deg, run_origin.longitude_deg,
-                                             run_origin.height_m);
-  const Eigen::Matrix3d R_run_ecef =
-      R_ecef_enu(run_origin.latitude_deg, run_origin.longitude_deg).transpose();
   GroundTruth gt;
-  gt.kind = "oxts";
+  gt.kind = positions == OxtsPositions::kRecorded ? "oxts" : "oxts_velocity";
   gt.source = reader.drive_dir() / (reader.HasImu100Hz() ? "oxts_100hz" : "oxts");
-  for (const StampedOxts& r : records) {
-    Eigen::Vector3d p_run;
-    run_lc.Forward(r.record.lat_deg, r.record.lon_deg, r.record.alt_m, p_run.x(), p_run.y(),
-                   p_run.z());
-    // OXTS attitude is relative to the local level (ENU) frame at the record's position.
-    const Eigen::Matrix3d R_run_local = R_run_ecef * R_ecef_enu(r.record.lat_deg, r.record.lon_deg);
-    Eigen::Isometry3d T_run_body = Eigen::Isometry3d::Identity();
-    T_run_body.linear() = R_run_local * OxtsAttitude(r.record);
-    T_run_body.translation() = p_run;
-    SLAM_MMS_RETURN_IF_ERROR(gt.T_world_body.Add(r.stamp, T_run_body));
-  }
+  OxtsTrajectoryOptions options;
+  options.positions = positions;
+  StatusOr<Trajectory> t = OxtsTrajectory(records, run_origin, options);
+  if (!t.ok()) return t.status().WithContext(gt.source.string());
+  gt.T_world_body = std::move(t).value();
   return gt;
 }
 
@@ -141,10 +133,19 @@ StatusOr<GroundTruth> LoadGroundTruth(const std::filesystem::path& gt_dir,
                                       const DriveReader& reader, const GeodeticPoint& run_origin) {
   if (HasSimulatorGroundTruth(gt_dir)) return LoadSimulator(gt_dir, run_origin);
   if (const auto* kitti = dynamic_cast<const KittiDriveReader*>(&reader.Underlying())) {
-    return LoadOxts(kitti->kitti(), run_origin);
+    return LoadOxts(kitti->kitti(), run_origin, OxtsPositions::kRecorded);
   }
   return NotFoundError(reader.Describe() + ": no ground truth (no " +
                        (gt_dir / "ground_truth").string() + " folder)");
+}
+
+StatusOr<GroundTruth> LoadOxtsGroundTruth(const DriveReader& reader,
+                                          const GeodeticPoint& run_origin,
+                                          OxtsPositions positions) {
+  if (const auto* kitti = dynamic_cast<const KittiDriveReader*>(&reader.Underlying())) {
+    return LoadOxts(kitti->kitti(), run_origin, positions);
+  }
+  return NotFoundError(reader.Describe() + ": no OXTS records (not a KITTI raw drive)");
 }
 
 }  // namespace slam_mms::eval

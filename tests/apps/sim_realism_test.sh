@@ -26,7 +26,18 @@ icp = r["odometry"]["icp_only"]
 for k in ("real", "sim"):
     t = icp[k]["t_rel_pct"]
     assert 0.0 < t < 5.0, (k, t)
+# Like for like against each drive's own OXTS, recorded and velocity-integrated positions.
+for ref in ("against_oxts", "against_oxts_velocity"):
+    for k in ("real", "sim"):
+        t = r["odometry"][ref]["icp_only"][k]["t_rel_pct"]
+        assert 0.0 < t < 5.0, (ref, k, t)
+# The real drive's OXTS is its ground truth: the same numbers against its recorded positions.
+assert r["odometry"]["against_oxts"]["icp_only"]["real"] == icp["real"], r["odometry"]["against_oxts"]
+a = r["oxts_position_vs_velocity"]
+for k in ("real", "sim"):
+    assert a[k]["windows"] > 0 and 8.0 < a[k]["mean_distance_m"] < 15.0, (k, a[k])
 e = r["ground_truth_map_entropy"]
 assert e["real"] < 0 and e["sim"] < 0, e
-print("ok: icp t_rel real %.3f sim %.3f" % (icp["real"]["t_rel_pct"], icp["sim"]["t_rel_pct"]))
+print("ok: icp t_rel real %.3f sim %.3f; OXTS position vs velocity RMS real %.2f %% sim %.2f %%" %
+      (icp["real"]["t_rel_pct"], icp["sim"]["t_rel_pct"], a["real"]["rms_pct"], a["sim"]["rms_pct"]))
 PY

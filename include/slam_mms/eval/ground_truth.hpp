@@ -20,13 +20,14 @@
 
 #include "slam_mms/core/status.hpp"
 #include "slam_mms/core/trajectory.hpp"
+#include "slam_mms/eval/oxts_reference.hpp"
 #include "slam_mms/ins/gnss_prior.hpp"
 #include "slam_mms/io/drive_reader.hpp"
 
 namespace slam_mms::eval {
 
 struct GroundTruth {
-  std::string kind;                 ///< "simulator" or "oxts" (report.json input.ground_truth).
+  std::string kind;  ///< "simulator", "oxts" or "oxts_velocity" (report.json input.ground_truth).
   Trajectory T_world_body;          ///< In the run's world frame.
   std::filesystem::path scene_map;  ///< The simulator's scene_points.ply ("" for OXTS).
   std::filesystem::path source;     ///< What it was read from (for messages).
@@ -41,6 +42,13 @@ bool HasSimulatorGroundTruth(const std::filesystem::path& drive_dir);
 /// drive folder, or the folder holding a bag.
 StatusOr<GroundTruth> LoadGroundTruth(const std::filesystem::path& gt_dir,
                                       const DriveReader& reader, const GeodeticPoint& run_origin);
+
+/// The OXTS records of a KITTI raw drive (the 100 Hz ones where it has them; a simulated drive
+/// has them too, beside its ground_truth/) as a reference in the run ENU frame, with recorded or
+/// velocity-integrated positions (eval/oxts_reference.hpp; kind "oxts" or "oxts_velocity");
+/// kNotFound for other drives.
+StatusOr<GroundTruth> LoadOxtsGroundTruth(const DriveReader& reader,
+                                          const GeodeticPoint& run_origin, OxtsPositions positions);
 
 /// The WGS-84 origin in a simulator scenario.json ("origin_wgs84": {...}).
 StatusOr<GeodeticPoint> ReadScenarioOrigin(const std::filesystem::path& scenario_json);

@@ -33,9 +33,12 @@ for ref in ("against_oxts", "against_oxts_velocity"):
         assert 0.0 < t < 5.0, (ref, k, t)
 # The real drive's OXTS is its ground truth: the same numbers against its recorded positions.
 assert r["odometry"]["against_oxts"]["icp_only"]["real"] == icp["real"], r["odometry"]["against_oxts"]
-a = r["oxts_position_vs_velocity"]
+inc = r["increments_vs_oxts_velocity"]
 for k in ("real", "sim"):
-    assert a[k]["windows"] > 0 and 8.0 < a[k]["mean_distance_m"] < 15.0, (k, a[k])
+    for track in ("OXTS positions", "ICP-only"):
+        a = inc[k][track]
+        assert a["windows"] > 0 and 8.0 < a["mean_distance_m"] < 15.0, (k, track, a)
+a = {k: inc[k]["OXTS positions"] for k in ("real", "sim")}
 e = r["ground_truth_map_entropy"]
 assert e["real"] < 0 and e["sim"] < 0, e
 print("ok: icp t_rel real %.3f sim %.3f; OXTS position vs velocity RMS real %.2f %% sim %.2f %%" %

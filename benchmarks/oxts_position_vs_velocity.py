@@ -1,0 +1,148 @@
+#!/usr/bin/env python3
+"""How far a KITTI drive's OXTS positions agree with its own velocities over 1 s.
+
+The statistic of eval::CompareIncrements (include/slam_mms/eval/oxts_reference.hpp), applied to
+every drive's OXTS records in ../shared/data/kitti_oxts (the tarballs are read as they are):
+windows from each record to the first record at least 1 s later, the horizontal position
+increment minus the trapezoidal integral of (ve, vn) over the same records, split along and
+across the integrated increment, in % of its length; windows under 5 m are skipped. Positions are
+taken to a local east/north frame at the drive's first record with the WGS-84 radii of curvature
+there (good to 1e-5 over a few km). A drive with stamps that do not increase inside a window, or
+a gap over 0.5 s, skips those windows; a drive slower than 5 m/s throughout has none.
+
+    python3 benchmarks/oxts_position_vs_velocity.py [../shared/data/kitti_oxts] [--csv OUT.csv]
+
+Prints one line per drive (sorted by RMS) and the median by the drives' main OXTS position mode
+(posmode: 3 SPS, 4 differential, 5 RTK float, 6 RTK integer, 0 none). docs/simulator.md, "The real
+reference", quotes its output.
+"""
+import argparse
+import io
+import math
+import os
+import sys
+import tarfile
+
+import numpy as np
+
+A = 6378137.0
+E2 = 6.69437999014e-3
+
+
+def stamp_seconds(line):
+    date, time = line.strip().split(" ")
+    h, m, s = time.split(":")
+    return int(h) * 3600 + int(m) * 60 + float(s)
+
+
+def read_drive(path):
+    records, stamps = {}, None
+    with tarfile.open(path) as tar:
+        for member in tar.getmembers():
+            if not member.isfile():
+                continue
+            name = member.name
+            if name.endswith("oxts/timestamps.txt"):
+                text = tar.extractfile(member).read().decode()
+                stamps = [stamp_seconds(l) for l in text.splitlines() if l.strip()]
+            elif "/oxts/data/" in name and name.endswith(".txt"):
+                values = tar.extractfile(member).read().decode().split()
+                records[int(os.path.basename(name)[:-4])] = [float(v) for v in values]
+    if stamps is None or not records:
+        return None
+    a = np.array([records[k] for k in sorted(records)])
+    t = np.array(stamps[: len(a)])
+    return t, a[: len(t)]
+
+
+def agreement(t, a, window_s=1.0, min_distance_m=5.0, max_gap_s=0.5):
+    lat0 = math.radians(a[0, 0])
+    w = math.sqrt(1.0 - E2 * math.sin(lat0) ** 2)
+    m_radius = A * (1.0 - E2) / w**3
+    n_radius = A / w
+    east = np.radians(a[:, 1] - a[0, 1]) * n_radius * math.cos(lat0)
+    north = np.radians(a[:, 0] - a[0, 0]) * m_radius
+    p = np.c_[east, north]
+    v = np.c_[a[:, 7], a[:, 6]]  # ve, vn
+    along, cross, dist = [], [], []
+    j = 0
+    for i in range(len(t)):
+        j = max(j, i + 1)
+        while j < len(t) and t[j] - t[i] < window_s:
+            j += 1
+        if j >= len(t):
+            break
+        dt = np.diff(t[i : j + 1])
+        if np.any(dt <= 0) or np.any(dt > max_gap_s):
+            continue
+        d_ref = np.sum(0.5 * (v[i:j] + v[i + 1 : j + 1]) * dt[:, None], axis=0)
+        length = np.linalg.norm(d_ref)
+        if length < min_distance_m:
+            continue
+        u = d_ref / length
+        diff = (p[j] - p[i]) - d_ref
+        along.append(100.0 * (u @ diff) / length)
+        cross.append(100.0 * (u[0] * diff[1] - u[1] * diff[0]) / length)
+        dist.append(length)
+    if not dist:
+        return None
+    along, cross = np.array(along), np.array(cross)
+    return {
+        "windows": len(dist),
+        "rms": float(np.sqrt(np.mean(along**2 + cross**2))),
+        "along_mean": float(along.mean()),
+        "along_std": float(along.std()),
+        "cross_mean": float(cross.mean()),
+        "cross_std": float(cross.std()),
+        "pos_accuracy_median": float(np.median(a[:, 23])),
+        "posmode": int(np.bincount(np.clip(a[:, 27].astype(int), 0, None)).argmax()),
+    }
+
+
+def main():
+    here = os.path.dirname(os.path.abspath(__file__))
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("folder", nargs="?",
+                        default=os.path.join(here, "..", "..", "shared", "data", "kitti_oxts"))
+    parser.add_argument("--csv", help="write the per-drive rows as CSV")
+    args = parser.parse_args()
+    tars = sorted(f for f in os.listdir(args.folder) if f.endswith("_sync.tar.gz"))
+    if not tars:
+        sys.exit(f"{args.folder}: no <drive>_sync.tar.gz")
+    rows, skipped = [], 0
+    for name in tars:
+        drive = read_drive(os.path.join(args.folder, name))
+        r = agreement(*drive) if drive else None
+        if r is None:
+            skipped += 1
+            continue
+        r["drive"] = name[: -len("_sync.tar.gz")]
+        rows.append(r)
+    rows.sort(key=lambda r: r["rms"])
+    for r in rows:
+        print("%s windows %5d  RMS %6.2f %%  along %+.2f +- %.2f  across %+.2f +- %.2f  "
+              "pos_accuracy %.2f m  posmode %d" % (r["drive"], r["windows"], r["rms"], r["along_mean"],
+                                                   r["along_std"], r["cross_mean"], r["cross_std"],
+                                                   r["pos_accuracy_median"], r["posmode"]))
+    rms = np.array([r["rms"] for r in rows])
+    print("\n%d drives with a window (%d without one: standing, or under 5 m/s); RMS median "
+          "%.2f %%, 10th/90th percentile %.2f / %.2f %%" %
+          (len(rows), skipped, np.median(rms), np.percentile(rms, 10), np.percentile(rms, 90)))
+    for mode in sorted({r["posmode"] for r in rows}):
+        sel = [r for r in rows if r["posmode"] == mode]
+        print("posmode %d: %3d drives, RMS median %.2f %%, across-track std median %.2f %%, "
+              "|across mean| median %.2f %%" %
+              (mode, len(sel), np.median([r["rms"] for r in sel]),
+               np.median([r["cross_std"] for r in sel]),
+               np.median([abs(r["cross_mean"]) for r in sel])))
+    if args.csv:
+        with open(args.csv, "w") as f:
+            keys = ["drive", "windows", "rms", "along_mean", "along_std", "cross_mean",
+                    "cross_std", "pos_accuracy_median", "posmode"]
+            f.write(",".join(keys) + "\n")
+            for r in rows:
+                f.write(",".join(str(r[k]) for k in keys) + "\n")
+
+
+if __name__ == "__main__":
+    main()

@@ -11,6 +11,11 @@ there (good to 1e-5 over a few km). A drive with stamps that do not increase ins
 a gap over 0.5 s, skips those windows; a drive slower than 5 m/s throughout has none.
 
     python3 benchmarks/oxts_position_vs_velocity.py [../shared/data/kitti_oxts] [--csv OUT.csv]
+        [--lag-scan]
+
+--lag-scan also reads each drive's velocities 0.025 s, 0.05 s ... later or earlier (-0.15..0.15 s)
+and reports the lag with the smallest RMS: a latency between the OXTS's velocity and position
+outputs shows as a best lag away from 0.
 
 Prints one line per drive (sorted by RMS) and the median by the drives' main OXTS position mode
 (posmode: 3 SPS, 4 differential, 5 RTK float, 6 RTK integer, 0 none). docs/simulator.md, "The real
@@ -55,7 +60,7 @@ def read_drive(path):
     return t, a[: len(t)]
 
 
-def agreement(t, a, window_s=1.0, min_distance_m=5.0, max_gap_s=0.5):
+def agreement(t, a, window_s=1.0, min_distance_m=5.0, max_gap_s=0.5, velocity_lag_s=0.0):
     lat0 = math.radians(a[0, 0])
     w = math.sqrt(1.0 - E2 * math.sin(lat0) ** 2)
     m_radius = A * (1.0 - E2) / w**3
@@ -64,6 +69,9 @@ def agreement(t, a, window_s=1.0, min_distance_m=5.0, max_gap_s=0.5):
     north = np.radians(a[:, 0] - a[0, 0]) * m_radius
     p = np.c_[east, north]
     v = np.c_[a[:, 7], a[:, 6]]  # ve, vn
+    if velocity_lag_s != 0.0:
+        # The velocity recorded at t taken as the one at t - lag (read it lag later).
+        v = np.c_[np.interp(t + velocity_lag_s, t, v[:, 0]), np.interp(t + velocity_lag_s, t, v[:, 1])]
     along, cross, dist = [], [], []
     j = 0
     for i in range(len(t)):
@@ -105,6 +113,9 @@ def main():
     parser.add_argument("folder", nargs="?",
                         default=os.path.join(here, "..", "..", "shared", "data", "kitti_oxts"))
     parser.add_argument("--csv", help="write the per-drive rows as CSV")
+    parser.add_argument("--lag-scan", action="store_true",
+                        help="also find per drive the velocity lag (-0.15..0.15 s, 25 ms steps) "
+                             "that minimises the RMS")
     args = parser.parse_args()
     tars = sorted(f for f in os.listdir(args.folder) if f.endswith("_sync.tar.gz"))
     if not tars:
@@ -117,13 +128,20 @@ def main():
             skipped += 1
             continue
         r["drive"] = name[: -len("_sync.tar.gz")]
+        if args.lag_scan:
+            lags = [0.025 * k for k in range(-6, 7)]
+            scan = [agreement(*drive, velocity_lag_s=lag)["rms"] for lag in lags]
+            r["best_lag_s"] = lags[int(np.argmin(scan))]
+            r["rms_at_best_lag"] = float(min(scan))
         rows.append(r)
     rows.sort(key=lambda r: r["rms"])
     for r in rows:
+        lag = ("  best lag %+.3f s: RMS %.2f %%" % (r["best_lag_s"], r["rms_at_best_lag"])
+               if args.lag_scan else "")
         print("%s windows %5d  RMS %6.2f %%  along %+.2f +- %.2f  across %+.2f +- %.2f  "
-              "pos_accuracy %.2f m  posmode %d" % (r["drive"], r["windows"], r["rms"], r["along_mean"],
-                                                   r["along_std"], r["cross_mean"], r["cross_std"],
-                                                   r["pos_accuracy_median"], r["posmode"]))
+              "pos_accuracy %.2f m  posmode %d%s" % (r["drive"], r["windows"], r["rms"], r["along_mean"],
+                                                     r["along_std"], r["cross_mean"], r["cross_std"],
+                                                     r["pos_accuracy_median"], r["posmode"], lag))
     rms = np.array([r["rms"] for r in rows])
     print("\n%d drives with a window (%d without one: standing, or under 5 m/s); RMS median "
           "%.2f %%, 10th/90th percentile %.2f / %.2f %%" %
@@ -135,10 +153,16 @@ def main():
               (mode, len(sel), np.median([r["rms"] for r in sel]),
                np.median([r["cross_std"] for r in sel]),
                np.median([abs(r["cross_mean"]) for r in sel])))
+        if args.lag_scan:
+            print("           best velocity lag median %+.3f s, RMS there median %.2f %%" %
+                  (np.median([r["best_lag_s"] for r in sel]),
+                   np.median([r["rms_at_best_lag"] for r in sel])))
     if args.csv:
         with open(args.csv, "w") as f:
             keys = ["drive", "windows", "rms", "along_mean", "along_std", "cross_mean",
                     "cross_std", "pos_accuracy_median", "posmode"]
+            if args.lag_scan:
+                keys += ["best_lag_s", "rms_at_best_lag"]
             f.write(",".join(keys) + "\n")
             for r in rows:
                 f.write(",".join(str(r[k]) for k in keys) + "\n")

@@ -15,7 +15,8 @@ a gap over 0.5 s, skips those windows; a drive slower than 5 m/s throughout has 
 
 --lag-scan also reads each drive's velocities 0.025 s, 0.05 s ... later or earlier (-0.15..0.15 s)
 and reports the lag with the smallest RMS: a latency between the OXTS's velocity and position
-outputs shows as a best lag away from 0.
+outputs shows as a best lag away from 0. It also finds the lag of the recorded horizontal
+accelerations (af, al) that fits the positions' second differences best.
 
 Prints one line per drive (sorted by RMS) and the median by the drives' main OXTS position mode
 (posmode: 3 SPS, 4 differential, 5 RTK float, 6 RTK integer, 0 none). docs/simulator.md, "The real
@@ -107,6 +108,30 @@ def agreement(t, a, window_s=1.0, min_distance_m=5.0, max_gap_s=0.5, velocity_la
     }
 
 
+def acceleration_lag(t, a, lags):
+    """The lag of the recorded horizontal accelerations (af, al: level frame, rotated by the yaw
+    to east/north) that fits the positions' second differences best (RMS over records whose two
+    neighbours are 0.09-0.12 s away)."""
+    lat0 = math.radians(a[0, 0])
+    w = math.sqrt(1.0 - E2 * math.sin(lat0) ** 2)
+    p = np.c_[np.radians(a[:, 1] - a[0, 1]) * (A / w) * math.cos(lat0),
+              np.radians(a[:, 0] - a[0, 0]) * A * (1.0 - E2) / w**3]
+    yaw, af, al = a[:, 5], a[:, 14], a[:, 15]
+    acc = np.c_[af * np.cos(yaw) - al * np.sin(yaw), af * np.sin(yaw) + al * np.cos(yaw)]
+    dt = np.diff(t)
+    good = (dt > 0.09) & (dt < 0.12)
+    i = np.where(np.r_[False, good[:-1] & good[1:], False])[0]
+    if len(i) < 20:
+        return None
+    h1, h2 = t[i] - t[i - 1], t[i + 1] - t[i]
+    a_pos = 2.0 * ((p[i + 1] - p[i]) / h2[:, None] - (p[i] - p[i - 1]) / h1[:, None]) / (h1 + h2)[:, None]
+    rms = []
+    for lag in lags:
+        a_rec = np.c_[np.interp(t[i] + lag, t, acc[:, 0]), np.interp(t[i] + lag, t, acc[:, 1])]
+        rms.append(np.sqrt(np.mean(np.sum((a_rec - a_pos) ** 2, axis=1))))
+    return lags[int(np.argmin(rms))]
+
+
 def main():
     here = os.path.dirname(os.path.abspath(__file__))
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
@@ -133,10 +158,13 @@ def main():
             scan = [agreement(*drive, velocity_lag_s=lag)["rms"] for lag in lags]
             r["best_lag_s"] = lags[int(np.argmin(scan))]
             r["rms_at_best_lag"] = float(min(scan))
+            r["acceleration_lag_s"] = acceleration_lag(*drive, lags)
         rows.append(r)
     rows.sort(key=lambda r: r["rms"])
     for r in rows:
-        lag = ("  best lag %+.3f s: RMS %.2f %%" % (r["best_lag_s"], r["rms_at_best_lag"])
+        lag = ("  best lag %+.3f s: RMS %.2f %%, accelerations %s" %
+               (r["best_lag_s"], r["rms_at_best_lag"],
+                "-" if r["acceleration_lag_s"] is None else "%+.3f s" % r["acceleration_lag_s"])
                if args.lag_scan else "")
         print("%s windows %5d  RMS %6.2f %%  along %+.2f +- %.2f  across %+.2f +- %.2f  "
               "pos_accuracy %.2f m  posmode %d%s" % (r["drive"], r["windows"], r["rms"], r["along_mean"],
@@ -154,15 +182,17 @@ def main():
                np.median([r["cross_std"] for r in sel]),
                np.median([abs(r["cross_mean"]) for r in sel])))
         if args.lag_scan:
-            print("           best velocity lag median %+.3f s, RMS there median %.2f %%" %
+            acc = [r["acceleration_lag_s"] for r in sel if r["acceleration_lag_s"] is not None]
+            print("           best velocity lag median %+.3f s, RMS there median %.2f %%; "
+                  "best acceleration lag median %+.3f s (%d drives)" %
                   (np.median([r["best_lag_s"] for r in sel]),
-                   np.median([r["rms_at_best_lag"] for r in sel])))
+                   np.median([r["rms_at_best_lag"] for r in sel]), np.median(acc), len(acc)))
     if args.csv:
         with open(args.csv, "w") as f:
             keys = ["drive", "windows", "rms", "along_mean", "along_std", "cross_mean",
                     "cross_std", "pos_accuracy_median", "posmode"]
             if args.lag_scan:
-                keys += ["best_lag_s", "rms_at_best_lag"]
+                keys += ["best_lag_s", "rms_at_best_lag", "acceleration_lag_s"]
             f.write(",".join(keys) + "\n")
             for r in rows:
                 f.write(",".join(str(r[k]) for k in keys) + "\n")

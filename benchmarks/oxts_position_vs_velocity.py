@@ -16,7 +16,8 @@ a gap over 0.5 s, skips those windows; a drive slower than 5 m/s throughout has 
 --lag-scan also reads each drive's velocities 0.025 s, 0.05 s ... later or earlier (-0.15..0.15 s)
 and reports the lag with the smallest RMS: a latency between the OXTS's velocity and position
 outputs shows as a best lag away from 0. It also finds the lag of the recorded horizontal
-accelerations (af, al) that fits the positions' second differences best.
+accelerations (af, al) that fits the positions' second differences best, and of the recorded yaw
+rate (wu) that fits the recorded yaw's central differences best.
 
 Prints one line per drive (sorted by RMS) and the median by the drives' main OXTS position mode
 (posmode: 3 SPS, 4 differential, 5 RTK float, 6 RTK integer, 0 none). docs/simulator.md, "The real
@@ -132,6 +133,21 @@ def acceleration_lag(t, a, lags):
     return lags[int(np.argmin(rms))]
 
 
+def rate_lag(t, a, lags):
+    """The lag of the recorded yaw rate (wu, about the up axis) that fits the central differences
+    of the recorded yaw best (records whose two neighbours are 0.18-0.24 s apart)."""
+    yaw = np.unwrap(a[:, 5])
+    wu = a[:, 22]
+    i = np.arange(1, len(t) - 1)
+    span = t[i + 1] - t[i - 1]
+    i = i[(span > 0.18) & (span < 0.24)]
+    if len(i) < 20:
+        return None
+    d_yaw = (yaw[i + 1] - yaw[i - 1]) / (t[i + 1] - t[i - 1])
+    rms = [np.sqrt(np.mean((np.interp(t[i] + lag, t, wu) - d_yaw) ** 2)) for lag in lags]
+    return lags[int(np.argmin(rms))]
+
+
 def main():
     here = os.path.dirname(os.path.abspath(__file__))
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
@@ -159,12 +175,14 @@ def main():
             r["best_lag_s"] = lags[int(np.argmin(scan))]
             r["rms_at_best_lag"] = float(min(scan))
             r["acceleration_lag_s"] = acceleration_lag(*drive, lags)
+            r["yaw_rate_lag_s"] = rate_lag(*drive, lags)
         rows.append(r)
     rows.sort(key=lambda r: r["rms"])
     for r in rows:
-        lag = ("  best lag %+.3f s: RMS %.2f %%, accelerations %s" %
-               (r["best_lag_s"], r["rms_at_best_lag"],
-                "-" if r["acceleration_lag_s"] is None else "%+.3f s" % r["acceleration_lag_s"])
+        fmt = lambda v: "-" if v is None else "%+.3f s" % v
+        lag = ("  best lag %+.3f s: RMS %.2f %%, accelerations %s, yaw rate %s" %
+               (r["best_lag_s"], r["rms_at_best_lag"], fmt(r["acceleration_lag_s"]),
+                fmt(r["yaw_rate_lag_s"]))
                if args.lag_scan else "")
         print("%s windows %5d  RMS %6.2f %%  along %+.2f +- %.2f  across %+.2f +- %.2f  "
               "pos_accuracy %.2f m  posmode %d%s" % (r["drive"], r["windows"], r["rms"], r["along_mean"],
@@ -183,16 +201,18 @@ def main():
                np.median([abs(r["cross_mean"]) for r in sel])))
         if args.lag_scan:
             acc = [r["acceleration_lag_s"] for r in sel if r["acceleration_lag_s"] is not None]
+            rate = [r["yaw_rate_lag_s"] for r in sel if r["yaw_rate_lag_s"] is not None]
             print("           best velocity lag median %+.3f s, RMS there median %.2f %%; "
-                  "best acceleration lag median %+.3f s (%d drives)" %
+                  "best acceleration lag median %+.3f s (%d drives), yaw rate %+.3f s (%d)" %
                   (np.median([r["best_lag_s"] for r in sel]),
-                   np.median([r["rms_at_best_lag"] for r in sel]), np.median(acc), len(acc)))
+                   np.median([r["rms_at_best_lag"] for r in sel]), np.median(acc), len(acc),
+                   np.median(rate), len(rate)))
     if args.csv:
         with open(args.csv, "w") as f:
             keys = ["drive", "windows", "rms", "along_mean", "along_std", "cross_mean",
                     "cross_std", "pos_accuracy_median", "posmode"]
             if args.lag_scan:
-                keys += ["best_lag_s", "rms_at_best_lag", "acceleration_lag_s"]
+                keys += ["best_lag_s", "rms_at_best_lag", "acceleration_lag_s", "yaw_rate_lag_s"]
             f.write(",".join(keys) + "\n")
             for r in rows:
                 f.write(",".join(str(r[k]) for k in keys) + "\n")

@@ -18,6 +18,8 @@
 //   --origin LAT,LON,H                 WGS-84 origin of the world frame (default Karlsruhe; with
 //                                      --oxts the first record unless --origin is given)
 //   --elevation-bias DEG               KITTI-like 0.205 deg low points (default 0)
+//   --oxts-inertial-lag S              KITTI-like: OXTS rates, accelerations, velocities S late
+//                                      (default 0; KITTI about 0.05)
 //   --lead-in S                        IMU/POS records before the first scan (default 1)
 //   --oxts-start S                     with --oxts: start the lead-in S seconds into the drive
 //   --calib-error-rpy-deg R,P,Y        write calib_imu_to_velo.txt wrong on purpose: rotated by
@@ -68,7 +70,8 @@ int Usage(const std::string& error) {
          "       [--gnss-outage START_S:DURATION_S]... [--imu-grade "
          "perfect|consumer|tactical|navigation]\n"
          "       [--gnss-quality fixed|float|sps] [--urban-canyon SCALE] [--origin LAT,LON,H]\n"
-         "       [--elevation-bias DEG] [--lead-in S] [--oxts-start S] [--threads N] "
+         "       [--elevation-bias DEG] [--oxts-inertial-lag S] [--lead-in S] [--oxts-start S] "
+         "[--threads N] "
          "[--no-scene-cloud] "
          "[--scene-voxel M]\n"
          "       [--drive-id N] [--date YYYY_MM_DD]\n"
@@ -151,6 +154,7 @@ int main(int argc, char** argv) {
   app.add_option("--urban-canyon", o.gnss.urban_canyon_scale);
   app.add_option("--origin", origin);
   app.add_option("--elevation-bias", o.lidar.elevation_bias_deg);
+  app.add_option("--oxts-inertial-lag", o.oxts_inertial_lag_s);
   app.add_option("--lead-in", o.lead_in_s);
   app.add_option("--threads", o.num_threads);
   app.add_flag("--no-scene-cloud", no_scene_cloud);

@@ -132,6 +132,7 @@ StatusOr<std::unique_ptr<DriveReader>> OpenDrive(const std::filesystem::path& pa
       ro.last_frame = options.last_frame;
       ro.vertical_angle_correction = options.kitti_vertical_correction_deg != 0.0;
       ro.vertical_correction_deg = options.kitti_vertical_correction_deg;
+      ro.oxts_inertial_delay_s = options.kitti_oxts_inertial_delay_s;
       SLAM_MMS_ASSIGN_OR_RETURN(std::unique_ptr<KittiDriveReader> reader,
                                 KittiDriveReader::Open(path, ro));
       return with_overrides(std::move(reader));

@@ -122,6 +122,8 @@ StatusOr<std::string> ReportToJson(const EvalReport& report) {
   }
   input["skipped_scans"] = Json{{"count", in.skipped_scans.size()}, {"scans", skipped}};
   input["imu_noise"] = in.imu_noise.empty() ? Json(nullptr) : Json(in.imu_noise);
+  input["oxts_inertial_delay_s"] =
+      in.oxts_inertial_delay_s ? Number(*in.oxts_inertial_delay_s) : Json(nullptr);
   j["input"] = std::move(input);
 
   Json outages = Json::array();

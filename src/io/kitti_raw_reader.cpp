@@ -148,6 +148,11 @@ Status KittiRawReader::Options::Validate() const {
     return internal::OptionError("KittiRawReader::Options", "vertical_correction_deg",
                                  vertical_correction_deg, "must be finite and within [-5, 5] deg");
   }
+  if (oxts_inertial_delay_s &&
+      (!std::isfinite(*oxts_inertial_delay_s) || std::abs(*oxts_inertial_delay_s) > 0.5)) {
+    return internal::OptionError("KittiRawReader::Options", "oxts_inertial_delay_s",
+                                 *oxts_inertial_delay_s, "must be finite and within [-0.5, 0.5] s");
+  }
   if (!std::isfinite(imu_time_margin_s) || imu_time_margin_s < 0.0) {
     return internal::OptionError("KittiRawReader::Options", "imu_time_margin_s", imu_time_margin_s,
                                  "must be >= 0");
@@ -168,6 +173,8 @@ struct KittiRawReader::Impl {
   std::vector<StampedOxts> oxts;
   std::vector<StampedOxts> imu_oxts;
   bool has_imu_100hz = false;
+  double oxts_inertial_delay_s = 0.0;
+  std::optional<OxtsInertialDelay> oxts_inertial_delay_estimate;
   Eigen::Isometry3d T_lidar_body = Eigen::Isometry3d::Identity();
   fs::path calibration_file;
   mutable std::atomic<uint64_t> dropped{0};
@@ -311,6 +318,19 @@ StatusOr<KittiRawReader> KittiRawReader::Open(const fs::path& drive_dir_in,
   } else {
     impl->imu_oxts = impl->oxts;
   }
+  if (options.oxts_inertial_delay_s) {
+    impl->oxts_inertial_delay_s = *options.oxts_inertial_delay_s;
+  } else if (impl->imu_oxts.size() >= 3) {
+    SLAM_MMS_ASSIGN_OR_RETURN(impl->oxts_inertial_delay_estimate,
+                              EstimateOxtsInertialDelay(impl->imu_oxts));
+    const OxtsInertialDelay& e = *impl->oxts_inertial_delay_estimate;
+    if (e.clear) impl->oxts_inertial_delay_s = e.delay_s;
+    SLAM_MMS_LOG(kInfo) << drive_dir.string() << ": OXTS rates fit the attitudes best "
+                        << e.delay_s * 1e3 << " ms later (RMS " << e.rms_at_delay_radps
+                        << " against " << e.rms_at_zero_radps << " rad/s, " << e.samples
+                        << " records): IMU samples stamped " << impl->oxts_inertial_delay_s * 1e3
+                        << " ms early" << (e.clear ? "" : " (not clear: as recorded)");
+  }
 
   // --- Calibration.
   std::vector<fs::path> candidates;
@@ -367,8 +387,17 @@ std::vector<GnssFix> KittiRawReader::GnssFixes() const {
 std::vector<ImuSample> KittiRawReader::ImuSamples() const {
   std::vector<ImuSample> samples;
   samples.reserve(impl_->imu_oxts.size());
-  for (const auto& r : impl_->imu_oxts) samples.push_back(ToImuSample(r.record, r.stamp));
+  const double delay = impl_->oxts_inertial_delay_s;
+  for (const auto& r : impl_->imu_oxts) {
+    samples.push_back(ToImuSample(r.record, delay == 0.0 ? r.stamp : r.stamp.PlusSeconds(-delay)));
+  }
   return samples;
+}
+
+double KittiRawReader::oxts_inertial_delay_s() const { return impl_->oxts_inertial_delay_s; }
+
+const std::optional<OxtsInertialDelay>& KittiRawReader::oxts_inertial_delay_estimate() const {
+  return impl_->oxts_inertial_delay_estimate;
 }
 
 double KittiAzimuthFraction(double x, double y, SpinDirection spin) {

@@ -220,7 +220,8 @@ Status WriteScenarioJson(const DriveSimulator::Options& o, const DriveSimulator&
                    {"antenna_above_imu_m", 0.75}};
   j["ins"] = Json{{"roll_pitch_sigma_rad", o.ins_roll_pitch_sigma_rad},
                   {"yaw_sigma_rad", o.ins_yaw_sigma_rad},
-                  {"velocity_sigma_mps", o.ins_velocity_sigma_mps}};
+                  {"velocity_sigma_mps", o.ins_velocity_sigma_mps},
+                  {"oxts_inertial_lag_s", o.oxts_inertial_lag_s}};
   j["scene_cloud_voxel_m"] = o.scene_cloud_voxel_m;
   j["summary"] = Json{{"scans", s.num_scans},
                       {"points", s.num_points},

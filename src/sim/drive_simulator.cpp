@@ -90,6 +90,8 @@ Status DriveSimulator::Options::Validate() const {
   if (!(ins_roll_pitch_sigma_rad >= 0.0 && ins_yaw_sigma_rad >= 0.0 &&
         ins_velocity_sigma_mps >= 0.0))
     return fail("ins_*_sigma", "negative", "must be >= 0");
+  if (!(oxts_inertial_lag_s >= 0.0 && oxts_inertial_lag_s <= 0.5))
+    return fail("oxts_inertial_lag_s", std::to_string(oxts_inertial_lag_s), "must be in [0, 0.5]");
   if (!date.empty() && (date.size() != 10 || date[4] != '_' || date[7] != '_'))
     return fail("date", "'" + date + "'", "must look like 2011_09_26");
   if (!T_lidar_body.matrix().allFinite())
@@ -327,14 +329,18 @@ StatusOr<DriveSimulator::Summary> DriveSimulator::Run(const std::filesystem::pat
     if (t > std::min(traj.end_s(), last_end + 0.5) + 1e-9) break;
     const BodyState state = traj.Evaluate(t);
     const Timestamp stamp = traj.ToTimestamp(t);
-    const ImuSample meas = imu.Measure(state, stamp);
+    // The records' inertial outputs from the motion oxts_inertial_lag_s earlier (KITTI-like).
+    const bool lagged = o.oxts_inertial_lag_s > 0.0;
+    const BodyState inertial_state =
+        lagged ? traj.Evaluate(std::max(traj.start_s(), t - o.oxts_inertial_lag_s)) : state;
+    const ImuSample meas = imu.Measure(inertial_state, stamp);
     if (t >= next_blockage_t) {  // sky view of the antenna (0.75 m above the IMU), 2 Hz
       blockage = world.SkyBlockage(state.T_world_body * Eigen::Vector3d(0.0, 0.0, 0.75));
       next_blockage_t = t + 0.5;
     }
     const GnssSample g = gnss.Step(t - first, blockage);
     ins.Step(imu_dt, g.state != GnssState::kNone);
-    records.push_back(SynthesizeOxts(state, meas, g, ins, enu));
+    records.push_back(SynthesizeOxts(state, inertial_state, meas, g, ins, enu));
     rec_t.push_back(t);
     if (t >= first && t <= last_end) ++counts[static_cast<int>(g.state)];
     SLAM_MMS_RETURN_IF_ERROR(writer.AddImuOxts(stamp, records.back()));

@@ -48,8 +48,9 @@ int PosMode(GnssState s) {
   return 0;
 }
 
-OxtsRecord SynthesizeOxts(const BodyState& truth, const ImuSample& imu, const GnssSample& gnss,
-                          const InsErrorProcess& ins, const GeographicLib::LocalCartesian& enu) {
+OxtsRecord SynthesizeOxts(const BodyState& truth, const BodyState& inertial_truth,
+                          const ImuSample& imu, const GnssSample& gnss, const InsErrorProcess& ins,
+                          const GeographicLib::LocalCartesian& enu) {
   OxtsRecord r;
   const Eigen::Vector3d p = truth.T_world_body.translation() + gnss.error_enu_m;
   enu.Reverse(p.x(), p.y(), p.z(), r.lat_deg, r.lon_deg, r.alt_m);
@@ -57,7 +58,7 @@ OxtsRecord SynthesizeOxts(const BodyState& truth, const ImuSample& imu, const Gn
   r.roll_rad = rpy.x();
   r.pitch_rad = rpy.y();
   r.yaw_rad = std::remainder(rpy.z(), 2.0 * M_PI);
-  const Eigen::Vector3d v = truth.v_world_mps + ins.velocity_error();
+  const Eigen::Vector3d v = inertial_truth.v_world_mps + ins.velocity_error();
   r.ve = v.x();
   r.vn = v.y();
   r.vu = v.z();

@@ -25,7 +25,11 @@ class InsErrorProcess {
 
 int PosMode(GnssState s);
 
-OxtsRecord SynthesizeOxts(const BodyState& truth, const ImuSample& imu, const GnssSample& gnss,
-                          const InsErrorProcess& ins, const GeographicLib::LocalCartesian& enu);
+/// A record at `truth`'s time: positions and attitude from `truth`, velocities from
+/// `inertial_truth` (the same state, or an earlier one for KITTI-like lagging inertial outputs),
+/// accelerations and rates from `imu` (measured at `inertial_truth`).
+OxtsRecord SynthesizeOxts(const BodyState& truth, const BodyState& inertial_truth,
+                          const ImuSample& imu, const GnssSample& gnss, const InsErrorProcess& ins,
+                          const GeographicLib::LocalCartesian& enu);
 
 }  // namespace slam_mms::sim

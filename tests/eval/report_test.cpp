@@ -54,6 +54,7 @@ EvalReport SampleReport() {
   r.input.kind = "kitti_raw";
   r.input.scans_total = 150;
   r.input.imu_noise = "/drives/0013/imu_noise.yaml";
+  r.input.oxts_inertial_delay_s = 0.055;
   r.input.skipped_scans = {{"velodyne_points/data/0000000005.bin", "truncated: 1000 bytes"},
                            {"velodyne_points/data/0000000009.bin", "quote \" and \\ and \n"}};
   r.command_line = {"slam_mms_run", "--out=o", "--config", "a b.yaml"};
@@ -83,7 +84,8 @@ TEST(ReportTest, JsonHasTheSchemaKeysAndRoundTrips) {
   const Json& input = j["input"];
   EXPECT_EQ(Keys(input),
             (std::vector<std::string>{"drive", "kind", "scans", "scans_total", "scans_processed",
-                                      "duration_s", "ground_truth", "skipped_scans", "imu_noise"}));
+                                      "duration_s", "ground_truth", "skipped_scans", "imu_noise",
+                                      "oxts_inertial_delay_s"}));
   EXPECT_EQ(input["drive"], "2011_09_26_drive_0013_sync");
   EXPECT_EQ(input["kind"], "kitti_raw");
   EXPECT_EQ(input["scans"], 144);
@@ -96,6 +98,7 @@ TEST(ReportTest, JsonHasTheSchemaKeysAndRoundTrips) {
   EXPECT_EQ(input["skipped_scans"]["scans"][0]["source"], r.input.skipped_scans[0].source);
   EXPECT_EQ(input["skipped_scans"]["scans"][1]["reason"], r.input.skipped_scans[1].reason);
   EXPECT_EQ(input["imu_noise"], r.input.imu_noise);
+  EXPECT_EQ(input["oxts_inertial_delay_s"].get<double>(), 0.055);
 
   const Json& outages = j["gnss_outages"];
   ASSERT_EQ(outages.size(), 2u);
@@ -162,6 +165,7 @@ TEST(ReportTest, DoublesReadBackExactlyAndDefaultsAreNull) {
   EXPECT_EQ(j["input"]["skipped_scans"]["count"], 0);
   EXPECT_TRUE(j["input"]["skipped_scans"]["scans"].empty());
   EXPECT_TRUE(j["input"]["imu_noise"].is_null());
+  EXPECT_TRUE(j["input"]["oxts_inertial_delay_s"].is_null());
   EXPECT_TRUE(j["options"].is_null());
   EXPECT_TRUE(j["georef"].is_null());
   EXPECT_TRUE(j["extrinsics"].is_null());

@@ -256,5 +256,57 @@ TEST(DriveSimulatorTest, OxtsStartOffsetsTheWindowIntoTheRealMotion) {
   EXPECT_FALSE(DriveSimulator::Create(past).ok());
 }
 
+TEST(DriveSimulatorTest, KittiLikeOxtsInertialLagIsWrittenAndFoundByTheReader) {
+  // KITTI's OXTS writes its rates, accelerations and velocities about 50 ms behind its positions
+  // and attitudes: the simulator can do the same, and the reader finds the lag from the records
+  // (and stamps the IMU samples that much early); on time, it finds nothing to correct.
+  auto o = ShortDrive(3);
+  o.lead_in_s = 8.0;  // the demo route's first turn
+  o.duration_s = 2.0;
+  o.lidar.firings_per_revolution = 200;  // the scans do not matter here
+  for (const double lag : {0.0, 0.05}) {
+    const ScopedDir dir("sim_oxts_lag");
+    o.oxts_inertial_lag_s = lag;
+    const auto s = RunTo(o, dir);
+    auto reader = KittiRawReader::Open(s.drive_dir);
+    ASSERT_TRUE(reader.ok()) << reader.status().ToString();
+    ASSERT_TRUE(reader->oxts_inertial_delay_estimate().has_value());
+    const OxtsInertialDelay& e = *reader->oxts_inertial_delay_estimate();
+    SCOPED_TRACE("lag " + std::to_string(lag) + ": estimate " + std::to_string(e.delay_s) +
+                 " s, RMS " + std::to_string(e.rms_at_delay_radps) + " against " +
+                 std::to_string(e.rms_at_zero_radps) + " rad/s");
+    if (lag > 0.0) {
+      EXPECT_TRUE(e.clear);
+      EXPECT_NEAR(e.delay_s, lag, 0.0051);
+      EXPECT_EQ(reader->oxts_inertial_delay_s(), e.delay_s);
+    } else {
+      EXPECT_FALSE(e.clear);
+      EXPECT_EQ(reader->oxts_inertial_delay_s(), 0.0);
+    }
+    // The IMU samples are the records stamped that much early.
+    const std::vector<ImuSample> imu = reader->ImuSamples();
+    ASSERT_EQ(imu.size(), reader->ImuOxtsRecords().size());
+    EXPECT_EQ(imu[10].stamp,
+              reader->ImuOxtsRecords()[10].stamp.PlusSeconds(-reader->oxts_inertial_delay_s()));
+    // Positions and attitudes stay on time: the records' attitude is the truth's at their stamp.
+    const std::string json = ReadAll(s.drive_dir / "ground_truth" / "scenario.json");
+    EXPECT_NE(json.find("\"oxts_inertial_lag_s\": " + std::string(lag > 0.0 ? "0.05" : "0.0")),
+              std::string::npos);
+  }
+  // As recorded on request.
+  KittiRawReader::Options ro;
+  ro.oxts_inertial_delay_s = 0.0;
+  const ScopedDir dir("sim_oxts_lag_off");
+  const auto s = RunTo(o, dir);
+  auto reader = KittiRawReader::Open(s.drive_dir, ro);
+  ASSERT_TRUE(reader.ok());
+  EXPECT_FALSE(reader->oxts_inertial_delay_estimate().has_value());
+  EXPECT_EQ(reader->ImuSamples()[10].stamp, reader->ImuOxtsRecords()[10].stamp);
+  ro.oxts_inertial_delay_s = 0.7;
+  EXPECT_EQ(KittiRawReader::Open(s.drive_dir, ro).status().code(), StatusCode::kInvalidArgument);
+  o.oxts_inertial_lag_s = -0.01;
+  EXPECT_FALSE(DriveSimulator::Create(o).ok());
+}
+
 }  // namespace
 }  // namespace slam_mms::sim

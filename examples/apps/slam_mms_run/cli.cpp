@@ -108,6 +108,13 @@ Options:
                           KISS-ICP and CT-ICP do: KITTI's HDL-64E writes points about 0.2 deg too
                           low, which tilts LiDAR-only odometry in pitch). KITTI raw drives and
                           folders of KITTI .bin scans; not for other sensors or the simulator.
+  --kitti-oxts-delay auto|SECONDS
+                          KITTI raw drives: stamp each IMU sample (the OXTS rates and
+                          accelerations) SECONDS before its record. KITTI's OXTS writes them
+                          about 50 ms behind its positions, attitudes and the LiDAR; auto (the
+                          default) estimates the delay from the records (rates against the
+                          attitudes' derivative) and applies it where it is clear (0 for the
+                          simulator's records); 0 = as recorded.
   --calibrate-extrinsics  estimate the LiDAR boresight, lever arm and clock offset from the drive
                           against the offline POS first, write DIR/calib_imu_to_velo_estimated.txt
                           and report.json "extrinsics", and run with the estimate (config key
@@ -178,7 +185,7 @@ StatusOr<RunArgs> ParseRunArgs(int argc, const char* const* argv) {
   app.allow_windows_style_options(false);
   std::string kitti_raw, folder, rosbag, extrinsics, imu_noise, out, mode, pos, frames, config,
       sim_duration, sim_seed, log_level, dump_config, las_tile_size, checkpoint_every, preset,
-      vertical_correction;
+      vertical_correction, oxts_delay;
   std::vector<std::string> outages;
   app.add_flag("-h,--help", args.help);
   app.add_flag("--version", args.version);
@@ -192,6 +199,7 @@ StatusOr<RunArgs> ParseRunArgs(int argc, const char* const* argv) {
   app.add_option("--extrinsics", extrinsics);
   app.add_option("--imu-noise", imu_noise);
   app.add_option("--kitti-vertical-correction", vertical_correction);
+  app.add_option("--kitti-oxts-delay", oxts_delay);
   app.add_option("--out", out);
   app.add_option("--mode", mode);
   app.add_option("--pos", pos);
@@ -264,6 +272,18 @@ StatusOr<RunArgs> ParseRunArgs(int argc, const char* const* argv) {
     return InvalidArgumentError(
         "--kitti-vertical-correction is for KITTI's own recordings (--kitti-raw, or --folder "
         "with KITTI .bin scans), not for a bag or the simulated drive");
+  }
+  if (given("--kitti-oxts-delay") && oxts_delay != "auto") {
+    double d = 0.0;
+    if (!ParseDouble(oxts_delay, &d) || !(std::abs(d) <= 0.5)) {
+      return InvalidArgumentError("--kitti-oxts-delay " + oxts_delay +
+                                  ": expected auto or seconds within [-0.5, 0.5] (KITTI: 0.05)");
+    }
+    args.kitti_oxts_inertial_delay_s = d;
+  }
+  if (given("--kitti-oxts-delay") && args.kitti_raw.empty()) {
+    return InvalidArgumentError(
+        "--kitti-oxts-delay is for KITTI raw drives (--kitti-raw): the OXTS records' timing");
   }
   for (const std::string& o : outages) SLAM_MMS_RETURN_IF_ERROR(ParseOutage(o, &args));
   if (args.sim_scenario != "demo" && args.sim_scenario != "default" &&

@@ -34,6 +34,9 @@ struct RunArgs {
   std::filesystem::path imu_noise;
   /// --kitti-vertical-correction DEG (DriveSourceOptions::kitti_vertical_correction_deg); 0: none.
   double kitti_vertical_correction_deg = 0.0;
+  /// --kitti-oxts-delay auto|SECONDS (DriveSourceOptions::kitti_oxts_inertial_delay_s); unset
+  /// (auto) = estimated from the records.
+  std::optional<double> kitti_oxts_inertial_delay_s;
   std::filesystem::path out_dir;
   /// In run order (all = full, gnss_ins, gnss_ins_smoothed, lidar_only).
   std::vector<MappingMode> modes;

@@ -24,6 +24,7 @@ StatusOr<std::unique_ptr<DriveReader>> OpenRunInput(const RunArgs& args,
   o.extrinsics = args.extrinsics;
   o.imu_noise = args.imu_noise;
   o.kitti_vertical_correction_deg = args.kitti_vertical_correction_deg;
+  o.kitti_oxts_inertial_delay_s = args.kitti_oxts_inertial_delay_s;
   return OpenDrive(path, o);
 }
 

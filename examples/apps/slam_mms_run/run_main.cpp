@@ -240,6 +240,11 @@ RunFingerprint MakeFingerprint(const RunArgs& args, const fs::path& input,
     std::snprintf(v, sizeof(v), "%.17g", args.kitti_vertical_correction_deg);
     f["kitti_vertical_correction_deg"] = v;
   }
+  if (args.kitti_oxts_inertial_delay_s) {
+    char v[40];
+    std::snprintf(v, sizeof(v), "%.17g", *args.kitti_oxts_inertial_delay_s);
+    f["kitti_oxts_inertial_delay_s"] = v;
+  }
   f["options"] = options_json;
   std::string outages = "[";
   for (const auto& [start, duration] : args.gnss_outages) {

@@ -11,6 +11,7 @@
 #include "slam_mms/eval/ground_truth.hpp"
 #include "slam_mms/eval/map_entropy.hpp"
 #include "slam_mms/eval/report.hpp"
+#include "slam_mms/io/kitti_drive_reader.hpp"
 #include "slam_mms/io/map_io.hpp"
 #include "slam_mms/io/trajectory_io.hpp"
 #include "slam_mms_run/outputs.hpp"
@@ -169,6 +170,9 @@ void EvaluateAndReport(const ReportInput& in, std::vector<ModeRun>* runs_out,
                                                 : "kitti_raw";
   report.input.scans_total = static_cast<int64_t>(in.reader.NumScans());
   report.input.imu_noise = in.imu_noise;
+  if (const auto* kitti = dynamic_cast<const KittiDriveReader*>(&in.reader.Underlying())) {
+    report.input.oxts_inertial_delay_s = kitti->kitti().oxts_inertial_delay_s();
+  }
   // The skipped scans are the reader's, the same for every method: the first run's list.
   if (!runs.empty()) {
     for (const std::string& entry : runs.front().skipped_scans) {

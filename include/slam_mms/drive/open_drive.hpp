@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "slam_mms/core/status.hpp"
@@ -54,6 +55,10 @@ struct DriveSourceOptions {
   /// points as recorded. For KITTI's own drives only: other sensors and the simulator (without
   /// --elevation-bias) have no such defect. InvalidArgument beyond +-5 deg.
   double kitti_vertical_correction_deg = 0.0;
+  /// KITTI raw drives: how long before its OXTS record an IMU sample is stamped [s]
+  /// (KittiRawReader::Options::oxts_inertial_delay_s); unset = estimated from the records
+  /// (KITTI's own: 50-55 ms; the simulator's: 0). 0 = as recorded.
+  std::optional<double> kitti_oxts_inertial_delay_s;
 };
 
 /// The kind kAuto would pick for `path` (kKittiRaw where nothing else fits).

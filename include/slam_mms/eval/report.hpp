@@ -64,6 +64,9 @@ struct ReportInput {
   std::vector<SkippedScan> skipped_scans;
   /// Where the IMU noise model came from (an imu_noise.yaml); empty: the filter's defaults (null).
   std::string imu_noise;
+  /// KITTI raw input: how long before its OXTS record each IMU sample was stamped [s]
+  /// (KittiRawReader::oxts_inertial_delay_s); absent for other inputs (null).
+  std::optional<double> oxts_inertial_delay_s;
 };
 
 /// One method's numbers; nullopt is written as null.

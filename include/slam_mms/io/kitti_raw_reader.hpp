@@ -17,7 +17,9 @@
 //
 // Streams: OxtsRecords() are the POS records (10 Hz in sync, 100 Hz in extract) -> GnssFixes().
 // ImuOxtsRecords() are the records used as IMU: oxts_100hz/ when present, else the OXTS records
-// themselves -> ImuSamples().
+// themselves -> ImuSamples(), each stamped Options::oxts_inertial_delay_s before its record: by
+// default the delay EstimateOxtsInertialDelay finds in those records where it is clear (KITTI's
+// own: 50-55 ms; the simulator's records: 0), see slam_mms/io/oxts_timing.hpp.
 //
 // Per-point time (KITTI scans carry none): t = 0.5 (-atan2(y, x)/pi + 1) in [0, 1] for a clockwise
 // spin (KISS-ICP / CT-ICP; confirmed on drive 0013, see ARCHITECTURE.md), 0.5 (atan2(y, x)/pi + 1)
@@ -42,6 +44,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -49,6 +52,7 @@
 #include "slam_mms/core/status.hpp"
 #include "slam_mms/core/timestamp.hpp"
 #include "slam_mms/io/oxts_record.hpp"
+#include "slam_mms/io/oxts_timing.hpp"
 
 namespace slam_mms {
 
@@ -88,6 +92,11 @@ class KittiRawReader {
     /// [first scan start - margin, last scan end + margin] [s]. Sync 10 Hz records are instead
     /// restricted to the frame range.
     double imu_time_margin_s = 1.0;
+    /// How long before its record's time an IMU sample (ImuSamples) is stamped [s]: KITTI's OXTS
+    /// rates and accelerations lag its positions, attitudes and the LiDAR (oxts_timing.hpp).
+    /// Unset (the default): EstimateOxtsInertialDelay on ImuOxtsRecords(), applied where the
+    /// estimate is clear, else 0. 0 = as recorded. Within [-0.5, 0.5] s.
+    std::optional<double> oxts_inertial_delay_s;
 
     [[nodiscard]] Status Validate() const;
   };
@@ -131,8 +140,12 @@ class KittiRawReader {
 
   /// ToGnssFix of every OxtsRecords() entry.
   std::vector<GnssFix> GnssFixes() const;
-  /// ToImuSample of every ImuOxtsRecords() entry.
+  /// ToImuSample of every ImuOxtsRecords() entry, stamped oxts_inertial_delay_s() before it.
   std::vector<ImuSample> ImuSamples() const;
+  /// The delay applied to ImuSamples() [s] (Options::oxts_inertial_delay_s or the clear estimate).
+  double oxts_inertial_delay_s() const;
+  /// The estimate where the option was unset and there were records to estimate from.
+  const std::optional<OxtsInertialDelay>& oxts_inertial_delay_estimate() const;
 
   /// From calib_imu_to_velo.txt: maps points of the IMU/OXTS (body) frame into the lidar frame.
   const Eigen::Isometry3d& T_lidar_body() const;

@@ -112,6 +112,11 @@ class DriveSimulator {
     double ins_roll_pitch_sigma_rad = 5.2e-4;  ///< 0.03 deg
     double ins_yaw_sigma_rad = 1.7e-3;         ///< 0.1 deg
     double ins_velocity_sigma_mps = 0.02;
+    /// KITTI-like (docs/io.md, "KITTI's OXTS timing"): the OXTS records' inertial outputs
+    /// (velocities, accelerations, angular rates, so the IMU the library reads) describe the
+    /// motion this long before the record's time [s], their positions and attitudes on time.
+    /// 0 = on time (default); KITTI's recordings: about 0.05. In [0, 0.5].
+    double oxts_inertial_lag_s = 0.0;
     int num_threads = 2;
     bool write_scene_cloud = true;
     double scene_cloud_voxel_m = 0.1;

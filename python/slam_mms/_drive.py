@@ -230,7 +230,8 @@ def _evaluate(result: DriveResult, drive: pathlib.Path, gnss_outages, num_thread
         [(_C.mapping_mode_name(run.mode), method)], gt_map_mme,
         kind=_READER_KINDS.get(type(reader).__name__, ""), scans_total=len(reader),
         skipped_scans=[_split_skipped(s) for s in run.skipped_scans], complete=run.complete,
-        imu_noise=_imu_noise_used(result.options, reader))
+        imu_noise=_imu_noise_used(result.options, reader),
+        oxts_inertial_delay_s=_C.oxts_inertial_delay_s(reader))
     result.extra["method_report"] = method
     result.extra["ground_truth_kind"] = gt_kind or "none"
     result.extra["ground_truth_map_mme"] = gt_map_mme

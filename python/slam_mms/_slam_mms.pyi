@@ -1312,6 +1312,11 @@ class LocalizerOptions:
     @lidar_only_initial_velocity.setter
     def lidar_only_initial_velocity(self, value: bool) -> None: ...
     @property
+    def refine_constant_velocity_deskew(self) -> bool:
+        """a constant-velocity de-skew is refined from the registration (second pass)"""
+    @refine_constant_velocity_deskew.setter
+    def refine_constant_velocity_deskew(self, value: bool) -> None: ...
+    @property
     def archive_surfels(self) -> bool:
         ...
     @archive_surfels.setter
@@ -2265,7 +2270,7 @@ def _install_log_sink(emit: object) -> None:
 def _log(level: LogLevel, message: str) -> None:
     """Sends one message through the library's log path (for tests)."""
 
-def _open_drive(path: os.PathLike[str], kind: str = 'auto', first_frame: int = 0, last_frame: int = -1, lidar_topic: str = '', imu_topic: str = '', gnss_topic: str = '', extrinsics: os.PathLike[str] = '') -> DriveReader:
+def _open_drive(path: os.PathLike[str], kind: str = 'auto', first_frame: int = 0, last_frame: int = -1, lidar_topic: str = '', imu_topic: str = '', gnss_topic: str = '', extrinsics: os.PathLike[str] = '', kitti_vertical_correction_deg: float = 0.0) -> DriveReader:
     """The C++ OpenDrive: a KITTI raw folder, a plain drive folder or a ROS 1 bag as a DriveReader (kind 'auto' detects it)."""
 
 def _remove_log_sink() -> None:
@@ -2334,6 +2339,9 @@ def options_to_json(options: Options) -> str:
 def options_to_yaml(options: Options) -> str:
     """Every --config key of options as YAML with a type/default comment each, as slam_mms_run --dump-config writes it (apply_config_text reads it back unchanged)."""
 
+def oxts_inertial_delay_s(reader: DriveReader) -> Optional[float]:
+    """KITTI raw drives: how long before its OXTS record each IMU sample is stamped [s] (KittiRawReader::oxts_inertial_delay_s: KITTI's OXTS rates lag its attitudes; estimated from the records); None for other drives."""
+
 def parse_mapping_mode(name: str) -> MappingMode:
     ...
 
@@ -2352,8 +2360,8 @@ def plot_trajectories_top_view(ground_truth: Trajectory, ground_truth_name: str,
 def read_ply(path: os.PathLike[str]) -> numpy.ndarray:
     """N x 4 float32 [x y z intensity]."""
 
-def report_to_json(drive: str, scans: int, duration_s: float, ground_truth: str, gnss_outages: List[Tuple[float, float]], methods: List[Tuple[str, MethodReport]], ground_truth_map_mme: Optional[float] = None, *, kind: str = '', scans_total: int = -1, skipped_scans: List[Tuple[str, str]] = [], command_line: List[str] = [], options_json: str = '', georef_json: str = '', complete: bool = True, outputs: List[str] = [], imu_noise: str = '') -> str:
-    """report.json text by the C++ writer (the schema of eval/report.hpp): kind (kitti_raw|folder|rosbag|simulated, '' = null), scans_total (< 0 = null), skipped_scans [(source, reason)], command_line, options_json / georef_json (JSON object texts, '' = null), complete, outputs (file names), imu_noise (the IMU noise file used, '' = null)."""
+def report_to_json(drive: str, scans: int, duration_s: float, ground_truth: str, gnss_outages: List[Tuple[float, float]], methods: List[Tuple[str, MethodReport]], ground_truth_map_mme: Optional[float] = None, *, kind: str = '', scans_total: int = -1, skipped_scans: List[Tuple[str, str]] = [], command_line: List[str] = [], options_json: str = '', georef_json: str = '', complete: bool = True, outputs: List[str] = [], imu_noise: str = '', oxts_inertial_delay_s: Optional[float] = None) -> str:
+    """report.json text by the C++ writer (the schema of eval/report.hpp): kind (kitti_raw|folder|rosbag|simulated, '' = null), scans_total (< 0 = null), skipped_scans [(source, reason)], command_line, options_json / georef_json (JSON object texts, '' = null), complete, outputs (file names), imu_noise (the IMU noise file used, '' = null), oxts_inertial_delay_s (KITTI raw: the IMU stamps' delay, None = null)."""
 
 def run_app(argv: List[str]) -> int:
     """Runs slam_mms_run with argv (argv[0] the program name) in this process; returns its exit status (0 done, 1 input or processing error, 2 bad command line or config, 130/143 stopped by SIGINT/SIGTERM). Progress goes to stdout, messages to stderr."""

@@ -301,9 +301,10 @@ void RegisterEval(py::module_& m) {
              const std::vector<std::pair<std::string, std::string>>& skipped_scans,
              const std::vector<std::string>& command_line, const std::string& options_json,
              const std::string& georef_json, bool complete, const std::vector<std::string>& outputs,
-             const std::string& imu_noise) {
+             const std::string& imu_noise, std::optional<double> oxts_inertial_delay_s) {
             EvalReport r;
             r.input.imu_noise = imu_noise;
+            r.input.oxts_inertial_delay_s = oxts_inertial_delay_s;
             r.input.drive = drive;
             r.input.kind = kind;
             r.input.scans = scans;
@@ -330,10 +331,12 @@ void RegisterEval(py::module_& m) {
           py::arg("command_line") = std::vector<std::string>(), py::arg("options_json") = "",
           py::arg("georef_json") = "", py::arg("complete") = true,
           py::arg("outputs") = std::vector<std::string>(), py::arg("imu_noise") = "",
+          py::arg("oxts_inertial_delay_s") = py::none(),
           "report.json text by the C++ writer (the schema of eval/report.hpp): kind "
           "(kitti_raw|folder|rosbag|simulated, '' = null), scans_total (< 0 = null), skipped_scans "
           "[(source, reason)], command_line, options_json / georef_json (JSON object texts, '' = "
-          "null), complete, outputs (file names), imu_noise (the IMU noise file used, '' = null).");
+          "null), complete, outputs (file names), imu_noise (the IMU noise file used, '' = null), "
+          "oxts_inertial_delay_s (KITTI raw: the IMU stamps' delay, None = null).");
   m.def("peak_rss_mb", &PeakRssMb, "Peak resident set size of this process [MB] (Linux).");
 
   // ---- map files ----

@@ -3,6 +3,7 @@
 // drive folder and the ROS 1 bag readers where their headers/modules exist at configure time.
 
 #include <limits>
+#include <optional>
 
 #include "common.hpp"
 #include "slam_mms/io/drive_reader.hpp"
@@ -283,6 +284,18 @@ void RegisterReaders(py::module_& m) {
       });
   m.attr("KittiDriveReader") = m.attr("KittiRawReader");
 
+  m.def(
+      "oxts_inertial_delay_s",
+      [](const DriveReader& reader) -> std::optional<double> {
+        if (const auto* k = dynamic_cast<const KittiDriveReader*>(&reader.Underlying())) {
+          return k->kitti().oxts_inertial_delay_s();
+        }
+        return std::nullopt;
+      },
+      py::arg("reader"),
+      "KITTI raw drives: how long before its OXTS record each IMU sample is stamped [s] "
+      "(KittiRawReader::oxts_inertial_delay_s: KITTI's OXTS rates lag its attitudes; estimated "
+      "from the records); None for other drives.");
 #ifdef SLAM_MMS_PY_WITH_OPEN_DRIVE
   m.def(
       "_open_drive",

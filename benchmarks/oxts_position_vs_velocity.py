@@ -62,14 +62,20 @@ def read_drive(path):
     return t, a[: len(t)]
 
 
-def agreement(t, a, window_s=1.0, min_distance_m=5.0, max_gap_s=0.5, velocity_lag_s=0.0):
+def east_north(a):
+    """The records' positions in a local east/north frame at the first one [m], with the WGS-84
+    radii of curvature there."""
     lat0 = math.radians(a[0, 0])
     w = math.sqrt(1.0 - E2 * math.sin(lat0) ** 2)
     m_radius = A * (1.0 - E2) / w**3
     n_radius = A / w
     east = np.radians(a[:, 1] - a[0, 1]) * n_radius * math.cos(lat0)
     north = np.radians(a[:, 0] - a[0, 0]) * m_radius
-    p = np.c_[east, north]
+    return np.c_[east, north]
+
+
+def agreement(t, a, window_s=1.0, min_distance_m=5.0, max_gap_s=0.5, velocity_lag_s=0.0):
+    p = east_north(a)
     v = np.c_[a[:, 7], a[:, 6]]  # ve, vn
     if velocity_lag_s != 0.0:
         # The velocity recorded at t taken as the one at t - lag (read it lag later).
@@ -113,10 +119,7 @@ def acceleration_lag(t, a, lags):
     """The lag of the recorded horizontal accelerations (af, al: level frame, rotated by the yaw
     to east/north) that fits the positions' second differences best (RMS over records whose two
     neighbours are 0.09-0.12 s away)."""
-    lat0 = math.radians(a[0, 0])
-    w = math.sqrt(1.0 - E2 * math.sin(lat0) ** 2)
-    p = np.c_[np.radians(a[:, 1] - a[0, 1]) * (A / w) * math.cos(lat0),
-              np.radians(a[:, 0] - a[0, 0]) * A * (1.0 - E2) / w**3]
+    p = east_north(a)
     yaw, af, al = a[:, 5], a[:, 14], a[:, 15]
     acc = np.c_[af * np.cos(yaw) - al * np.sin(yaw), af * np.sin(yaw) + al * np.cos(yaw)]
     dt = np.diff(t)

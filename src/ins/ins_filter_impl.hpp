@@ -102,6 +102,7 @@ struct InsFilter::Impl {
   Eigen::Vector3d zaru_sum = Eigen::Vector3d::Zero();
   int zaru_n = 0;
   int num_zupt = 0;
+  int num_nhc_refused = 0;
 
   static int ModelIndex(GnssFixType t) {
     return t >= GnssFixType::kRtkFixed ? 0 : t == GnssFixType::kRtkFloat ? 1 : 2;
@@ -290,8 +291,21 @@ struct InsFilter::Impl {
       const Eigen::Vector2d z = -vb.tail<2>();
       const Eigen::Matrix2d Rm =
           options.nhc_sigma_mps * options.nhc_sigma_mps * Eigen::Matrix2d::Identity();
-      Update<2>(H, z, Rm);
       last_nhc = t;
+      // The innovation test: where the vehicle does not keep to its x axis (not a car, a skid,
+      // an IMU mounted otherwise, broken input motion), the constraint is refused rather than
+      // pulled against the GNSS (chi-square, 2 dof, 99.9 %).
+      constexpr double kNhcGateChi2 = 13.82;
+      const Eigen::Matrix2d S = H * P * H.transpose() + Rm;
+      if (z.dot(S.ldlt().solve(z)) > kNhcGateChi2) {
+        if (num_nhc_refused++ == 0) {
+          SLAM_MMS_LOG(kInfo) << "InsFilter: the non-holonomic constraint does not hold (body y/z "
+                              << "velocity " << -z.x() << " / " << -z.y()
+                              << " m/s): refused where it fails its innovation test";
+        }
+        return;
+      }
+      Update<2>(H, z, Rm);
       Record();
     }
   }

@@ -391,7 +391,7 @@ Status FeedDrive(const slam_mms::DriveReader& reader, MappingMode mode, const Ar
   options.localizer.spill_dir = a.spill_dir;
   options.T_body_lidar = in.T_body_lidar;
   if (in.t_body_antenna_m) options.ins.gnss.t_body_antenna = *in.t_body_antenna_m;
-  options = slam_mms::ApplyInputImuNoise(options, in);  // as RunDrive does
+  options = slam_mms::ApplyInputModels(options, in);  // as RunDrive does
   std::vector<slam_mms::InsState> pos;
   if (!in.pos.empty()) {
     options.origin = slam_mms::GeodeticPoint{in.pos.front().latitude_deg,

@@ -76,17 +76,24 @@ bool UsesStatedImuNoise(const MappingSystem::Options& options, const DriveStream
   return options.use_stated_imu_noise && streams.imu_noise.has_value();
 }
 
-MappingSystem::Options ApplyInputImuNoise(const MappingSystem::Options& options,
-                                          const DriveStreams& streams) {
+bool UsesVehicleConstraint(const MappingSystem::Options& options, const DriveStreams& streams) {
+  return streams.imu_frame_is_vehicle_frame && options.vehicle_nhc_sigma_mps > 0.0 &&
+         options.ins.nhc_sigma_mps == 0.0;
+}
+
+MappingSystem::Options ApplyInputModels(const MappingSystem::Options& options,
+                                        const DriveStreams& streams) {
   MappingSystem::Options out = options;
   if (UsesStatedImuNoise(options, streams)) out.SetImuNoise(*streams.imu_noise);
+  if (UsesVehicleConstraint(options, streams))
+    out.ins.nhc_sigma_mps = options.vehicle_nhc_sigma_mps;
   return out;
 }
 
 StatusOr<OfflinePos> ComputeOfflinePos(const DriveReader& reader,
                                        const MappingSystem::Options& input_options) {
   const DriveStreams& in = reader.streams();
-  const MappingSystem::Options options = ApplyInputImuNoise(input_options, in);
+  const MappingSystem::Options options = ApplyInputModels(input_options, in);
   OfflinePos out;
   if (in.pos.empty()) {
     PosSmoother::Options so;
@@ -139,9 +146,13 @@ DriveRun RunMethod(const DriveReader& reader, const MappingSystem::Options& base
   run.scans_total = reader.NumScans();
   const auto t0 = std::chrono::steady_clock::now();
 
-  MappingSystem::Options options = ApplyInputImuNoise(base_options, in);
+  MappingSystem::Options options = ApplyInputModels(base_options, in);
   if (UsesStatedImuNoise(options, in)) {
     SLAM_MMS_LOG(kInfo) << reader.Describe() << ": IMU noise as stated in " << in.imu_noise_source;
+  }
+  if (UsesVehicleConstraint(base_options, in)) {
+    SLAM_MMS_LOG(kInfo) << reader.Describe() << ": the IMU frame is the vehicle's; POS with the "
+                        << "non-holonomic constraint (" << options.ins.nhc_sigma_mps << " m/s)";
   }
   const bool smooth =
       base_options.mode == MappingMode::kGnssInsSmoothed ||

@@ -65,6 +65,8 @@ KittiDriveReader::KittiDriveReader(KittiRawReader reader) : reader_(std::move(re
     s.initial_attitude_sigma_rpy_rad = kOxtsAttitudeSigmaRpyRad;
   }
   s.T_body_lidar = reader_.T_body_lidar();
+  // The OXTS RT3003's frame: x forward, y left, z up, on the car (KITTI's setup).
+  s.imu_frame_is_vehicle_frame = true;
 }
 
 std::string KittiDriveReader::Describe() const {

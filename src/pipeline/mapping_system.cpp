@@ -56,6 +56,10 @@ Status MappingSystem::Options::Validate() const {
     return internal::OptionError("MappingSystem::Options", "max_pos_jump_rad", max_pos_jump_rad,
                                  "must be > 0");
   }
+  if (!(vehicle_nhc_sigma_mps >= 0.0) || !std::isfinite(vehicle_nhc_sigma_mps)) {
+    return internal::OptionError("MappingSystem::Options", "vehicle_nhc_sigma_mps",
+                                 vehicle_nhc_sigma_mps, "must be >= 0 (0: never)");
+  }
   if (num_threads < 1 || num_threads > 64) {
     return internal::OptionError("MappingSystem::Options", "num_threads", num_threads,
                                  "must be in [1, 64]");

@@ -93,7 +93,7 @@ TEST_F(DriveRunnerTest, GivesExactlyWhatAHandFedSystemGives) {
   // By hand: the IMU noise the drive states, the initial state, then IMU/GNSS up to each scan's
   // end, then the scan.
   const DriveStreams& in = reader->streams();
-  auto system = MappingSystem::Create(ApplyInputImuNoise(options, in));
+  auto system = MappingSystem::Create(ApplyInputModels(options, in));
   ASSERT_TRUE(system.ok());
   ASSERT_TRUE(in.initial_state.has_value());
   // A KITTI drive's POS record states the OXTS RT3003's attitude accuracy (0.03 / 0.03 / 0.1 deg).
@@ -326,12 +326,12 @@ TEST_F(DriveRunnerTest, StatedImuNoiseIsAppliedUnlessSwitchedOff) {
   MappingSystem::Options options = OptionsFor(MappingMode::kGnssIns, *reader);
   EXPECT_FALSE(options.use_stated_imu_noise);  // off by default (docs/ins.md)
   options.use_stated_imu_noise = true;
-  const MappingSystem::Options applied = ApplyInputImuNoise(options, in);
+  const MappingSystem::Options applied = ApplyInputModels(options, in);
   EXPECT_EQ(applied.ins.gyro_noise_density, in.imu_noise->gyro_noise_density);
   EXPECT_EQ(applied.localizer.imu.accel_bias_random_walk, in.imu_noise->AccelBiasRandomWalk());
   EXPECT_NE(applied.ins.gyro_noise_density, options.ins.gyro_noise_density);
   options.use_stated_imu_noise = false;
-  EXPECT_EQ(ApplyInputImuNoise(options, in).ins.gyro_noise_density, options.ins.gyro_noise_density);
+  EXPECT_EQ(ApplyInputModels(options, in).ins.gyro_noise_density, options.ins.gyro_noise_density);
   const DriveRun off = RunDrive(*reader, options);
   options.use_stated_imu_noise = true;
   const DriveRun on = RunDrive(*reader, options);
@@ -339,6 +339,45 @@ TEST_F(DriveRunnerTest, StatedImuNoiseIsAppliedUnlessSwitchedOff) {
   ASSERT_EQ(off.trajectory.size(), on.trajectory.size());
   EXPECT_FALSE(off.trajectory.poses().back().T_world_body.isApprox(
       on.trajectory.poses().back().T_world_body, 1e-12));
+}
+
+// A KITTI raw drive states that its IMU frame is the vehicle's: where vehicle_nhc_sigma_mps is
+// set, RunDrive's POS then holds the non-holonomic constraint, unless the caller set
+// ins.nhc_sigma_mps itself; an input that does not state it gets none.
+TEST_F(DriveRunnerTest, VehicleConstraintWhereTheInputStatesItsImuFrame) {
+  auto reader = Open(sim_->drive_dir);
+  ASSERT_NE(reader, nullptr);
+  DriveStreams in = reader->streams();
+  EXPECT_TRUE(in.imu_frame_is_vehicle_frame);
+  MappingSystem::Options options = OptionsFor(MappingMode::kGnssIns, *reader);
+  EXPECT_EQ(options.ins.nhc_sigma_mps, 0.0);
+  EXPECT_EQ(options.vehicle_nhc_sigma_mps, 0.0);  // off by default (docs/ins.md)
+  EXPECT_FALSE(UsesVehicleConstraint(options, in));
+  options.vehicle_nhc_sigma_mps = 0.1;
+  EXPECT_TRUE(UsesVehicleConstraint(options, in));
+  EXPECT_EQ(ApplyInputModels(options, in).ins.nhc_sigma_mps, options.vehicle_nhc_sigma_mps);
+  MappingSystem::Options own = options;
+  own.ins.nhc_sigma_mps = 0.3;  // the caller's own value wins
+  EXPECT_FALSE(UsesVehicleConstraint(own, in));
+  EXPECT_EQ(ApplyInputModels(own, in).ins.nhc_sigma_mps, 0.3);
+  MappingSystem::Options never = options;
+  never.vehicle_nhc_sigma_mps = 0.0;
+  EXPECT_EQ(ApplyInputModels(never, in).ins.nhc_sigma_mps, 0.0);
+  DriveStreams unknown = in;
+  unknown.imu_frame_is_vehicle_frame = false;
+  EXPECT_FALSE(UsesVehicleConstraint(options, unknown));
+  EXPECT_EQ(ApplyInputModels(options, unknown).ins.nhc_sigma_mps, 0.0);
+  MappingSystem::Options bad = options;
+  bad.vehicle_nhc_sigma_mps = -0.1;
+  EXPECT_EQ(bad.Validate().code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(bad.Validate().message().find("vehicle_nhc_sigma_mps"), std::string::npos);
+  // The constraint changes the POS.
+  const DriveRun with = RunDrive(*reader, options);
+  const DriveRun without = RunDrive(*reader, never);
+  ASSERT_TRUE(with.status.ok() && without.status.ok());
+  ASSERT_EQ(with.trajectory.size(), without.trajectory.size());
+  EXPECT_FALSE(with.trajectory.poses().back().T_world_body.isApprox(
+      without.trajectory.poses().back().T_world_body, 1e-12));
 }
 
 TEST(DriveRunOptionsTest, PosWorkflowNames) {

@@ -263,6 +263,7 @@ const std::vector<std::pair<std::string, KeyHandler>>& Handlers() {
     SLAM_MMS_KEY_D("max_pos_jump_rad", o->system.max_pos_jump_rad);
     SLAM_MMS_KEY_I("num_threads", o->system.num_threads);
     SLAM_MMS_KEY_B("use_stated_imu_noise", o->system.use_stated_imu_noise);
+    SLAM_MMS_KEY_D("vehicle_nhc_sigma_mps", o->system.vehicle_nhc_sigma_mps);
     // POS (InsFilter).
     SLAM_MMS_KEY_D("ins.gyro_noise_density", o->system.ins.gyro_noise_density);
     SLAM_MMS_KEY_D("ins.accel_noise_density", o->system.ins.accel_noise_density);

@@ -117,11 +117,19 @@ struct DriveRunCallbacks {
 /// models the IMU with it.
 bool UsesStatedImuNoise(const MappingSystem::Options& options, const DriveStreams& streams);
 
-/// `options` with the IMU noise `streams` state (MappingSystem::Options::SetImuNoise) where
-/// UsesStatedImuNoise; else `options` unchanged. RunDrive, ComputeOfflinePos and
-/// CalibrateDriveExtrinsics apply it themselves.
-MappingSystem::Options ApplyInputImuNoise(const MappingSystem::Options& options,
-                                          const DriveStreams& streams);
+/// True where ApplyInputModels turns the non-holonomic constraint on: the input states that its
+/// IMU frame is the vehicle's (DriveStreams::imu_frame_is_vehicle_frame),
+/// options.vehicle_nhc_sigma_mps > 0 and options.ins.nhc_sigma_mps is 0 (not set by the caller).
+bool UsesVehicleConstraint(const MappingSystem::Options& options, const DriveStreams& streams);
+
+/// `options` with what the input states about its sensors applied: the IMU noise
+/// (MappingSystem::Options::SetImuNoise) where UsesStatedImuNoise, and the vehicle's
+/// non-holonomic constraint (ins.nhc_sigma_mps = vehicle_nhc_sigma_mps) where
+/// UsesVehicleConstraint; else `options` unchanged. RunDrive, ComputeOfflinePos and
+/// CalibrateDriveExtrinsics apply it themselves; hosts that build a MappingSystem for a
+/// DriveReader's streams call it first.
+MappingSystem::Options ApplyInputModels(const MappingSystem::Options& options,
+                                        const DriveStreams& streams);
 
 /// Runs `options.mode` over `reader`. options.T_body_lidar is used as given (set it from
 /// reader.streams().T_body_lidar); an options error is returned in DriveRun::status.

@@ -98,9 +98,9 @@ class InsFilter {
     /// (InitializeAttitude's sigma_rpy_rad: a KITTI OXTS record, initial_state.csv's sigma
     /// columns, a bag's orientation_covariance); false: always the init sigmas above. Off by
     /// default: with this filter's default IMU model (3-25x a tactical IMU's noise) the stated
-    /// prior outweighs what GNSS and motion tell of the attitude, so a record 2 sigma off stays
-    /// 2 sigma off (demo drive: smoothed POS 0.20 deg against 0.04; docs/sweep.md, session 18);
-    /// it helps where the IMU model is right or GNSS is weak (the sweep's float/SPS drives).
+    /// prior outweighs what GNSS and motion tell of the attitude (docs/sweep.md, fix 5); with the
+    /// stated IMU noise and the vehicle constraint it helps most drives but not all (docs/ins.md,
+    /// "A land vehicle's POS").
     bool use_stated_attitude_sigma = false;
     double max_imu_gap_s = 0.6;         ///< Longer IMU gaps are bridged but logged [s].
     double max_fix_latency_s = 0.25;    ///< Older fixes (than the state) are rejected [s].
@@ -126,7 +126,9 @@ class InsFilter {
     double zupt_max_speed_mps = 0.2;  ///< Estimated speed must be below this [m/s].
     double zupt_sigma_mps = 0.01;     ///< Zero-velocity measurement sigma [m/s].
     double zupt_interval_s = 0.1;     ///< At most one ZUPT (and ZARU) per interval [s].
-    /// Non-holonomic constraint sigma on the body y/z velocity [m/s]; 0 = off (default).
+    /// Non-holonomic constraint sigma on the body y/z velocity [m/s]; 0 = off (default here;
+    /// RunDrive sets MappingSystem::Options::vehicle_nhc_sigma_mps where the input's IMU frame is
+    /// the vehicle's, see ApplyInputModels).
     double nhc_sigma_mps = 0.0;
     double nhc_min_speed_mps = 1.0;  ///< Applied above this estimated speed [m/s].
     /// Keep every step (InsFilterStep) since the initialisation for a forward-backward smoother

@@ -74,6 +74,12 @@ struct DriveStreams {
   Eigen::Isometry3d T_body_lidar = Eigen::Isometry3d::Identity();
   /// GNSS antenna lever arm in body [m] where the input gives one.
   std::optional<Eigen::Vector3d> t_body_antenna_m;
+  /// True where the input states that its IMU (body) frame is the vehicle's: x forward, z up,
+  /// mounted on a wheeled vehicle, so that its sideways and vertical velocities stay near zero
+  /// (the non-holonomic constraint, MappingSystem::Options::vehicle_nhc_sigma_mps). KITTI raw
+  /// (the OXTS frame, also the simulator's drives): true. A folder or a bag says nothing of the
+  /// IMU's mounting: false.
+  bool imu_frame_is_vehicle_frame = false;
 };
 
 class DriveReader {

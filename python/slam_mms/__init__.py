@@ -118,6 +118,7 @@ plot_trajectories_top_view = _C.plot_trajectories_top_view
 plot_position_errors = _C.plot_position_errors
 plot_map_height = _C.plot_map_height
 write_scan_results_csv = _C.write_scan_results_csv
+apply_input_models = _C.apply_input_models
 parse_mapping_mode = _C.parse_mapping_mode
 set_min_log_level = _C.set_min_log_level
 flush_log = _C.flush_log

@@ -302,6 +302,9 @@ class DriveStreams:
     def imu_noise_source(self) -> str:
         ...
     @property
+    def imu_frame_is_vehicle_frame(self) -> bool:
+        """True where the input states that its IMU frame is the vehicle's (KITTI raw)."""
+    @property
     def T_body_lidar(self) -> numpy.ndarray:
         ...
     @property
@@ -1663,6 +1666,11 @@ class Options:
         """Model the IMU with the noise its input states (run_drive; DriveStreams.imu_noise)."""
     @use_stated_imu_noise.setter
     def use_stated_imu_noise(self, value: bool) -> None: ...
+    @property
+    def vehicle_nhc_sigma_mps(self) -> float:
+        """Non-holonomic constraint sigma [m/s] run_drive sets as ins.nhc_sigma_mps where the input's IMU frame is the vehicle's (DriveStreams.imu_frame_is_vehicle_frame) and ins.nhc_sigma_mps is 0; 0: never."""
+    @vehicle_nhc_sigma_mps.setter
+    def vehicle_nhc_sigma_mps(self, value: float) -> None: ...
     def validate(self: Options) -> None:
         """Raises ValueError naming the first bad field and its rule."""
     def set_imu_noise(self: Options, spec: ImuNoiseSpec) -> None:
@@ -2287,6 +2295,9 @@ def apply_config_file(path: os.PathLike[str], options: Options) -> None:
 
 def apply_config_text(text: str, options: Options, name: str = '<config>') -> None:
     """apply_config_file on YAML text already read; `name` is used in messages."""
+
+def apply_input_models(options: Options, streams: DriveStreams) -> Options:
+    """A copy of options with what the input states about its sensors applied, as run_drive does: the stated IMU noise (use_stated_imu_noise) and the vehicle's non-holonomic constraint where its IMU frame is the vehicle's (vehicle_nhc_sigma_mps). For hosts that feed a MappingSystem from a reader's streams themselves."""
 
 def check_geo_output_options(crs: str = '', las_tile_size_m: float = 0.0) -> None:
     """Raises ValueError for an unusable --crs or --las-tile-size (before any processing)."""

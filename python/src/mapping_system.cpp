@@ -501,6 +501,17 @@ void RegisterMappingSystem(py::module_& m) {
       "Writes LocalizationResults (MappingSystem.results) as slam_mms_run's <mode>_scans.csv.");
 
   m.def(
+      "apply_input_models",
+      [](const MappingSystem::Options& options, const DriveStreams& streams) {
+        return ApplyInputModels(options, streams);
+      },
+      py::arg("options"), py::arg("streams"),
+      "A copy of options with what the input states about its sensors applied, as run_drive "
+      "does: the stated IMU noise (use_stated_imu_noise) and the vehicle's non-holonomic "
+      "constraint where its IMU frame is the vehicle's (vehicle_nhc_sigma_mps). For hosts that "
+      "feed a MappingSystem from a reader's streams themselves.");
+
+  m.def(
       "_run_drive",
       [](const DriveReader& reader, const MappingSystem::Options& options, py::object progress,
          PosWorkflow pos, bool estimate_extrinsics) {

@@ -381,6 +381,10 @@ void RegisterOptions(py::module_& m) {
       .Field("num_threads", &MO::num_threads, "The one thread count, in [1, 64].")
       .Field("use_stated_imu_noise", &MO::use_stated_imu_noise,
              "Model the IMU with the noise its input states (run_drive; DriveStreams.imu_noise).")
+      .Field("vehicle_nhc_sigma_mps", &MO::vehicle_nhc_sigma_mps,
+             "Non-holonomic constraint sigma [m/s] run_drive sets as ins.nhc_sigma_mps where the "
+             "input's IMU frame is the vehicle's (DriveStreams.imu_frame_is_vehicle_frame) and "
+             "ins.nhc_sigma_mps is 0; 0: never.")
       .Validated()
       .Done()
       .def(

@@ -160,6 +160,8 @@ void RegisterReaders(py::module_& m) {
       .def_readonly("imu_noise", &DS::imu_noise,
                     "ImuNoiseSpec as the input states it (imu_noise.yaml), or None.")
       .def_readonly("imu_noise_source", &DS::imu_noise_source)
+      .def_readonly("imu_frame_is_vehicle_frame", &DS::imu_frame_is_vehicle_frame,
+                    "True where the input states that its IMU frame is the vehicle's (KITTI raw).")
       .def_property_readonly("T_body_lidar",
                              [](const DS& s) { return IsometryToArray(s.T_body_lidar); })
       .def_readonly("t_body_antenna_m", &DS::t_body_antenna_m, "(3,) or None.");

@@ -34,7 +34,7 @@ def test_every_field_is_exposed():
     assert slam_mms.Options._fields == (
         "mode", "T_body_lidar", "origin", "gnss_outages", "ins", "localizer", "level2",
         "map_max_range_m", "map_voxel_m", "max_pos_jump_m", "max_pos_jump_rad", "num_threads",
-        "use_stated_imu_noise")
+        "use_stated_imu_noise", "vehicle_nhc_sigma_mps")
     d = slam_mms.Options().to_dict()
     assert d["localizer"]["icp"]["max_iterations"] == 20
     assert d["mode"] == "FULL"

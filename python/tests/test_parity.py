@@ -54,8 +54,14 @@ def test_manual_feed_equals_run_drive(sim_drive):
     options.T_body_lidar = reader.T_body_lidar
     streams = reader.streams
     assert streams.imu_noise is not None  # the simulator states its IMU (imu_noise.yaml)
-    if options.use_stated_imu_noise:  # as run_drive does (off by default)
-        options.set_imu_noise(streams.imu_noise)
+    assert streams.imu_frame_is_vehicle_frame  # KITTI raw: the OXTS frame is the car's
+    stated = options.copy()  # what apply_input_models does where the models are switched on
+    stated.use_stated_imu_noise = True  # off by default (docs/ins.md)
+    stated.vehicle_nhc_sigma_mps = 0.1  # off by default
+    stated = slam_mms.apply_input_models(stated, streams)
+    assert stated.ins.gyro_noise_density == streams.imu_noise.gyro_noise_density
+    assert stated.ins.nhc_sigma_mps == 0.1
+    options = slam_mms.apply_input_models(options, streams)  # as run_drive does (the defaults)
     system = slam_mms.MappingSystem(options)
     system.initialize_pos(streams.initial_state, streams.initial_attitude_sigma_rpy_rad)
     imu, gnss = streams.imu_samples, streams.gnss_fixes

@@ -102,7 +102,7 @@ struct InsFilter::Impl {
   Eigen::Vector3d zaru_sum = Eigen::Vector3d::Zero();
   int zaru_n = 0;
   int num_zupt = 0;
-  int num_nhc_refused = 0;
+  bool nhc_refusal_logged = false;  // the first refusal of the NHC is logged, not every one
 
   static int ModelIndex(GnssFixType t) {
     return t >= GnssFixType::kRtkFixed ? 0 : t == GnssFixType::kRtkFloat ? 1 : 2;
@@ -298,7 +298,8 @@ struct InsFilter::Impl {
       constexpr double kNhcGateChi2 = 13.82;
       const Eigen::Matrix2d S = H * P * H.transpose() + Rm;
       if (z.dot(S.ldlt().solve(z)) > kNhcGateChi2) {
-        if (num_nhc_refused++ == 0) {
+        if (!nhc_refusal_logged) {
+          nhc_refusal_logged = true;
           SLAM_MMS_LOG(kInfo) << "InsFilter: the non-holonomic constraint does not hold (body y/z "
                               << "velocity " << -z.x() << " / " << -z.y()
                               << " m/s): refused where it fails its innovation test";

@@ -22,6 +22,9 @@
 //                                      (default 0; KITTI about 0.05)
 //   --lead-in S                        IMU/POS records before the first scan (default 1)
 //   --oxts-start S                     with --oxts: start the lead-in S seconds into the drive
+//   --oxts-truth-through-positions     with --oxts: the true motion is a spline through the
+//                                      records' positions (before session 26), not their
+//                                      velocities held to the positions within 1 m
 //   --calib-error-rpy-deg R,P,Y        write calib_imu_to_velo.txt wrong on purpose: rotated by
 //                                      Rz(Y) Ry(P) Rx(R) about the body axes (each |.| <= 10 deg)
 //   --calib-error-xyz-m X,Y,Z          ... and its lever arm off by X,Y,Z [m] in the body frame
@@ -71,7 +74,7 @@ int Usage(const std::string& error) {
          "perfect|consumer|tactical|navigation]\n"
          "       [--gnss-quality fixed|float|sps] [--urban-canyon SCALE] [--origin LAT,LON,H]\n"
          "       [--elevation-bias DEG] [--oxts-inertial-lag S] [--lead-in S] [--oxts-start S] "
-         "[--threads N] "
+         "[--oxts-truth-through-positions] [--threads N] "
          "[--no-scene-cloud] "
          "[--scene-voxel M]\n"
          "       [--drive-id N] [--date YYYY_MM_DD]\n"
@@ -133,6 +136,7 @@ int main(int argc, char** argv) {
   std::string gnss_quality, origin;
   std::vector<std::string> outages;
   bool help = false, version = false, no_scene_cloud = false;
+  bool oxts_truth_through_positions = false;
   bool laser_intrinsics = false, ground_roughness = false, realism = false;
   double beam_divergence_mrad = 0.0;
   std::vector<double> calib_error_rpy_deg, calib_error_xyz_m;
@@ -145,6 +149,7 @@ int main(int argc, char** argv) {
   app.add_option("--route-variant", o.route_variant);
   app.add_option("--oxts", o.oxts_drive_dir);
   app.add_option("--oxts-start", o.oxts_start_s);
+  app.add_flag("--oxts-truth-through-positions", oxts_truth_through_positions);
   app.add_option("--seed", o.seed);
   app.add_option("--duration", o.duration_s);
   app.add_option("--out", out);
@@ -184,6 +189,7 @@ int main(int argc, char** argv) {
     return 0;
   }
   if (no_scene_cloud) o.write_scene_cloud = false;
+  if (oxts_truth_through_positions) o.oxts_truth_follows_velocities = false;
   if (realism) {
     laser_intrinsics = ground_roughness = o.world.volumetric_vegetation = true;
     if (app.count("--beam-divergence-mrad") == 0) beam_divergence_mrad = 2.0;

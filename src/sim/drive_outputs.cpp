@@ -86,6 +86,10 @@ Status WriteScenarioJson(const DriveSimulator::Options& o, const DriveSimulator&
   j["scenario"] = o.oxts_drive_dir.empty() ? o.scenario : "oxts";
   j["oxts_drive_dir"] = o.oxts_drive_dir.string();
   j["oxts_start_s"] = o.oxts_start_s;
+  if (!o.oxts_drive_dir.empty()) {
+    j["oxts_truth"] = Json{{"follows_velocities", o.oxts_truth_follows_velocities},
+                           {"position_sigma_m", o.oxts_truth_position_sigma_m}};
+  }
   j["seed"] = o.seed;
   j["route_variant"] = o.route_variant;  // -1: the scenario's route alone
   j["num_route_variants"] = o.oxts_drive_dir.empty() ? NumRouteVariants(o.scenario) : 0;

@@ -8,8 +8,10 @@
 #include <cstdio>
 #include <fstream>
 #include <limits>
+#include <optional>
 #include <sstream>
 #include <unordered_map>
+#include <utility>
 
 #include "sim/drive_outputs.hpp"
 #include "sim/oxts_synthesis.hpp"
@@ -90,6 +92,9 @@ Status DriveSimulator::Options::Validate() const {
   if (!(ins_roll_pitch_sigma_rad >= 0.0 && ins_yaw_sigma_rad >= 0.0 &&
         ins_velocity_sigma_mps >= 0.0))
     return fail("ins_*_sigma", "negative", "must be >= 0");
+  if (!(oxts_truth_position_sigma_m > 0.0) || !std::isfinite(oxts_truth_position_sigma_m))
+    return fail("oxts_truth_position_sigma_m", std::to_string(oxts_truth_position_sigma_m),
+                "must be > 0");
   if (!(oxts_inertial_lag_s >= 0.0 && oxts_inertial_lag_s <= 0.5))
     return fail("oxts_inertial_lag_s", std::to_string(oxts_inertial_lag_s), "must be in [0, 0.5]");
   if (!date.empty() && (date.size() != 10 || date[4] != '_' || date[7] != '_'))
@@ -163,6 +168,7 @@ StatusOr<DriveSimulator> DriveSimulator::Create(const Options& options_in) {
   Timestamp epoch;
   std::vector<PoseSample> samples;
   double span_begin_s = -std::numeric_limits<double>::infinity();  // oxts_start_s, if any
+  std::optional<std::pair<double, double>> window;  // of the fitted motion, with oxts_start_s
   if (!o.oxts_drive_dir.empty()) {
     SLAM_MMS_ASSIGN_OR_RETURN(
         OxtsPoseSamples loaded,
@@ -170,28 +176,39 @@ StatusOr<DriveSimulator> DriveSimulator::Create(const Options& options_in) {
                             o.origin_height_m, o.origin_from_oxts));
     epoch = loaded.epoch;
     samples = std::move(loaded.samples);
+    for (PoseSample& sample : samples) {
+      if (o.oxts_truth_follows_velocities) {
+        sample.position_sigma_m = std::max(sample.position_sigma_m, o.oxts_truth_position_sigma_m);
+      } else {
+        sample.has_velocity = false;
+        sample.position_sigma_m = 0.0;
+      }
+    }
     if (o.oxts_start_s > 0.0) {
-      // The span simulated: from oxts_start_s, to 5 s past the last scan (spline margin).
+      // The span simulated: from oxts_start_s, to 5 s past the last scan (spline margin), of the
+      // motion fitted over the whole drive (a window is the same motion as the whole drive).
       const double begin = samples.empty() ? 0.0 : samples.front().t_s + o.oxts_start_s;
       const double end = o.duration_s > 0.0 ? begin + o.lead_in_s + o.duration_s + 5.0
                                             : std::numeric_limits<double>::infinity();
-      // From the last record at or before `begin` (the spline then covers it).
-      std::vector<PoseSample> kept;
+      // From the last record at or before `begin`.
+      int kept = 0;
+      double kept_from = 0.0, kept_to = 0.0;
       for (size_t i = 0; i < samples.size(); ++i) {
         const bool next_after = i + 1 < samples.size() && samples[i + 1].t_s > begin + 1e-9;
         if ((samples[i].t_s >= begin - 1e-9 || next_after) && samples[i].t_s <= end) {
-          kept.push_back(samples[i]);
+          if (kept++ == 0) kept_from = samples[i].t_s;
+          kept_to = samples[i].t_s;
         }
       }
       span_begin_s = begin;
-      if (kept.size() < 4) {
+      if (kept < 4) {
         return InvalidArgumentError(
             "DriveSimulator: oxts_start_s = " + std::to_string(o.oxts_start_s) + " leaves " +
-            std::to_string(kept.size()) + " OXTS records of " + o.oxts_drive_dir.string() +
+            std::to_string(kept) + " OXTS records of " + o.oxts_drive_dir.string() +
             " (need >= 4; the drive spans " +
             std::to_string(samples.back().t_s - samples.front().t_s) + " s)");
       }
-      samples = std::move(kept);
+      window = {kept_from, kept_to};
     }
     o.origin_latitude_deg = loaded.origin_latitude_deg;
     o.origin_longitude_deg = loaded.origin_longitude_deg;
@@ -223,6 +240,10 @@ StatusOr<DriveSimulator> DriveSimulator::Create(const Options& options_in) {
   impl->sensor_seed =
       o.route_variant > 0 ? MixSeed(o.seed, 1000 + static_cast<uint64_t>(o.route_variant)) : o.seed;
   SLAM_MMS_ASSIGN_OR_RETURN(impl->trajectory, ReferenceTrajectory::Fit(epoch, samples, o.fit));
+  if (window) {
+    SLAM_MMS_ASSIGN_OR_RETURN(impl->trajectory,
+                              impl->trajectory.Restricted(window->first, window->second));
+  }
   const ReferenceTrajectory& traj = impl->trajectory;
   // Timeline: the first scan after the lead-in, then scans back to back.
   Hdl64Lidar lidar(o.lidar);

@@ -1,5 +1,6 @@
 // Pose samples of a real KITTI OXTS drive folder, in local ENU through GeographicLib.
 #include <GeographicLib/LocalCartesian.hpp>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <string>
@@ -59,6 +60,15 @@ StatusOr<OxtsPoseSamples> LoadOxtsPoseSamples(const std::filesystem::path& drive
     enu.Forward(record->lat_deg, record->lon_deg, record->alt_m, x, y, z);
     s.p_world = Eigen::Vector3d(x, y, z);
     s.rpy_rad = Eigen::Vector3d(record->roll_rad, record->pitch_rad, record->yaw_rad);
+    // vf, vl: forward and left, parallel to the earth's surface; vu: up. So world = Rz(yaw) v.
+    const double cy = std::cos(record->yaw_rad), sy = std::sin(record->yaw_rad);
+    s.v_world_mps = Eigen::Vector3d(cy * record->vf - sy * record->vl,
+                                    sy * record->vf + cy * record->vl, record->vu);
+    s.has_velocity = s.v_world_mps.allFinite();
+    if (!s.has_velocity) s.v_world_mps.setZero();
+    if (std::isfinite(record->pos_accuracy_m) && record->pos_accuracy_m > 0.0) {
+      s.position_sigma_m = record->pos_accuracy_m;
+    }
     out.samples.push_back(s);
   }
   if (out.samples.size() < 4) {

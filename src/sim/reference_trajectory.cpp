@@ -47,6 +47,7 @@ Status ReferenceTrajectory::FitOptions::Validate() const {
   SLAM_MMS_RETURN_IF_ERROR(positive(knot_spacing_s, "knot_spacing_s"));
   SLAM_MMS_RETURN_IF_ERROR(positive(position_sigma_m, "position_sigma_m"));
   SLAM_MMS_RETURN_IF_ERROR(positive(angle_sigma_rad, "angle_sigma_rad"));
+  SLAM_MMS_RETURN_IF_ERROR(positive(velocity_sigma_mps, "velocity_sigma_mps"));
   SLAM_MMS_RETURN_IF_ERROR(positive(accel_density, "accel_density"));
   SLAM_MMS_RETURN_IF_ERROR(positive(angular_accel_density, "angular_accel_density"));
   return OkStatus();
@@ -62,7 +63,9 @@ StatusOr<ReferenceTrajectory> ReferenceTrajectory::Fit(Timestamp epoch,
   }
   for (size_t i = 0; i < samples.size(); ++i) {
     if (!samples[i].p_world.allFinite() || !samples[i].rpy_rad.allFinite() ||
-        !std::isfinite(samples[i].t_s)) {
+        !std::isfinite(samples[i].t_s) || !(samples[i].position_sigma_m >= 0.0) ||
+        !std::isfinite(samples[i].position_sigma_m) ||
+        (samples[i].has_velocity && !samples[i].v_world_mps.allFinite())) {
       return InvalidArgumentError("ReferenceTrajectory::Fit: sample " + std::to_string(i) +
                                   " is not finite");
     }
@@ -100,30 +103,45 @@ StatusOr<ReferenceTrajectory> ReferenceTrajectory::Fit(Timestamp epoch,
   traj.num_segments_ = segs;
   traj.control_.assign(n, Eigen::Matrix<double, 6, 1>::Zero());
 
-  // Data term: same design for all channels; regularisation (second differences of the control
-  // points ~ acceleration * dt^2, white-noise acceleration prior) differs per channel only by
-  // weight.
-  std::vector<Eigen::Triplet<double>> data_trip;
+  // Data terms, scaled by the group's sigma^2 (a sample at the group's sigma weighs 1): the angles
+  // and positions share the design, the positions add their own weights and the velocity rows
+  // (derivative of the basis / dt). Regularisation (second differences of the control points ~
+  // acceleration * dt^2, white-noise acceleration prior) differs per group only by weight.
+  const double sp = options.position_sigma_m;
+  std::vector<Eigen::Triplet<double>> angle_trip, pos_trip;
   Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(n, 6);
-  data_trip.reserve(samples.size() * 16);
+  angle_trip.reserve(samples.size() * 16);
+  pos_trip.reserve(samples.size() * 16);
   for (size_t i = 0; i < samples.size(); ++i) {
-    const double x = (samples[i].t_s - t0) / dt;
+    const PoseSample& sample = samples[i];
+    const double x = (sample.t_s - t0) / dt;
     const int seg = std::clamp(static_cast<int>(std::floor(x)), 0, segs - 1);
     double b[4], db[4], ddb[4];
     Basis(x - seg, b, db, ddb);
+    const double sigma_i = sample.position_sigma_m > 0.0 ? sample.position_sigma_m : sp;
+    const double w = (sp / sigma_i) * (sp / sigma_i);
+    const double wv = (sp / options.velocity_sigma_mps) * (sp / options.velocity_sigma_mps);
     for (int a = 0; a < 4; ++a) {
-      for (int c = 0; c < 4; ++c) data_trip.emplace_back(seg + a, seg + c, b[a] * b[c]);
-      rhs.row(seg + a) += b[a] * y[i].transpose();
+      for (int c = 0; c < 4; ++c) {
+        angle_trip.emplace_back(seg + a, seg + c, b[a] * b[c]);
+        pos_trip.emplace_back(seg + a, seg + c, w * b[a] * b[c]);
+        if (sample.has_velocity) {
+          pos_trip.emplace_back(seg + a, seg + c, wv * db[a] * db[c] / (dt * dt));
+        }
+      }
+      rhs.row(seg + a).head<3>() += w * b[a] * y[i].head<3>().transpose();
+      if (sample.has_velocity) {
+        rhs.row(seg + a).head<3>() += wv * db[a] / dt * sample.v_world_mps.transpose();
+      }
+      rhs.row(seg + a).tail<3>() += b[a] * y[i].tail<3>().transpose();
     }
   }
-  Eigen::SparseMatrix<double> data(n, n);
-  data.setFromTriplets(data_trip.begin(), data_trip.end());
   std::vector<Eigen::Triplet<double>> reg_trip;
   for (int k = 1; k + 1 < n; ++k) {
     const int idx[3] = {k - 1, k, k + 1};
-    const double w[3] = {1.0, -2.0, 1.0};
+    const double wr[3] = {1.0, -2.0, 1.0};
     for (int a = 0; a < 3; ++a)
-      for (int c = 0; c < 3; ++c) reg_trip.emplace_back(idx[a], idx[c], w[a] * w[c]);
+      for (int c = 0; c < 3; ++c) reg_trip.emplace_back(idx[a], idx[c], wr[a] * wr[c]);
   }
   Eigen::SparseMatrix<double> reg(n, n);
   reg.setFromTriplets(reg_trip.begin(), reg_trip.end());
@@ -132,6 +150,9 @@ StatusOr<ReferenceTrajectory> ReferenceTrajectory::Fit(Timestamp epoch,
     const double sigma = group == 0 ? options.position_sigma_m : options.angle_sigma_rad;
     const double q = group == 0 ? options.accel_density : options.angular_accel_density;
     const double lambda = sigma * sigma / (q * q * dt * dt * dt);
+    const std::vector<Eigen::Triplet<double>>& trip = group == 0 ? pos_trip : angle_trip;
+    Eigen::SparseMatrix<double> data(n, n);
+    data.setFromTriplets(trip.begin(), trip.end());
     Eigen::SparseMatrix<double> A = data + lambda * reg;
     // A tiny ridge keeps the system definite where samples are missing at the ends.
     for (int k = 0; k < n; ++k) A.coeffRef(k, k) += 1e-9;
@@ -145,6 +166,27 @@ StatusOr<ReferenceTrajectory> ReferenceTrajectory::Fit(Timestamp epoch,
     }
   }
   return traj;
+}
+
+StatusOr<ReferenceTrajectory> ReferenceTrajectory::Restricted(double from_s, double to_s) const {
+  const double b = std::max(from_s, start_s()), e = std::min(to_s, end_s());
+  if (!(e > b)) {
+    std::ostringstream s;
+    s << "ReferenceTrajectory::Restricted: [" << from_s << ", " << to_s << "] s leaves nothing of ["
+      << start_s() << ", " << end_s() << "] s";
+    return InvalidArgumentError(s.str());
+  }
+  const int first =
+      std::clamp(static_cast<int>(std::floor((b - t0_s_) / dt_s_ + 1e-9)), 0, num_segments_ - 1);
+  const int last =
+      std::clamp(static_cast<int>(std::ceil((e - t0_s_) / dt_s_ - 1e-9)), first + 1, num_segments_);
+  ReferenceTrajectory out;
+  out.epoch_ = epoch_;
+  out.t0_s_ = t0_s_ + dt_s_ * first;
+  out.dt_s_ = dt_s_;
+  out.num_segments_ = last - first;
+  out.control_.assign(control_.begin() + first, control_.begin() + last + 3);
+  return out;
 }
 
 BodyState ReferenceTrajectory::Evaluate(double t_s) const {

@@ -3,6 +3,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+
 #include "slam_mms/core/lie.hpp"
 #include "slam_mms/sim/imu_simulator.hpp"
 
@@ -148,12 +151,100 @@ TEST(ReferenceTrajectoryTest, ZeroNoiseImuIntegratesBackOntoGroundTruth) {
   RecordProperty("max_position_error_m", std::to_string(max_err));
 }
 
+// A car driving east at 10 m/s whose recorded positions jump 0.4 m to the left at 10 s (a GNSS
+// re-fix) while its recorded velocities stay straight: fitted through the positions alone the
+// car moves sideways at metres per second; with the velocities and 1 m positions it does not.
+// Over minutes the positions still hold the motion: a velocity biased 0.05 m/s to the north for
+// 200 s (10 m integrated) stays within a few metres of the positions.
+TEST(ReferenceTrajectoryTest, VelocitiesHoldTheMotionWherePositionsJump) {
+  std::vector<PoseSample> samples;
+  for (int i = 0; i <= 2000; ++i) {
+    PoseSample s;
+    s.t_s = 0.1 * i;
+    s.p_world = Eigen::Vector3d(1.0 * i, s.t_s >= 10.0 ? 0.4 : 0.0, 0.0);
+    s.v_world_mps = Eigen::Vector3d(10.0, s.t_s >= 30.0 ? 0.05 : 0.0, 0.0);
+    samples.push_back(s);
+  }
+  auto max_sideways = [](const ReferenceTrajectory& traj, double from_s, double to_s) {
+    double m = 0.0;
+    for (double t = from_s; t <= to_s; t += 0.01) {
+      m = std::max(m, std::abs(traj.Evaluate(t).v_world_mps.y()));
+    }
+    return m;
+  };
+  ReferenceTrajectory::FitOptions options;
+  auto through_positions = ReferenceTrajectory::Fit(Timestamp(), samples, options);
+  ASSERT_TRUE(through_positions.ok()) << through_positions.status().ToString();
+  EXPECT_GT(max_sideways(*through_positions, 9.0, 11.0), 1.0);
+
+  for (PoseSample& s : samples) {
+    s.has_velocity = true;
+    s.position_sigma_m = 1.0;
+  }
+  auto with_velocities = ReferenceTrajectory::Fit(Timestamp(), samples, options);
+  ASSERT_TRUE(with_velocities.ok()) << with_velocities.status().ToString();
+  EXPECT_LT(max_sideways(*with_velocities, 1.0, 29.0), 0.03);
+  // The bias: sideways motion near 0.05 m/s, the positions pulling it back only slowly.
+  EXPECT_LT(max_sideways(*with_velocities, 31.0, 199.0), 0.08);
+  double max_off = 0.0;
+  for (const PoseSample& s : samples) {
+    max_off = std::max(max_off, (with_velocities->Pose(s.t_s).translation() - s.p_world).norm());
+  }
+  EXPECT_LT(max_off, 4.0);  // 8.5 m where the velocities alone were integrated
+  EXPECT_GT(max_off, 0.5);  // and not the positions themselves
+
+  // A sample whose own sigma is the options' is fitted exactly as one without its own.
+  std::vector<PoseSample> plain = DefaultUrbanRouteSamples(), own = plain;
+  for (PoseSample& s : own) s.position_sigma_m = options.position_sigma_m;
+  auto a = ReferenceTrajectory::Fit(Timestamp(), plain, options);
+  auto b = ReferenceTrajectory::Fit(Timestamp(), own, options);
+  ASSERT_TRUE(a.ok() && b.ok());
+  for (double t = 0.0; t < a->end_s(); t += 7.3) {
+    EXPECT_EQ(a->Pose(t).matrix(), b->Pose(t).matrix()) << t;
+  }
+}
+
+TEST(ReferenceTrajectoryTest, RestrictedIsTheSameMotionOverItsSpan) {
+  const ReferenceTrajectory full = DefaultTrajectory();
+  auto part = full.Restricted(20.03, 35.0);
+  ASSERT_TRUE(part.ok()) << part.status().ToString();
+  EXPECT_LE(part->start_s(), 20.03);
+  EXPECT_GT(part->start_s(), 19.9);
+  EXPECT_GE(part->end_s(), 35.0);
+  EXPECT_LT(part->end_s(), 35.11);
+  for (double t = 20.03; t <= 35.0; t += 0.37) {
+    const BodyState a = full.Evaluate(t), b = part->Evaluate(t);
+    EXPECT_LT((a.T_world_body.matrix() - b.T_world_body.matrix()).norm(), 1e-12) << t;
+    EXPECT_LT((a.v_world_mps - b.v_world_mps).norm(), 1e-12) << t;
+    EXPECT_LT((a.omega_body_radps - b.omega_body_radps).norm(), 1e-12) << t;
+  }
+  EXPECT_FALSE(full.Restricted(full.end_s() + 1.0, full.end_s() + 2.0).ok());
+  EXPECT_FALSE(full.Restricted(30.0, 30.0).ok());
+  auto whole = full.Restricted(-1e9, 1e9);
+  ASSERT_TRUE(whole.ok());
+  EXPECT_EQ(whole->start_s(), full.start_s());
+  EXPECT_EQ(whole->end_s(), full.end_s());
+}
+
 TEST(ReferenceTrajectoryTest, FitRejectsBadInput) {
   std::vector<PoseSample> few(3);
   EXPECT_FALSE(ReferenceTrajectory::Fit(Timestamp(), few, {}).ok());
   ReferenceTrajectory::FitOptions o;
   o.knot_spacing_s = 0.0;
   EXPECT_FALSE(o.Validate().ok());
+  o = {};
+  o.velocity_sigma_mps = 0.0;
+  EXPECT_FALSE(o.Validate().ok());
+  std::vector<PoseSample> samples(8);
+  for (int i = 0; i < 8; ++i) samples[i].t_s = 0.1 * i;
+  samples[3].position_sigma_m = -1.0;
+  EXPECT_FALSE(ReferenceTrajectory::Fit(Timestamp(), samples, {}).ok());
+  samples[3].position_sigma_m = 0.0;
+  samples[4].has_velocity = true;
+  samples[4].v_world_mps.x() = std::nan("");
+  EXPECT_FALSE(ReferenceTrajectory::Fit(Timestamp(), samples, {}).ok());
+  samples[4].v_world_mps.x() = 1.0;
+  EXPECT_TRUE(ReferenceTrajectory::Fit(Timestamp(), samples, {}).ok());
 }
 
 }  // namespace

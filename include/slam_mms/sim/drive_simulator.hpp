@@ -68,6 +68,15 @@ class DriveSimulator {
     /// after the last scan where duration_s > 0, are not used (0: every record is fitted, as
     /// before). The world origin stays the first record's.
     double oxts_start_s = 0.0;
+    /// With oxts_drive_dir: the true motion's positions follow the records' velocities (Rz(yaw)
+    /// (vf, vl, vu), so the simulated car moves sideways only as much as the real one's recorded
+    /// vl) and the records' positions only as closely as oxts_truth_position_sigma_m or their
+    /// stated accuracy, whichever is looser: KITTI's position track jumps and drifts (float RTK,
+    /// re-fixes) where its velocities do not (docs/simulator.md, "The true motion of an OXTS
+    /// drive"). false: a spline through the recorded positions (the car then crabs where they
+    /// jump). The attitudes are the records' either way.
+    bool oxts_truth_follows_velocities = true;
+    double oxts_truth_position_sigma_m = 1.0;  ///< > 0 [m]
     uint64_t seed = 1;
     double duration_s = 0.0;  ///< Seconds of scans from the first scan; 0 = the whole drive.
     double lead_in_s = 1.0;   ///< IMU/POS records before the first scan [s] (>= 0).

@@ -32,11 +32,18 @@ struct BodyState {
   Eigen::Vector3d rpy_rad = Eigen::Vector3d::Zero();  ///< Roll, pitch, yaw (yaw unwrapped).
 };
 
-/// A pose sample to fit: position of the body in world and its roll/pitch/yaw (KITTI convention).
+/// A pose sample to fit: position of the body in world and its roll/pitch/yaw (KITTI convention),
+/// optionally with the body's velocity and the position's own 1-sigma accuracy.
 struct PoseSample {
   double t_s = 0.0;  ///< Seconds since the trajectory's epoch.
   Eigen::Vector3d p_world = Eigen::Vector3d::Zero();
   Eigen::Vector3d rpy_rad = Eigen::Vector3d::Zero();
+  /// 1-sigma of p_world per axis [m]; 0 = FitOptions::position_sigma_m.
+  double position_sigma_m = 0.0;
+  /// With has_velocity, the fitted positions' time derivative follows v_world_mps (weighted by
+  /// FitOptions::velocity_sigma_mps) as well as the positions (each by its sigma).
+  bool has_velocity = false;
+  Eigen::Vector3d v_world_mps = Eigen::Vector3d::Zero();
 };
 
 class ReferenceTrajectory {
@@ -45,6 +52,8 @@ class ReferenceTrajectory {
     double knot_spacing_s = 0.1;     ///< Spline knot interval [s]; > 0.
     double position_sigma_m = 0.02;  ///< Expected noise of the sampled positions [m]; > 0.
     double angle_sigma_rad = 0.002;  ///< Expected noise of the sampled angles [rad]; > 0.
+    /// Expected noise of the sampled velocities (PoseSample::has_velocity) [m/s]; > 0.
+    double velocity_sigma_mps = 0.02;
     /// White-noise acceleration prior (smoothing) [m/s^2 per sqrt(Hz)] and its angular
     /// counterpart [rad/s^2 per sqrt(Hz)]; larger follows the samples more closely. > 0.
     double accel_density = 3.0;
@@ -56,10 +65,18 @@ class ReferenceTrajectory {
   ReferenceTrajectory() = default;
 
   /// Fits the splines to `samples` (time-ordered, at least 4, spanning > 3 knot intervals). Yaw is
-  /// unwrapped first. `epoch` is the absolute time of t_s = 0.
+  /// unwrapped first. `epoch` is the absolute time of t_s = 0. Positions are weighted by their
+  /// own position_sigma_m where set; samples with has_velocity also constrain the positions'
+  /// derivative (so, with loose positions, the motion follows the velocities and the positions
+  /// only over longer times). Angles are fitted on their own.
   [[nodiscard]] static StatusOr<ReferenceTrajectory> Fit(Timestamp epoch,
                                                          const std::vector<PoseSample>& samples,
                                                          const FitOptions& options);
+
+  /// The same motion over [from_s, to_s] only (widened to whole knot intervals): the control
+  /// points of those segments, so Evaluate agrees exactly inside it. InvalidArgument where the
+  /// span leaves nothing of [start_s(), end_s()].
+  [[nodiscard]] StatusOr<ReferenceTrajectory> Restricted(double from_s, double to_s) const;
 
   /// The state at `t_s` seconds after the epoch, clamped to [start_s(), end_s()].
   BodyState Evaluate(double t_s) const;
@@ -119,7 +136,10 @@ std::vector<PoseSample> LongUrbanRouteSamples(double min_duration_s);
 /// Pose samples of an unpacked KITTI OXTS drive folder (`<drive>_sync` with oxts/timestamps.txt
 /// and oxts/data/*.txt), converted to local ENU about the WGS-84 origin (lat, lon [deg], h [m])
 /// with GeographicLib; `origin_from_first` replaces the origin by the first record's position.
-/// Records with duplicate or backward stamps are dropped. `epoch` receives the first stamp.
+/// Records with duplicate or backward stamps are dropped. `epoch` receives the first stamp. Each
+/// sample carries the record's velocity (v_world_mps = Rz(yaw) (vf, vl, vu): forward and leftward
+/// parallel to the earth's surface, up perpendicular to it; has_velocity = true) and its stated
+/// horizontal accuracy (position_sigma_m = pos_accuracy where finite and > 0, else 0).
 struct OxtsPoseSamples {
   Timestamp epoch;
   std::vector<PoseSample> samples;

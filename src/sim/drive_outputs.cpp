@@ -89,6 +89,15 @@ Status WriteScenarioJson(const DriveSimulator::Options& o, const DriveSimulator&
   if (!o.oxts_drive_dir.empty()) {
     j["oxts_truth"] = Json{{"follows_velocities", o.oxts_truth_follows_velocities},
                            {"position_sigma_m", o.oxts_truth_position_sigma_m}};
+    Json spans = Json::array();
+    for (const ImplausibleMotion& span : sim.implausible_motion()) {
+      spans.push_back(Json{{"records", {span.first_record, span.last_record}},
+                           {"from_s", span.from_s},
+                           {"to_s", span.to_s},
+                           {"max_sideways_mps", span.max_sideways_mps},
+                           {"max_vertical_mps", span.max_vertical_mps}});
+    }
+    j["oxts_not_a_car"] = std::move(spans);
   }
   j["seed"] = o.seed;
   j["route_variant"] = o.route_variant;  // -1: the scenario's route alone

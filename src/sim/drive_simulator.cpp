@@ -132,6 +132,7 @@ struct DriveSimulator::Impl {
   int num_scans = 0;
   double seconds_world = 0.0;
   uint64_t sensor_seed = 1;
+  std::vector<ImplausibleMotion> implausible;
 };
 
 namespace {
@@ -244,6 +245,20 @@ StatusOr<DriveSimulator> DriveSimulator::Create(const Options& options_in) {
     SLAM_MMS_ASSIGN_OR_RETURN(impl->trajectory,
                               impl->trajectory.Restricted(window->first, window->second));
   }
+  if (!o.oxts_drive_dir.empty()) {
+    for (const ImplausibleMotion& span : FindImplausibleMotion(samples)) {
+      if (span.to_s < impl->trajectory.start_s() || span.from_s > impl->trajectory.end_s()) {
+        continue;
+      }
+      SLAM_MMS_LOG(kWarning) << "sim: OXTS records " << span.first_record << ".."
+                             << span.last_record << " (" << span.from_s << "-" << span.to_s
+                             << " s) of " << o.oxts_drive_dir.string()
+                             << " are not a road car's motion (sideways up to "
+                             << span.max_sideways_mps << " m/s, vertical up to "
+                             << span.max_vertical_mps << " m/s); the simulated car follows them";
+      impl->implausible.push_back(span);
+    }
+  }
   const ReferenceTrajectory& traj = impl->trajectory;
   // Timeline: the first scan after the lead-in, then scans back to back.
   Hdl64Lidar lidar(o.lidar);
@@ -296,6 +311,9 @@ double DriveSimulator::first_scan_s() const { return impl_->first_scan_s; }
 int DriveSimulator::num_scans() const { return impl_->num_scans; }
 double DriveSimulator::seconds_world_build() const { return impl_->seconds_world; }
 uint64_t DriveSimulator::sensor_seed() const { return impl_->sensor_seed; }
+const std::vector<ImplausibleMotion>& DriveSimulator::implausible_motion() const {
+  return impl_->implausible;
+}
 
 StatusOr<DriveSimulator::Summary> DriveSimulator::Run(const std::filesystem::path& out_dir,
                                                       const Progress& progress,

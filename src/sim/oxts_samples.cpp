@@ -1,5 +1,6 @@
 // Pose samples of a real KITTI OXTS drive folder, in local ENU through GeographicLib.
 #include <GeographicLib/LocalCartesian.hpp>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -56,6 +57,7 @@ StatusOr<OxtsPoseSamples> LoadOxtsPoseSamples(const std::filesystem::path& drive
     last = *stamp;
     PoseSample s;
     s.t_s = stamp->SecondsSince(out.epoch);
+    s.record = index;
     double x, y, z;
     enu.Forward(record->lat_deg, record->lon_deg, record->alt_m, x, y, z);
     s.p_world = Eigen::Vector3d(x, y, z);
@@ -77,6 +79,35 @@ StatusOr<OxtsPoseSamples> LoadOxtsPoseSamples(const std::filesystem::path& drive
   out.origin_latitude_deg = enu.LatitudeOrigin();
   out.origin_longitude_deg = enu.LongitudeOrigin();
   out.origin_height_m = enu.HeightOrigin();
+  return out;
+}
+
+std::vector<ImplausibleMotion> FindImplausibleMotion(const std::vector<PoseSample>& samples,
+                                                     double max_sideways_mps,
+                                                     double max_vertical_mps) {
+  std::vector<ImplausibleMotion> out;
+  for (size_t i = 0; i < samples.size(); ++i) {
+    const PoseSample& s = samples[i];
+    if (!s.has_velocity) continue;
+    const double yaw = s.rpy_rad.z();
+    const double sideways =
+        std::abs(-std::sin(yaw) * s.v_world_mps.x() + std::cos(yaw) * s.v_world_mps.y());
+    const double vertical = std::abs(s.v_world_mps.z());
+    if (!(sideways > max_sideways_mps || vertical > max_vertical_mps)) continue;
+    if (out.empty() || s.t_s - out.back().to_s >= 1.0) {
+      ImplausibleMotion span;
+      span.from_s = s.t_s;
+      span.first_sample = i;
+      span.first_record = s.record;
+      out.push_back(span);
+    }
+    ImplausibleMotion& span = out.back();
+    span.to_s = s.t_s;
+    span.last_sample = i;
+    span.last_record = s.record;
+    span.max_sideways_mps = std::max(span.max_sideways_mps, sideways);
+    span.max_vertical_mps = std::max(span.max_vertical_mps, vertical);
+  }
   return out;
 }
 

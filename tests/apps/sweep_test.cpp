@@ -310,5 +310,38 @@ TEST(SweepTruthTest, SimulatedCarMovesSidewaysOnlyAsTheRecordsSay) {
   fs::remove_all(unpack);
 }
 
+// KITTI 2011_09_26_drive_0093's OXTS runs without satellites, its INS free-running (6 m/s down,
+// up to 14 m/s sideways): its windows are of class not-a-car and the simulator says so; drive
+// 0013's are not.
+TEST(SweepTruthTest, BrokenRecordsAreNotACar) {
+  const fs::path oxts = testing::SharedDataDir() / "kitti_oxts";
+  if (!fs::exists(oxts / "INDEX.tsv")) GTEST_SKIP() << "no " << oxts << " (../shared/data)";
+  const fs::path unpack = testing::MakeTempDir("sweep_not_a_car");
+  for (const char* drive : {"2011_09_26_drive_0093_sync", "2011_09_26_drive_0013_sync"}) {
+    const bool broken = std::string(drive).find("0093") != std::string::npos;
+    auto dir = UnpackDrive(oxts, drive, unpack);
+    ASSERT_TRUE(dir.ok()) << dir.status().ToString();
+    auto samples = sim::LoadOxtsPoseSamples(*dir, 0.0, 0.0, 0.0, true);
+    ASSERT_TRUE(samples.ok()) << samples.status().ToString();
+    auto m = WindowMotion(samples->samples, drive, 5.0, 10.0);
+    ASSERT_TRUE(m.ok()) << m.status().ToString();
+    EXPECT_EQ(m->classes.find("not-a-car") != std::string::npos, broken) << drive << m->classes;
+    sim::DriveSimulator::Options o;
+    o.oxts_drive_dir = *dir;
+    o.oxts_start_s = 5.0;
+    o.duration_s = 1.0;
+    auto simulator = sim::DriveSimulator::Create(o);
+    ASSERT_TRUE(simulator.ok()) << simulator.status().ToString();
+    EXPECT_EQ(simulator->implausible_motion().empty(), !broken) << drive;
+    for (const sim::ImplausibleMotion& span : simulator->implausible_motion()) {
+      EXPECT_GT(std::max(span.max_sideways_mps, span.max_vertical_mps), 3.0);
+      EXPECT_GE(span.first_record, 0);
+      EXPECT_LE(span.from_s, simulator->trajectory().end_s());
+      EXPECT_GE(span.to_s, simulator->trajectory().start_s());
+    }
+  }
+  fs::remove_all(unpack);
+}
+
 }  // namespace
 }  // namespace slam_mms::sweep

@@ -226,6 +226,42 @@ TEST(ReferenceTrajectoryTest, RestrictedIsTheSameMotionOverItsSpan) {
   EXPECT_EQ(whole->end_s(), full.end_s());
 }
 
+// A car heading north-east: a sideways slide of 2 m/s for 0.3 s, and 1.2 s later a fall of 4 m/s,
+// are two spans; a slower slide, and samples without velocities, are none.
+TEST(ReferenceTrajectoryTest, ImplausibleMotionIsFoundWhereTheVelocityIsNotACars) {
+  std::vector<PoseSample> samples;
+  const double yaw = M_PI / 4.0;
+  const Eigen::Vector3d forward(std::cos(yaw), std::sin(yaw), 0.0);
+  const Eigen::Vector3d left(-std::sin(yaw), std::cos(yaw), 0.0);
+  for (int i = 0; i < 60; ++i) {
+    PoseSample s;
+    s.t_s = 0.1 * i;
+    s.rpy_rad.z() = yaw;
+    s.has_velocity = true;
+    s.record = 100 + i;
+    s.v_world_mps = 10.0 * forward + 0.3 * left;
+    if (i >= 10 && i <= 12) s.v_world_mps += 2.0 * left;
+    if (i >= 25 && i <= 27) s.v_world_mps.z() = -4.0;
+    samples.push_back(s);
+  }
+  const std::vector<ImplausibleMotion> spans = FindImplausibleMotion(samples);
+  ASSERT_EQ(spans.size(), 2u);
+  EXPECT_NEAR(spans[0].from_s, 1.0, 1e-9);
+  EXPECT_NEAR(spans[0].to_s, 1.2, 1e-9);
+  EXPECT_EQ(spans[0].first_record, 110);
+  EXPECT_EQ(spans[0].last_record, 112);
+  EXPECT_NEAR(spans[0].max_sideways_mps, 2.3, 1e-9);
+  EXPECT_NEAR(spans[0].max_vertical_mps, 0.0, 1e-9);
+  EXPECT_EQ(spans[1].first_sample, 25u);
+  EXPECT_EQ(spans[1].last_sample, 27u);
+  EXPECT_NEAR(spans[1].max_vertical_mps, 4.0, 1e-9);
+  // Closer than 1 s: one span.
+  samples[20].v_world_mps.z() = 5.0;
+  EXPECT_EQ(FindImplausibleMotion(samples).size(), 1u);
+  for (PoseSample& s : samples) s.has_velocity = false;
+  EXPECT_TRUE(FindImplausibleMotion(samples).empty());
+}
+
 TEST(ReferenceTrajectoryTest, FitRejectsBadInput) {
   std::vector<PoseSample> few(3);
   EXPECT_FALSE(ReferenceTrajectory::Fit(Timestamp(), few, {}).ok());

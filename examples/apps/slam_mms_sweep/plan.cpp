@@ -129,6 +129,9 @@ StatusOr<MotionStats> WindowMotion(const std::vector<sim::PoseSample>& all,
   if (m.max_yaw_rate_dps >= 15.0) classes.push_back("sharp-turn");
   if (drive.rfind("2011_09_28", 0) == 0) classes.push_back("campus");
   if (classes.empty()) classes.push_back("city");
+  std::vector<sim::PoseSample> window;
+  for (const sim::PoseSample* p : w) window.push_back(*p);
+  if (!sim::FindImplausibleMotion(window).empty()) classes.push_back("not-a-car");
   for (size_t i = 0; i < classes.size(); ++i) m.classes += (i ? "+" : "") + classes[i];
   return m;
 }

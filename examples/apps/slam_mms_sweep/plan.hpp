@@ -43,7 +43,9 @@ struct MotionStats {
   double max_yaw_rate_dps = 0.0;     ///< Over 0.5 s differences.
   double total_turn_deg = 0.0;       ///< Sum of |yaw change|.
   /// Classes, "+"-joined: standing, stop-and-go, highway, start-at-speed, sharp-turn, campus
-  /// (KITTI's 2011_09_28 recordings), city (none of the others).
+  /// (KITTI's 2011_09_28 recordings), city (none of the others), and not-a-car where the
+  /// window's records are not a road car's motion (sim::FindImplausibleMotion: broken OXTS
+  /// records, which the simulated car follows; not in the CI subset).
   std::string classes;
 };
 

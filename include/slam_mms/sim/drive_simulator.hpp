@@ -179,6 +179,10 @@ class DriveSimulator {
   /// The seed of the sensor noise (IMU, GNSS, INS errors, LiDAR): Options::seed, or with a route
   /// variant K > 0 one derived from (seed, K), so each variant's noise is an independent draw.
   uint64_t sensor_seed() const;
+  /// With oxts_drive_dir: the spans of the simulated motion whose records are not a road car's
+  /// (FindImplausibleMotion; times like the trajectory's), each logged as a warning by Create and
+  /// listed in scenario.json. The simulated car follows them.
+  const std::vector<ImplausibleMotion>& implausible_motion() const;
 
  private:
   struct Impl;

@@ -44,6 +44,7 @@ struct PoseSample {
   /// FitOptions::velocity_sigma_mps) as well as the positions (each by its sigma).
   bool has_velocity = false;
   Eigen::Vector3d v_world_mps = Eigen::Vector3d::Zero();
+  int record = -1;  ///< The input record it came from (OXTS file number), -1 = none.
 };
 
 class ReferenceTrajectory {
@@ -148,6 +149,28 @@ struct OxtsPoseSamples {
   double origin_height_m = 0.0;
   int num_dropped = 0;
 };
+/// A span of samples whose recorded velocity is not a road car's (FindImplausibleMotion).
+struct ImplausibleMotion {
+  double from_s = 0.0, to_s = 0.0;           ///< Sample times of the span's first and last sample.
+  size_t first_sample = 0, last_sample = 0;  ///< Indices into the samples.
+  int first_record = -1, last_record = -1;   ///< Their PoseSample::record.
+  double max_sideways_mps = 0.0;             ///< |velocity across the heading, level| in the span.
+  double max_vertical_mps = 0.0;             ///< |vertical velocity| in the span.
+};
+
+/// Limits of a road car's motion: sideways 1.5 m/s is a slip angle of 8.5 deg at 36 km/h (a skid),
+/// vertical 3 m/s a 30 % grade at 36 km/h. Every KITTI drive stays below a third of either
+/// (sideways 0.39 m/s, vertical 1.64 m/s) except where its OXTS records are broken.
+inline constexpr double kCarMaxSidewaysMps = 1.5;
+inline constexpr double kCarMaxVerticalMps = 3.0;
+
+/// The spans of `samples` with has_velocity whose velocity exceeds either limit (merged where
+/// less than 1 s apart): records that do not describe a car, e.g. an INS free-running without
+/// GNSS (KITTI 2011_09_26_drive_0093). Empty where every sample is plausible or has no velocity.
+std::vector<ImplausibleMotion> FindImplausibleMotion(const std::vector<PoseSample>& samples,
+                                                     double max_sideways_mps = kCarMaxSidewaysMps,
+                                                     double max_vertical_mps = kCarMaxVerticalMps);
+
 [[nodiscard]] StatusOr<OxtsPoseSamples> LoadOxtsPoseSamples(const std::filesystem::path& drive_dir,
                                                             double origin_latitude_deg,
                                                             double origin_longitude_deg,

@@ -45,7 +45,7 @@ RunRecord GoodRun() {
                 {"outage", nullptr},
                 {"modes", {"gnss_ins", "full", "lidar_only"}},
                 {"motion", {{"classes", "city"}}}};
-  r.result = Json{{"sim", {{"path_m", 80.0}, {"fraction_fixed", 1.0}}},
+  r.result = Json{{"sim", {{"path_m", 80.0}, {"fraction_fixed", 1.0}, {"records_ate_m", 0.02}}},
                   {"methods",
                    {{"gnss_ins", Method(0.030, 0.10)},
                     {"full", Method(0.031, 0.12)},
@@ -69,6 +69,25 @@ TEST(SweepRulesTest, AGoodRunPassesEveryRuleThatApplies) {
   EXPECT_EQ(Verdict(r, "standing_still"), "n/a");
   EXPECT_EQ(Verdict(r, "full_rot_vs_pos"), "pass");
   EXPECT_EQ(Verdict(r, "full_map_sharper"), "pass");
+  EXPECT_EQ(Verdict(r, "full_bounded"), "pass");
+}
+
+// full within twice its input's own error + 0.1 m: a divergence of full and gnss_ins together
+// (which the relative rules pass) fails; a result without records_ate_m is n/a.
+TEST(SweepRulesTest, FullBoundedByTheInputsOwnError) {
+  RunRecord r = GoodRun();
+  r.result["sim"]["records_ate_m"] = 1.5;  // single-point GNSS
+  r.result["methods"]["full"]["ate_rmse_m"] = 3.09;
+  EXPECT_EQ(Verdict(r, "full_bounded"), "pass");
+  r.result["methods"]["full"]["ate_rmse_m"] = 3.11;
+  EXPECT_EQ(Verdict(r, "full_bounded"), "FAIL");
+  r.result["methods"]["full"]["ate_rmse_m"] = 38.0;
+  r.result["methods"]["gnss_ins"]["ate_rmse_m"] = 68.0;
+  r.result["sim"]["fraction_fixed"] = 0.5;
+  EXPECT_EQ(Verdict(r, "full_rot_vs_pos"), "pass");
+  EXPECT_EQ(Verdict(r, "full_bounded"), "FAIL");
+  r.result["sim"].erase("records_ate_m");
+  EXPECT_EQ(Verdict(r, "full_bounded"), "n/a");
 }
 
 TEST(SweepRulesTest, FullMustNotRotateMoreThanThePosOnMovingRuns) {

@@ -132,6 +132,25 @@ RuleOutcome FullMapSharper(const RunRecord& r) {
   return Outcome("full_map_sharper", *fm < *gm, why);
 }
 
+// An absolute bound: full's ATE within twice its input's own error + 0.1 m, the input being the
+// OXTS records' positions (the GNSS/INS solution the POS reads its fixes from; during an outage
+// the simulated RT3003's own dead reckoning). The relative rules pass a run where full and
+// gnss_ins diverge together (session 25: 38 m and 68 m on 2011_09_26_drive_0093).
+RuleOutcome FullBounded(const RunRecord& r) {
+  const Json& sim = r.result["sim"];
+  if (!sim.is_object() || !sim.contains("records_ate_m") || !sim["records_ate_m"].is_number()) {
+    return NotApplicable("full_bounded", "no records_ate_m (a result from before session 26)");
+  }
+  const auto fa = Num(r.result, "full", "ate_rmse_m");
+  if (!fa) return NotApplicable("full_bounded", "full missing");
+  const double records = sim["records_ate_m"].get<double>();
+  const double limit = 2.0 * records + 0.1;
+  char why[128];
+  std::snprintf(why, sizeof(why), "full ATE %.3f m, limit 2 x records %.3f + 0.1 = %.3f", *fa,
+                records, limit);
+  return Outcome("full_bounded", *fa <= limit, why);
+}
+
 std::string Join(const std::vector<std::string>& v, const std::string& sep) {
   std::string s;
   for (size_t i = 0; i < v.size(); ++i) s += (i ? sep : "") + v[i];
@@ -143,7 +162,8 @@ std::string Join(const std::vector<std::string>& v, const std::string& sep) {
 const std::vector<std::string>& RuleNames() {
   static const std::vector<std::string> names = {
       "sane",           "lidar_tracks",    "full_vs_pos_rtk",
-      "standing_still", "full_rot_vs_pos", "full_map_sharper"};
+      "standing_still", "full_rot_vs_pos", "full_map_sharper",
+      "full_bounded"};
   return names;
 }
 
@@ -162,6 +182,7 @@ std::vector<RuleOutcome> EvaluateRules(const RunRecord& r) {
   out.push_back(FullRotationWithinThePos(r, true));
   out.push_back(FullRotationWithinThePos(r, false));
   out.push_back(FullMapSharper(r));
+  out.push_back(FullBounded(r));
   return out;
 }
 

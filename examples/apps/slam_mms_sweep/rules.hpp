@@ -14,7 +14,9 @@
 //                    0.05 deg;
 //   standing_still   a window standing still (class "standing"): full rotation RMSE <= gnss_ins
 //                    + 0.05 deg (standing must not rotate the estimate);
-//   full_map_sharper full MME < gnss_ins MME.
+//   full_map_sharper full MME < gnss_ins MME;
+//   full_bounded     full ATE <= 2 x the input records' own ATE (sim.records_ate_m: the OXTS
+//                    positions against the truth over the scans) + 0.1 m; n/a without it.
 // The real-frame rule (real_lidar_drift): lidar_only t_rel over 10 m <= 3.28 % and r_rel over
 // 25 m <= 0.89 deg/100 m (the public LiDAR-only peer, KISS-ICP, on the same frames).
 //

@@ -245,8 +245,10 @@ int RunOne(const fs::path& run_dir) {
   const Timestamp reference = (*reader)->ScanStart(0);
   Json methods = Json::object();
   std::optional<eval::GroundTruth> gt;
+  std::optional<GeodeticPoint> origin;
   for (const MappingMode mode : modes) {
     app::ModeRun mr = app::RunMode(mode, options, **reader, PosWorkflow::kForward, false);
+    if (!origin && mr.origin) origin = *mr.origin;
     if (!gt && mr.origin) {
       StatusOr<eval::GroundTruth> loaded =
           eval::LoadGroundTruth(summary->drive_dir, **reader, *mr.origin);
@@ -259,6 +261,24 @@ int RunOne(const fs::path& run_dir) {
     methods[mr.name] = MethodJson(mr, ev, gt ? &*gt : nullptr);
   }
   result["methods"] = methods;
+  // The input's own error: the OXTS records' positions (the GNSS/INS solution the POS reads its
+  // fixes from) against the truth over the scans' span, as the methods' ATE (rule full_bounded).
+  if (gt && origin && (*reader)->NumScans() > 0) {
+    StatusOr<eval::GroundTruth> records =
+        eval::LoadOxtsGroundTruth(**reader, *origin, eval::OxtsPositions::kRecorded);
+    if (!records.ok()) return Fail(run_dir, *spec_json, records.status());
+    const Timestamp from = (*reader)->ScanStart(0);
+    const Timestamp to = (*reader)->ScanEnd((*reader)->NumScans() - 1);
+    Trajectory span;
+    for (const StampedPose& p : records->T_world_body.poses()) {
+      if (p.stamp < from || to < p.stamp) continue;
+      const Status added = span.Add(p);
+      if (!added.ok()) return Fail(run_dir, *spec_json, added);
+    }
+    StatusOr<eval::AteResult> ate = eval::ComputeAte(span, gt->T_world_body);
+    if (!ate.ok()) return Fail(run_dir, *spec_json, ate.status());
+    result["sim"]["records_ate_m"] = ate->ate_rmse_m;
+  }
   if (!settings.keep_drive) {
     std::error_code ec;
     fs::remove_all(sim_dir, ec);

@@ -271,9 +271,10 @@ Status WriteSweepTables(const std::vector<RunRecord>& runs, const RunRecord* rea
     const std::string drive = r.spec["drive"].get<std::string>();
     if (std::find(motions.begin(), motions.end(), drive) == motions.end()) motions.push_back(drive);
     csv << id << "," << drive << "," << r.spec["seed"] << ","
-        << r.spec["scenario"].get<std::string>() << "," << r.spec["oxts_start_s"] << ","
-        << r.spec["duration_s"] << "," << r.spec["motion"]["classes"].get<std::string>() << ","
-        << F(path, "%.2f") << "," << F(fixed, "%.3f") << ",\"" << r.process_error << "\"";
+        << r.spec["scenario"].get<std::string>() << "," << r.spec.value("oxts_start_s", Json())
+        << "," << r.spec.value("duration_s", Json()) << ","
+        << r.spec["motion"]["classes"].get<std::string>() << "," << F(path, "%.2f") << ","
+        << F(fixed, "%.3f") << ",\"" << r.process_error << "\"";
     for (const std::string& m : kModes) {
       for (const std::string& k : kMetrics) csv << "," << F(Num(j, m, k), "%.6g");
     }

@@ -108,6 +108,7 @@ StatusOr<ReferenceTrajectory> ReferenceTrajectory::Fit(Timestamp epoch,
   // (derivative of the basis / dt). Regularisation (second differences of the control points ~
   // acceleration * dt^2, white-noise acceleration prior) differs per group only by weight.
   const double sp = options.position_sigma_m;
+  const double wv = (sp / options.velocity_sigma_mps) * (sp / options.velocity_sigma_mps);
   std::vector<Eigen::Triplet<double>> angle_trip, pos_trip;
   Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(n, 6);
   angle_trip.reserve(samples.size() * 16);
@@ -120,7 +121,6 @@ StatusOr<ReferenceTrajectory> ReferenceTrajectory::Fit(Timestamp epoch,
     Basis(x - seg, b, db, ddb);
     const double sigma_i = sample.position_sigma_m > 0.0 ? sample.position_sigma_m : sp;
     const double w = (sp / sigma_i) * (sp / sigma_i);
-    const double wv = (sp / options.velocity_sigma_mps) * (sp / options.velocity_sigma_mps);
     for (int a = 0; a < 4; ++a) {
       for (int c = 0; c < 4; ++c) {
         angle_trip.emplace_back(seg + a, seg + c, b[a] * b[c]);

@@ -137,13 +137,16 @@ RuleOutcome FullMapSharper(const RunRecord& r) {
 // the simulated RT3003's own dead reckoning). The relative rules pass a run where full and
 // gnss_ins diverge together (session 25: 38 m and 68 m on 2011_09_26_drive_0093).
 RuleOutcome FullBounded(const RunRecord& r) {
-  const Json& sim = r.result["sim"];
-  if (!sim.is_object() || !sim.contains("records_ate_m") || !sim["records_ate_m"].is_number()) {
+  // find(), not const operator[]: a result without "sim" must not be undefined behaviour.
+  const auto sim = r.result.find("sim");
+  const bool has = sim != r.result.end() && sim->is_object() && sim->contains("records_ate_m") &&
+                   sim->at("records_ate_m").is_number();
+  if (!has) {
     return NotApplicable("full_bounded", "no records_ate_m (a result from before session 26)");
   }
   const auto fa = Num(r.result, "full", "ate_rmse_m");
   if (!fa) return NotApplicable("full_bounded", "full missing");
-  const double records = sim["records_ate_m"].get<double>();
+  const double records = sim->at("records_ate_m").get<double>();
   const double limit = 2.0 * records + 0.1;
   char why[128];
   std::snprintf(why, sizeof(why), "full ATE %.3f m, limit 2 x records %.3f + 0.1 = %.3f", *fa,
@@ -170,7 +173,8 @@ const std::vector<std::string>& RuleNames() {
 std::vector<RuleOutcome> EvaluateRules(const RunRecord& r) {
   std::vector<RuleOutcome> out;
   out.push_back(Sane(r));
-  const bool has = r.result.is_object() && r.result.contains("methods");
+  // The rules below read result["sim"] and ["methods"] with const operator[]: both must exist.
+  const bool has = r.result.is_object() && r.result.contains("methods") && r.result.contains("sim");
   if (!has) {
     for (size_t i = 1; i < RuleNames().size(); ++i) {
       out.push_back(NotApplicable(RuleNames()[i], "no result"));

@@ -248,8 +248,8 @@ int RunOne(const fs::path& run_dir) {
   std::optional<GeodeticPoint> origin;
   for (const MappingMode mode : modes) {
     app::ModeRun mr = app::RunMode(mode, options, **reader, PosWorkflow::kForward, false);
-    if (!origin && mr.origin) origin = *mr.origin;
     if (!gt && mr.origin) {
+      origin = *mr.origin;  // the frame gt is loaded in
       StatusOr<eval::GroundTruth> loaded =
           eval::LoadGroundTruth(summary->drive_dir, **reader, *mr.origin);
       if (!loaded.ok()) return Fail(run_dir, *spec_json, loaded.status());

@@ -886,6 +886,21 @@ class InsOptions:
     @nhc_min_speed_mps.setter
     def nhc_min_speed_mps(self, value: float) -> None: ...
     @property
+    def vehicle_pitch_misalignment_rad(self) -> float:
+        """IMU-to-vehicle misalignment the constraint starts from: pitch about body y [rad]"""
+    @vehicle_pitch_misalignment_rad.setter
+    def vehicle_pitch_misalignment_rad(self, value: float) -> None: ...
+    @property
+    def vehicle_yaw_misalignment_rad(self) -> float:
+        """IMU-to-vehicle misalignment: yaw about body z [rad]"""
+    @vehicle_yaw_misalignment_rad.setter
+    def vehicle_yaw_misalignment_rad(self, value: float) -> None: ...
+    @property
+    def vehicle_misalignment_sigma_rad(self) -> float:
+        """1-sigma of the misalignment: > 0 estimates it while the constraint is on, 0: exact [rad]"""
+    @vehicle_misalignment_sigma_rad.setter
+    def vehicle_misalignment_sigma_rad(self, value: float) -> None: ...
+    @property
     def gnss(self) -> GnssPriorOptions:
         """GnssPriorOptions (lever arm, floors, gates, outage timeout)."""
     @gnss.setter

@@ -165,6 +165,13 @@ void RegisterOptions(py::module_& m) {
       .Field("zupt_interval_s", &IO::zupt_interval_s, "[s]")
       .Field("nhc_sigma_mps", &IO::nhc_sigma_mps, "Non-holonomic constraint sigma, 0: off [m/s]")
       .Field("nhc_min_speed_mps", &IO::nhc_min_speed_mps, "[m/s]")
+      .Field("vehicle_pitch_misalignment_rad", &IO::vehicle_pitch_misalignment_rad,
+             "IMU-to-vehicle misalignment the constraint starts from: pitch about body y [rad]")
+      .Field("vehicle_yaw_misalignment_rad", &IO::vehicle_yaw_misalignment_rad,
+             "IMU-to-vehicle misalignment: yaw about body z [rad]")
+      .Field("vehicle_misalignment_sigma_rad", &IO::vehicle_misalignment_sigma_rad,
+             "1-sigma of the misalignment: > 0 estimates it while the constraint is on, 0: exact "
+             "[rad]")
       .Field("gnss", &IO::gnss, "GnssPriorOptions (lever arm, floors, gates, outage timeout).")
       .Validated()
       .Done();

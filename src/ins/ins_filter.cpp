@@ -83,6 +83,15 @@ Status InsFilter::Options::Validate() const {
     return FieldError("nhc_sigma_mps", nhc_sigma_mps, "must be >= 0 (0: off)");
   if (!(nhc_min_speed_mps >= 0.0) || !std::isfinite(nhc_min_speed_mps))
     return FieldError("nhc_min_speed_mps", nhc_min_speed_mps, "must be >= 0");
+  for (const auto& [name, v] : {std::pair<const char*, double>{"vehicle_pitch_misalignment_rad",
+                                                               vehicle_pitch_misalignment_rad},
+                                {"vehicle_yaw_misalignment_rad", vehicle_yaw_misalignment_rad}}) {
+    if (!(std::abs(v) <= 0.2)) return FieldError(name, v, "must be within +-0.2 rad (11 deg)");
+  }
+  if (!(vehicle_misalignment_sigma_rad >= 0.0 && vehicle_misalignment_sigma_rad <= 0.2)) {
+    return FieldError("vehicle_misalignment_sigma_rad", vehicle_misalignment_sigma_rad,
+                      "must be in [0, 0.2] rad (0: the given angles are exact)");
+  }
   return gnss.Validate();
 }
 
@@ -114,6 +123,7 @@ GnssPrior& InsFilter::mutable_gnss_prior() { return impl_->gnss; }
 bool InsFilter::initialized() const { return impl_->initialized; }
 const InsErrorMatrix& InsFilter::covariance() const { return impl_->P; }
 Eigen::Vector3d InsFilter::gnss_bias_world() const { return impl_->x.bn; }
+Eigen::Vector2d InsFilter::vehicle_misalignment_rad() const { return impl_->x.m; }
 int InsFilter::num_zero_velocity_updates() const { return impl_->num_zupt; }
 Eigen::Vector3d InsFilter::gravity_world() const { return impl_->g(); }
 

@@ -19,10 +19,12 @@ namespace slam_mms {
 namespace ins_detail {
 
 // Error-state indices.
-constexpr int kP = 0, kV = 3, kTh = 6, kBa = 9, kBg = 12, kBn = 15;
+constexpr int kP = 0, kV = 3, kTh = 6, kBa = 9, kBg = 12, kBn = 15, kM = 18;
 constexpr int kN = kInsErrorDim;
 // Variance of b_gnss while the solution type's errors are white (kept positive for the smoother).
 constexpr double kWhiteBiasVariance = 1e-10;
+// Variance of the misalignment where it is not estimated (positive for the smoother) [rad^2].
+constexpr double kFixedMisalignmentVariance = 1e-12;
 
 inline bool PositiveFinite(double x) { return std::isfinite(x) && x > 0.0; }
 
@@ -34,7 +36,13 @@ struct Nominal {
   Eigen::Vector3d ba = Eigen::Vector3d::Zero();
   Eigen::Vector3d bg = Eigen::Vector3d::Zero();
   Eigen::Vector3d bn = Eigen::Vector3d::Zero();  // GNSS position bias (world)
+  Eigen::Vector2d m = Eigen::Vector2d::Zero();   // IMU-to-vehicle misalignment (pitch, yaw)
 };
+
+// R_body_vehicle of the misalignment (pitch about body y, yaw about body z).
+inline Eigen::Matrix3d BodyToVehicleRotation(const Eigen::Vector2d& m) {
+  return so3::Exp(Eigen::Vector3d(0.0, m.x(), m.y()));
+}
 
 struct HistoryEntry {
   Nominal x;
@@ -132,6 +140,8 @@ struct InsFilter::Impl {
   // Clears the GNSS-model and constraint state (a new initialisation).
   void ResetAuxiliary() {
     x.bn.setZero();
+    x.m = Eigen::Vector2d(options.vehicle_pitch_misalignment_rad,
+                          options.vehicle_yaw_misalignment_rad);
     bias_model = -1;
     bias_cov = kWhiteBiasVariance * Eigen::Matrix3d::Identity();
     last_used_fix.reset();
@@ -169,6 +179,16 @@ struct InsFilter::Impl {
     P.block<3, 3>(kBa, kBa).diagonal().setConstant(std::pow(options.init_sigma_accel_bias_mps2, 2));
     P.block<3, 3>(kBg, kBg).diagonal().setConstant(std::pow(options.init_sigma_gyro_bias_radps, 2));
     P.block<3, 3>(kBn, kBn) = bias_cov;
+    P.block<2, 2>(kM, kM).diagonal().setConstant(MisalignmentVariance());
+  }
+
+  // The misalignment is estimated where the constraint is on and its sigma positive.
+  bool EstimatesMisalignment() const {
+    return options.nhc_sigma_mps > 0.0 && options.vehicle_misalignment_sigma_rad > 0.0;
+  }
+  double MisalignmentVariance() const {
+    return EstimatesMisalignment() ? std::pow(options.vehicle_misalignment_sigma_rad, 2)
+                                   : kFixedMisalignmentVariance;
   }
 
   // A new GNSS solution starts: b_gnss restarts from zero with the stationary covariance `cov`
@@ -208,6 +228,7 @@ struct InsFilter::Impl {
     x.ba += dx.template segment<3>(kBa);
     x.bg += dx.template segment<3>(kBg);
     x.bn += dx.template segment<3>(kBn);
+    x.m += dx.template segment<2>(kM);
     InsErrorMatrix G = InsErrorMatrix::Identity();
     G.block<3, 3>(kTh, kTh) -= 0.5 * so3::Hat(dth);
     P = G * P * G.transpose();
@@ -281,14 +302,19 @@ struct InsFilter::Impl {
     }
     if (options.nhc_sigma_mps > 0.0 && x.v.norm() > options.nhc_min_speed_mps &&
         (!last_nhc || t.SecondsSince(*last_nhc) >= options.zupt_interval_s - 1e-9)) {
-      // v_body = R^T v ~ R_hat^T v_hat + R_hat^T dv + [R_hat^T v_hat]x dtheta; rows y, z.
+      // The vehicle's velocity v_veh = M^T R^T v, M = R_body_vehicle:
+      // ~ v_veh_hat + M^T R_hat^T dv + M^T [R_hat^T v_hat]x dtheta + [v_veh_hat]x (0, dm);
+      // rows y, z.
+      const Eigen::Matrix3d Mt = BodyToVehicleRotation(x.m).transpose();
       const Eigen::Matrix3d Rt = x.q.toRotationMatrix().transpose();
       const Eigen::Vector3d vb = Rt * x.v;
+      const Eigen::Vector3d vv = Mt * vb;
       Eigen::Matrix<double, 3, kN> J = Eigen::Matrix<double, 3, kN>::Zero();
-      J.block<3, 3>(0, kV) = Rt;
-      J.block<3, 3>(0, kTh) = so3::Hat(vb);
+      J.block<3, 3>(0, kV) = Mt * Rt;
+      J.block<3, 3>(0, kTh) = Mt * so3::Hat(vb);
+      if (EstimatesMisalignment()) J.block<3, 2>(0, kM) = so3::Hat(vv).rightCols<2>();
       const Eigen::Matrix<double, 2, kN> H = J.bottomRows<2>();
-      const Eigen::Vector2d z = -vb.tail<2>();
+      const Eigen::Vector2d z = -vv.tail<2>();
       const Eigen::Matrix2d Rm =
           options.nhc_sigma_mps * options.nhc_sigma_mps * Eigen::Matrix2d::Identity();
       last_nhc = t;
@@ -337,6 +363,7 @@ struct InsFilter::Impl {
       st.P_prior = P;
       st.P_posterior = P;
       st.gnss_bias_prior = st.gnss_bias_posterior = x.bn;
+      st.vehicle_misalignment_prior = st.vehicle_misalignment_posterior = x.m;
       st.F = steps.empty() ? InsErrorMatrix::Identity() : F_since_step;
       steps.push_back(st);
     } else {
@@ -344,6 +371,7 @@ struct InsFilter::Impl {
       st.posterior = ToInsState(e);
       st.P_posterior = P;
       st.gnss_bias_posterior = x.bn;
+      st.vehicle_misalignment_posterior = x.m;
       st.updated = true;
     }
     F_since_step.setIdentity();

@@ -9,18 +9,26 @@
 namespace slam_mms {
 namespace {
 
-constexpr int kP = 0, kV = 3, kTh = 6, kBa = 9, kBg = 12, kBn = 15;
+constexpr int kP = 0, kV = 3, kTh = 6, kBa = 9, kBg = 12, kBn = 15, kM = 18;
 
-// a [-] b in the filter's error definition (a = b [+] d); bn_*: the GNSS bias.
-InsErrorVector BoxMinus(const InsState& a, const Eigen::Vector3d& bn_a, const InsState& b,
-                        const Eigen::Vector3d& bn_b) {
+// The parts of the filter's state beside InsState: the GNSS bias and the IMU-to-vehicle
+// misalignment.
+struct Auxiliary {
+  Eigen::Vector3d bn = Eigen::Vector3d::Zero();
+  Eigen::Vector2d m = Eigen::Vector2d::Zero();
+};
+
+// a [-] b in the filter's error definition (a = b [+] d).
+InsErrorVector BoxMinus(const InsState& a, const Auxiliary& aux_a, const InsState& b,
+                        const Auxiliary& aux_b) {
   InsErrorVector d;
   d.segment<3>(kP) = a.T_world_body.translation() - b.T_world_body.translation();
   d.segment<3>(kV) = a.v_world_mps - b.v_world_mps;
   d.segment<3>(kTh) = so3::Log(b.T_world_body.linear().transpose() * a.T_world_body.linear());
   d.segment<3>(kBa) = a.accel_bias_mps2 - b.accel_bias_mps2;
   d.segment<3>(kBg) = a.gyro_bias_radps - b.gyro_bias_radps;
-  d.segment<3>(kBn) = bn_a - bn_b;
+  d.segment<3>(kBn) = aux_a.bn - aux_b.bn;
+  d.segment<2>(kM) = aux_a.m - aux_b.m;
   return d;
 }
 
@@ -35,7 +43,7 @@ InsState BoxPlus(const InsState& x, const InsErrorVector& d) {
   return s;
 }
 
-// 6x6 pose covariance [omega, v_body] of T_world_body from the 18x18 (as InsFilter reports it).
+// 6x6 pose covariance [omega, v_body] of T_world_body from the 20x20 (as InsFilter reports it).
 Matrix6d PoseCovariance(const InsErrorMatrix& P, const Eigen::Matrix3d& R) {
   Eigen::Matrix<double, 6, kInsErrorDim> J = Eigen::Matrix<double, 6, kInsErrorDim>::Zero();
   J.block<3, 3>(0, kTh) = Eigen::Matrix3d::Identity();
@@ -84,16 +92,23 @@ StatusOr<std::vector<InsState>> PosSmoother::Smooth(const std::vector<InsFilterS
     }
     if (!FiniteState(s.prior) || !FiniteState(s.posterior) || !s.P_prior.allFinite() ||
         !s.P_posterior.allFinite() || !s.F.allFinite() || !s.gnss_bias_prior.allFinite() ||
-        !s.gnss_bias_posterior.allFinite()) {
+        !s.gnss_bias_posterior.allFinite() || !s.vehicle_misalignment_prior.allFinite() ||
+        !s.vehicle_misalignment_posterior.allFinite()) {
       return InvalidArgumentError("PosSmoother::Smooth: step " + std::to_string(k) +
                                   " holds a non-finite state, covariance or transition");
     }
   }
   std::vector<InsState> xs(n);
-  std::vector<Eigen::Vector3d> bns(n);
+  std::vector<Auxiliary> aux(n);
+  const auto prior_aux = [](const InsFilterStep& s) {
+    return Auxiliary{s.gnss_bias_prior, s.vehicle_misalignment_prior};
+  };
+  const auto posterior_aux = [](const InsFilterStep& s) {
+    return Auxiliary{s.gnss_bias_posterior, s.vehicle_misalignment_posterior};
+  };
   std::vector<InsErrorMatrix> Ps(n);
   xs[n - 1] = steps[n - 1].posterior;
-  bns[n - 1] = steps[n - 1].gnss_bias_posterior;
+  aux[n - 1] = posterior_aux(steps[n - 1]);
   Ps[n - 1] = steps[n - 1].P_posterior;
   for (size_t k = n - 1; k-- > 0;) {
     const InsFilterStep& cur = steps[k];
@@ -115,11 +130,13 @@ StatusOr<std::vector<InsState>> PosSmoother::Smooth(const std::vector<InsFilterS
     const InsErrorMatrix Ct =
         s.asDiagonal() * llt.solve(s.asDiagonal() * (next.F * cur.P_posterior));
     const InsErrorMatrix C = Ct.transpose();
-    const InsErrorVector dx = C * BoxMinus(xs[k + 1], bns[k + 1], next.prior, next.gnss_bias_prior);
+    const InsErrorVector dx = C * BoxMinus(xs[k + 1], aux[k + 1], next.prior, prior_aux(next));
     InsErrorMatrix P = cur.P_posterior + C * (Ps[k + 1] - next.P_prior) * Ct;
     Ps[k] = 0.5 * (P + P.transpose());
     xs[k] = BoxPlus(cur.posterior, dx);
-    bns[k] = cur.gnss_bias_posterior + dx.segment<3>(kBn);
+    aux[k] = posterior_aux(cur);
+    aux[k].bn += dx.segment<3>(kBn);
+    aux[k].m += dx.segment<2>(kM);
   }
   for (size_t k = 0; k < n; ++k) {
     xs[k].stamp = steps[k].stamp;

@@ -23,7 +23,8 @@ using testing::TruthState;
 const Timestamp kT0 = Timestamp::FromSeconds(1317000000.0);
 const GeodeticPoint kOrigin{49.011, 8.4165, 112.0};
 
-// The linear state x = [p, v, theta, ba, bg, bn] as a nominal InsState (bn: the step's GNSS bias).
+// The linear state x = [p, v, theta, ba, bg, bn, m] as a nominal InsState (bn, m: the step's GNSS
+// bias and IMU-to-vehicle misalignment).
 // theta stays exactly zero in the linear test (decoupled and never measured), so the filter's
 // right-perturbation error on it is linear too.
 InsState ToState(const VectorNd& x, Timestamp stamp) {
@@ -36,7 +37,8 @@ InsState ToState(const VectorNd& x, Timestamp stamp) {
   return s;
 }
 
-// The 15 nominal components (the smoother returns InsStates, without the GNSS bias).
+// The 15 nominal components (the smoother returns InsStates, without the GNSS bias and the
+// misalignment).
 Eigen::Matrix<double, 15, 1> FromState(const InsState& s) {
   Eigen::Matrix<double, 15, 1> x;
   x << s.T_world_body.translation(), s.v_world_mps, so3::Log(s.T_world_body.linear()),
@@ -54,15 +56,16 @@ TEST(PosSmootherTest, RtsEqualsBatchLeastSquaresOnALinearModel) {
   F.block<3, 3>(3, 9) = -dt * Eigen::Matrix3d::Identity();
   F(0, 12) = 0.05;               // a gyro-bias coupling, so every block is exercised
   F.block<3, 3>(15, 15) *= 0.9;  // the GNSS bias: Gauss-Markov
+  F(4, 19) = 0.1;                // the misalignment (a random constant) couples into a velocity
   VectorNd q_diag;
   q_diag << Eigen::Vector3d::Constant(1e-4), Eigen::Vector3d::Constant(4e-3),
       Eigen::Vector3d::Constant(1e-6), Eigen::Vector3d::Constant(1e-5),
-      Eigen::Vector3d::Constant(1e-8), Eigen::Vector3d::Constant(2e-3);
+      Eigen::Vector3d::Constant(1e-8), Eigen::Vector3d::Constant(2e-3), Eigen::Vector2d(1e-9, 1e-9);
   const InsErrorMatrix Q = q_diag.asDiagonal();
   VectorNd p0_diag;
   p0_diag << Eigen::Vector3d::Constant(0.25), Eigen::Vector3d::Constant(0.04),
       Eigen::Vector3d::Constant(1e-4), Eigen::Vector3d::Constant(1e-3),
-      Eigen::Vector3d::Constant(1e-6), Eigen::Vector3d::Constant(0.01);
+      Eigen::Vector3d::Constant(1e-6), Eigen::Vector3d::Constant(0.01), Eigen::Vector2d(3e-4, 3e-4);
   const InsErrorMatrix P0 = p0_diag.asDiagonal();
   VectorNd m0 = VectorNd::Zero();
   m0.head<6>() << 1.0, -2.0, 0.5, 10.0, 0.3, -0.1;
@@ -95,6 +98,7 @@ TEST(PosSmootherTest, RtsEqualsBatchLeastSquaresOnALinearModel) {
     z.H = Eigen::MatrixXd::Zero(m, kN);
     z.H.leftCols(m).setIdentity();
     z.H.block<3, 3>(0, 15).setIdentity();  // the position fix holds the GNSS bias
+    if (m == 6) z.H.block<2, 2>(4, 18) = 5.0 * Eigen::Matrix2d::Identity();  // as the NHC does
     z.R = Eigen::MatrixXd::Identity(m, m) * 0.01;
     z.z = z.H * truth[k] + 0.1 * randn(m);
     meas[k] = z;
@@ -113,7 +117,8 @@ TEST(PosSmootherTest, RtsEqualsBatchLeastSquaresOnALinearModel) {
       st.F = F;
     }
     st.prior = ToState(x, st.stamp);
-    st.gnss_bias_prior = x.tail<3>();
+    st.gnss_bias_prior = x.segment<3>(15);
+    st.vehicle_misalignment_prior = x.tail<2>();
     st.P_prior = P;
     if (meas[k]) {
       const Meas& z = *meas[k];
@@ -125,7 +130,8 @@ TEST(PosSmootherTest, RtsEqualsBatchLeastSquaresOnALinearModel) {
       st.updated = true;
     }
     st.posterior = ToState(x, st.stamp);
-    st.gnss_bias_posterior = x.tail<3>();
+    st.gnss_bias_posterior = x.segment<3>(15);
+    st.vehicle_misalignment_posterior = x.tail<2>();
     st.P_posterior = P;
     steps.push_back(st);
   }
@@ -166,8 +172,8 @@ TEST(PosSmootherTest, RtsEqualsBatchLeastSquaresOnALinearModel) {
     max_dP = std::max(
         max_dP, (P_smoothed[k] - P_batch.block(kN * k, kN * k, kN, kN)).cwiseAbs().maxCoeff());
   }
-  std::printf("RTS vs batch least squares (%d steps, 18 states): max |dx| %.3g, max |dP| %.3g\n",
-              kSteps, max_dx, max_dP);
+  std::printf("RTS vs batch least squares (%d steps, %d states): max |dx| %.3g, max |dP| %.3g\n",
+              kSteps, kN, max_dx, max_dP);
   EXPECT_LT(max_dx, 1e-9);
   EXPECT_LT(max_dP, 1e-9);
   // The smoother is not the filter: the first state moved (a property, not a tautology).

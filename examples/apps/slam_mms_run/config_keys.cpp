@@ -302,6 +302,11 @@ const std::vector<std::pair<std::string, KeyHandler>>& Handlers() {
     SLAM_MMS_KEY_D("ins.zupt_interval_s", o->system.ins.zupt_interval_s);
     SLAM_MMS_KEY_D("ins.nhc_sigma_mps", o->system.ins.nhc_sigma_mps);
     SLAM_MMS_KEY_D("ins.nhc_min_speed_mps", o->system.ins.nhc_min_speed_mps);
+    SLAM_MMS_KEY_D("ins.vehicle_pitch_misalignment_rad",
+                   o->system.ins.vehicle_pitch_misalignment_rad);
+    SLAM_MMS_KEY_D("ins.vehicle_yaw_misalignment_rad", o->system.ins.vehicle_yaw_misalignment_rad);
+    SLAM_MMS_KEY_D("ins.vehicle_misalignment_sigma_rad",
+                   o->system.ins.vehicle_misalignment_sigma_rad);
     // GNSS (GnssPrior).
     h.emplace_back("ins.gnss.t_body_antenna",
                    Vector3([](Options* o) { return &o->system.ins.gnss.t_body_antenna; }));

@@ -30,8 +30,15 @@
 //   acceleration below thresholds)
 //   and the estimated speed is below zupt_max_speed_mps (the speed guard keeps a vehicle cruising
 //   on a smooth road, whose IMU is also still, from being stopped).
-// - Optional non-holonomic constraint (a vehicle does not slide sideways or jump): body y and z
-//   velocity zero with nhc_sigma_mps while moving; body x must be the vehicle's forward axis.
+// - Optional non-holonomic constraint (a vehicle does not slide sideways or jump): the vehicle's
+//   y and z velocity zero with nhc_sigma_mps while moving. The vehicle's frame is the body (IMU)
+//   frame turned by the IMU-to-vehicle misalignment (pitch about body y, yaw about body z:
+//   R_body_vehicle = Exp((0, pitch, yaw))), two random constants in the error state estimated from
+//   the constraint against GNSS and the IMU, starting from the given angles with
+//   vehicle_misalignment_sigma_rad (0: the given angles are taken as exact). A real IMU is mounted
+//   a few tenths of a degree off the car's axes (and an OXTS's heading is off its travel
+//   direction by as much); a constraint that takes the IMU's axes for the car's turns the heading
+//   onto the travel direction, against the GNSS (docs/ins.md).
 // - During GNSS outages (no usable fix) the filter propagates the IMU alone and its covariance
 //   grows.
 //
@@ -54,13 +61,14 @@
 namespace slam_mms {
 
 using Matrix15d = Eigen::Matrix<double, 15, 15>;
-/// Dimension of InsFilter's error state [dp, dv, dtheta, dba, dbg, db_gnss].
-constexpr int kInsErrorDim = 18;
+/// Dimension of InsFilter's error state [dp, dv, dtheta, dba, dbg, db_gnss, dm]; dm: the
+/// IMU-to-vehicle misalignment (pitch, yaw) [rad].
+constexpr int kInsErrorDim = 20;
 using InsErrorMatrix = Eigen::Matrix<double, kInsErrorDim, kInsErrorDim>;
 using InsErrorVector = Eigen::Matrix<double, kInsErrorDim, 1>;
 
 /// One step of the forward filter as a smoother needs it (InsFilter::Options::record_steps): the
-/// nominal state and the 18x18 error covariance [dp, dv, dtheta, dba, dbg, db_gnss] after the
+/// nominal state and the 20x20 error covariance [dp, dv, dtheta, dba, dbg, db_gnss, dm] after the
 /// propagation to `stamp` (a priori) and after the measurement updates at `stamp` (a posteriori;
 /// equal to the a-priori ones where no fix was used), and the error-state transition matrix from
 /// the previous step's a-posteriori error to this step's a-priori error (identity for the first
@@ -71,6 +79,9 @@ struct InsFilterStep {
   InsState posterior;
   Eigen::Vector3d gnss_bias_prior = Eigen::Vector3d::Zero();  ///< b_gnss (world) [m].
   Eigen::Vector3d gnss_bias_posterior = Eigen::Vector3d::Zero();
+  /// IMU-to-vehicle misalignment (pitch, yaw) [rad].
+  Eigen::Vector2d vehicle_misalignment_prior = Eigen::Vector2d::Zero();
+  Eigen::Vector2d vehicle_misalignment_posterior = Eigen::Vector2d::Zero();
   InsErrorMatrix P_prior = InsErrorMatrix::Zero();
   InsErrorMatrix P_posterior = InsErrorMatrix::Zero();
   InsErrorMatrix F = InsErrorMatrix::Identity();
@@ -131,6 +142,14 @@ class InsFilter {
     /// the vehicle's, see ApplyInputModels).
     double nhc_sigma_mps = 0.0;
     double nhc_min_speed_mps = 1.0;  ///< Applied above this estimated speed [m/s].
+    /// IMU-to-vehicle misalignment the constraint starts from: the vehicle frame is the body
+    /// frame turned by pitch about body y and yaw about body z [rad] (a calibrated mounting).
+    double vehicle_pitch_misalignment_rad = 0.0;
+    double vehicle_yaw_misalignment_rad = 0.0;
+    /// 1-sigma of those angles: > 0 estimates them (random constants) while the constraint is
+    /// on; 0 takes them as exact. 1 deg by default: a unit mounted by hand, an OXTS whose heading
+    /// is off the travel direction (KITTI: -0.24 / 0.04 / 0.47 deg, 10th/50th/90th percentile).
+    double vehicle_misalignment_sigma_rad = 0.0175;
     /// Keep every step (InsFilterStep) since the initialisation for a forward-backward smoother
     /// (PosSmoother). Memory: about 8.6 kB per IMU sample or fix (100 Hz IMU + 10 Hz GNSS: 56 MB
     /// per minute, 3.4 GB per hour: smooth long drives in pieces). Not bounded by history_s.
@@ -191,10 +210,14 @@ class InsFilter {
   /// The state at `t`, interpolated between stored states (pose by slerp, velocity and covariance
   /// linearly), or extrapolated with the last IMU sample up to max_extrapolation_s past the last.
   StatusOr<InsState> StateAt(Timestamp t) const;
-  /// 18x18 error-state covariance [dp, dv, dtheta, dba, dbg, db_gnss] of the latest state.
+  /// 20x20 error-state covariance [dp, dv, dtheta, dba, dbg, db_gnss, dm] of the latest state.
   const InsErrorMatrix& covariance() const;
   /// The GNSS error model's bias (antenna position error of the current solution type) [m].
   Eigen::Vector3d gnss_bias_world() const;
+  /// The estimated IMU-to-vehicle misalignment (pitch, yaw) [rad] (the options' angles where the
+  /// non-holonomic constraint is off or the angles are taken as exact); its covariance is the
+  /// last 2x2 block of covariance().
+  Eigen::Vector2d vehicle_misalignment_rad() const;
   /// Zero-velocity updates applied since the initialisation.
   int num_zero_velocity_updates() const;
   /// Every stored state, oldest first (the GNSS/INS-only trajectory).

@@ -1,22 +1,22 @@
 #pragma once
 // InsFilter: the POS of a traditional mobile mapping system (paper §4, the `gnss_ins` baseline) and
-// the motion prior of the SLAM-integrated one: an 18-state error-state EKF fusing IMU samples with
+// the motion prior of the SLAM-integrated one: a 20-state error-state EKF fusing IMU samples with
 // GNSS position fixes (through GnssPrior's use / down-weight / reject decisions), or, instead, an
 // external POS solution (a commercial INS's poses) that is only stored and interpolated.
 //
 // Model (documented simplifications):
 // - Nominal state: p_world, v_world, R_world_body, accel bias ba, gyro bias bg, GNSS position bias
-//   b_gnss; `world` is the local ENU frame of GnssPrior. Gravity is constant in world,
-//   g = (0, 0, -gravity): Somigliana's normal gravity at the origin's latitude and height by
-//   default (or a given constant). Earth rotation (15 deg/h) and transport rate are neglected: fine
-//   for a tactical IMU over minutes, and a tactical gyro could not gyrocompass anyway (so static
-//   alignment needs a given yaw).
+//   b_gnss, IMU-to-vehicle misalignment m (pitch, yaw; see the constraint below); `world` is the
+//   local ENU frame of GnssPrior. Gravity is constant in world, g = (0, 0, -gravity): Somigliana's
+//   normal gravity at the origin's latitude and height by default (or a given constant). Earth
+//   rotation (15 deg/h) and transport rate are neglected: fine for a tactical IMU over minutes, and
+//   a tactical gyro could not gyrocompass anyway (so static alignment needs a given yaw).
 // - Error state [dp (world, additive), dv (world), dtheta (right: R = R_hat Exp(dtheta)), dba,
-//   dbg, db_gnss (world)], IMU biases as random walks. Propagation between consecutive samples
-//   uses the mean of the two samples (second order); a GNSS fix between samples propagates to the
-//   fix with the last sample held. A fix older than the state (latency <= max_fix_latency_s) is
-//   compared with the antenna position extrapolated back by the velocity; an older one is rejected
-//   (kReject, with the lag in the reason), not an error.
+//   dbg, db_gnss (world), dm (additive)], IMU biases as random walks, m a random constant.
+//   Propagation between consecutive samples uses the mean of the two samples (second order); a GNSS
+//   fix between samples propagates to the fix with the last sample held. A fix older than the state
+//   (latency <= max_fix_latency_s) is compared with the antenna position extrapolated back by the
+//   velocity; an older one is rejected (kReject, with the lag in the reason), not an error.
 // - GNSS errors are time-correlated (float ambiguities, single-point orbit/clock/atmosphere
 //   errors, multipath): a fix measures p + R t_body_antenna + b_gnss + white noise. The share
 //   `correlated_fraction` of the fix's variance (as GnssPrior weighs it) is a first-order

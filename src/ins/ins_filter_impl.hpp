@@ -110,7 +110,8 @@ struct InsFilter::Impl {
   Eigen::Vector3d zaru_sum = Eigen::Vector3d::Zero();
   int zaru_n = 0;
   int num_zupt = 0;
-  bool nhc_refusal_logged = false;  // the first refusal of the NHC is logged, not every one
+  bool nhc_refusal_logged = false;   // the first refusal of the NHC is logged, not every one
+  bool misalignment_logged = false;  // the first settled misalignment estimate is logged
 
   static int ModelIndex(GnssFixType t) {
     return t >= GnssFixType::kRtkFixed ? 0 : t == GnssFixType::kRtkFloat ? 1 : 2;
@@ -334,6 +335,17 @@ struct InsFilter::Impl {
       }
       Update<2>(H, z, Rm);
       Record();
+      if (EstimatesMisalignment() && !misalignment_logged) {
+        // Once both angles are known to 0.1 deg: what the user's mounting calibration is.
+        const Eigen::Vector2d sigma = P.block<2, 2>(kM, kM).diagonal().cwiseSqrt();
+        if (sigma.maxCoeff() < 0.1 * M_PI / 180.0) {
+          misalignment_logged = true;
+          SLAM_MMS_LOG(kInfo) << "InsFilter: IMU-to-vehicle misalignment pitch "
+                              << x.m.x() * 180.0 / M_PI << " +- " << sigma.x() * 180.0 / M_PI
+                              << " deg, yaw " << x.m.y() * 180.0 / M_PI << " +- "
+                              << sigma.y() * 180.0 / M_PI << " deg";
+        }
+      }
     }
   }
 

@@ -11,6 +11,7 @@
 
 #include "ins/synthetic_drive.hpp"
 #include "slam_mms/core/lie.hpp"
+#include "slam_mms/core/logging.hpp"
 #include "slam_mms/ins/imu_preintegration.hpp"
 #include "slam_mms/ins/ins_filter.hpp"
 
@@ -397,6 +398,13 @@ TEST(InsFilterModelsTest, NonHolonomicConstraintEstimatesTheImuMisalignment) {
   // calibrated mounting given as exact. Means over seeds.
   constexpr int kCases = 4, kSeeds = 4;
   double yaw_rms[kCases] = {}, outage[kCases] = {};
+  // The settled estimate is logged once per filter that estimates it.
+  int logged = 0;
+  const LogLevel previous_level = MinLogLevel();
+  SetMinLogLevel(LogLevel::kInfo);
+  const LogSink previous_sink = SetLogSink([&](LogLevel, const std::string& m) {
+    if (m.find("IMU-to-vehicle misalignment pitch") != std::string::npos) ++logged;
+  });
   for (uint32_t seed = 1; seed <= kSeeds; ++seed) {
     for (int c = 0; c < kCases; ++c) {
       InsFilter::Options o = BaseOptions();
@@ -434,6 +442,9 @@ TEST(InsFilterModelsTest, NonHolonomicConstraintEstimatesTheImuMisalignment) {
       if (c == 3) EXPECT_EQ(m, Eigen::Vector2d(-0.3, 0.4));
     }
   }
+  SetLogSink(previous_sink);
+  SetMinLogLevel(previous_level);
+  EXPECT_EQ(logged, kSeeds);
   std::printf(
       "IMU mounted pitch -0.3 / yaw 0.4 deg off a car, %d seeds: yaw error RMS with RTK (30-90 s) "
       "NHC off %.3f, on as if aligned %.3f, on estimating %.3f, on calibrated %.3f deg; max error "

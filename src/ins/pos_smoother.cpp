@@ -4,12 +4,11 @@
 #include <cmath>
 #include <string>
 
+#include "ins/ins_filter_impl.hpp"  // the error-state layout and PoseCovariance
 #include "slam_mms/core/lie.hpp"
 
 namespace slam_mms {
 namespace {
-
-constexpr int kP = 0, kV = 3, kTh = 6, kBa = 9, kBg = 12, kBn = 15, kM = 18;
 
 // The parts of the filter's state beside InsState: the GNSS bias and the IMU-to-vehicle
 // misalignment.
@@ -41,14 +40,6 @@ InsState BoxPlus(const InsState& x, const InsErrorVector& d) {
   s.accel_bias_mps2 += d.segment<3>(kBa);
   s.gyro_bias_radps += d.segment<3>(kBg);
   return s;
-}
-
-// 6x6 pose covariance [omega, v_body] of T_world_body from the 20x20 (as InsFilter reports it).
-Matrix6d PoseCovariance(const InsErrorMatrix& P, const Eigen::Matrix3d& R) {
-  Eigen::Matrix<double, 6, kInsErrorDim> J = Eigen::Matrix<double, 6, kInsErrorDim>::Zero();
-  J.block<3, 3>(0, kTh) = Eigen::Matrix3d::Identity();
-  J.block<3, 3>(3, kP) = R.transpose();
-  return J * P * J.transpose();
 }
 
 bool FiniteState(const InsState& s) {

@@ -97,7 +97,7 @@ StatusOr<Eigen::Isometry3d> ParseTransform(const YAML::Node& node, const std::st
 
 StatusOr<DriveExtrinsics> ParseExtrinsicsYaml(const std::string& text, const std::string& file) {
   try {
-    const YAML::Node root = YAML::Load(text);
+    SLAM_MMS_ASSIGN_OR_RETURN(const YAML::Node root, io_internal::YamlOneDocument(text, file));
     if (!root.IsMap()) {
       return DataLossError(file + ": extrinsics must be a YAML map with key T_body_lidar");
     }

@@ -55,7 +55,7 @@ using io_internal::YamlWhere;
 
 StatusOr<ImuNoiseSpec> ParseImuNoiseYaml(const std::string& text, const std::string& file) {
   try {
-    const YAML::Node root = YAML::Load(text);
+    SLAM_MMS_ASSIGN_OR_RETURN(const YAML::Node root, io_internal::YamlOneDocument(text, file));
     if (!root.IsMap()) {
       return DataLossError(file +
                            ": an IMU noise file must be a YAML map (see imu_noise_yaml.hpp)");

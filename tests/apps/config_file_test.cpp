@@ -78,6 +78,11 @@ TEST(ConfigFileTest, ErrorsNameFileLineAndKey) {
   m = Error("level2:\n  max_iterations: 2.5\n");
   EXPECT_NE(m.find("my.yaml:2: key 'level2.max_iterations': bad value '2.5'"), std::string::npos)
       << m;
+  // yaml-cpp's Load keeps the first document only: `{}` then a key is two documents.
+  m = Error("{}\nlevel2.use_loops: false\n");
+  EXPECT_NE(m.find("my.yaml:2: a second YAML document"), std::string::npos) << m;
+  m = Error("level2.use_loops: false\n---\nlevel2.use_gnss: false\n");
+  EXPECT_NE(m.find("my.yaml:3: a second YAML document"), std::string::npos) << m;
   m = Error("localizer: 3\n");
   EXPECT_NE(m.find("my.yaml:1: 'localizer' is a group of keys: expected a mapping"),
             std::string::npos)

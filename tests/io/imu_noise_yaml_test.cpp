@@ -102,6 +102,10 @@ TEST(ImuNoiseYamlTest, ErrorsNameFileLineKeyAndField) {
               HasSubstr("ImuNoiseSpec::accel_noise_density = -0.0005; must be > 0"));
   EXPECT_THAT(error("[1, 2]"), HasSubstr("imu.yaml: an IMU noise file must be a YAML map"));
   EXPECT_THAT(error("a: [1,\n"), HasSubstr("imu.yaml:"));
+  // A second document is not dropped silently (yaml-cpp's Load would keep only the first).
+  EXPECT_THAT(error("{}\ngyro_noise_density: 1e-4\n"),
+              HasSubstr("imu.yaml:2: a second YAML document"));
+  EXPECT_THAT(error("model: a\n---\nmodel: b\n"), HasSubstr("imu.yaml:3: a second YAML document"));
   EXPECT_EQ(ReadImuNoiseYaml("/nonexistent/imu_noise.yaml").status().code(), StatusCode::kNotFound);
 }
 

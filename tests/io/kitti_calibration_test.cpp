@@ -145,6 +145,11 @@ TEST_F(KittiCalibrationTest, YamlCarriesTheTimeOffsetExactly) {
       "T_body_lidar: {xyz: [0, 0, 0], rpy_deg: [0, 0, 0]}\nlidar_time_offset_s: [1]\n", "c.yaml");
   ASSERT_FALSE(seq.ok());
   EXPECT_THAT(seq.status().message(), HasSubstr("c.yaml:2: lidar_time_offset_s"));
+  // A second document (a line after a closed flow map) is an error, not dropped.
+  auto two = ParseExtrinsicsYaml(
+      "{T_body_lidar: {xyz: [0, 0, 0], rpy_deg: [0, 0, 0]}}\nlidar_time_offset_s: 0.1\n", "d.yaml");
+  ASSERT_FALSE(two.ok());
+  EXPECT_THAT(two.status().message(), HasSubstr("d.yaml:2: a second YAML document"));
 }
 
 TEST_F(KittiCalibrationTest, ReadExtrinsicsFilePicksTheFormatByExtension) {

@@ -213,15 +213,23 @@ Status ApplyPreset(const YAML::Node& root, const ParseState& state, Options* opt
 }
 
 Status ApplyConfigText(const std::string& text, const std::string& file_name, Options* options) {
-  YAML::Node root;
+  // Every document: yaml-cpp's Load keeps the first and drops the rest without a word (`{}` and
+  // then `key: value` on the next line are two documents).
+  std::vector<YAML::Node> docs;
   try {
-    root = YAML::Load(text);
+    docs = YAML::LoadAll(text);
   } catch (const YAML::ParserException& e) {
     return InvalidArgumentError(file_name + ":" + std::to_string(e.mark.line + 1) +
                                 ": not valid YAML: " + e.msg);
   }
   ParseState state;
   state.file_name = file_name;
+  if (docs.size() > 1) {
+    return InvalidArgumentError(Where(state, docs[1]) +
+                                "a second YAML document (a config file is one mapping; is a line "
+                                "left after a closed '{...}', or a '---'?)");
+  }
+  const YAML::Node root = docs.empty() ? YAML::Node() : docs.front();
   if (root.IsMap()) {
     try {
       SLAM_MMS_RETURN_IF_ERROR(ApplyPreset(root, state, options));

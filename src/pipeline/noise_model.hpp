@@ -54,9 +54,13 @@ inline constexpr double kAnchorPoseVariance = 1e-8;
 inline constexpr std::size_t kMinRegistrationPoints = 100;
 /// Map-to-map and loop factor covariance: the ICP's formal covariance (which assumes independent
 /// point residuals, far too optimistic for voxelised submaps) times 100, plus an additive floor
-/// per axis (rotation 0.001 rad, translation 0.02 m).
+/// per axis (rotation 0.0002 rad, translation 0.02 m). The rotation floor is 6 mm at 30 m, what
+/// the maps show of consecutive submaps' alignment. It was 0.001 rad (3 cm at 30 m): then a POS
+/// attitude prior of 0.02-0.03 deg per submap (a POS on a tactical IMU's stated noise) outweighed
+/// the registration of two overlapping submaps, and the submaps followed the POS's attitude
+/// errors from one submap to the next (full's map entropy 0.1-0.3 worse, session 28).
 inline constexpr double kMapToMapCovarianceScale = 100.0;
-inline constexpr double kMapToMapSigmaFloorRotRad = 0.001;
+inline constexpr double kMapToMapSigmaFloorRotRad = 0.0002;
 inline constexpr double kMapToMapSigmaFloorTransM = 0.02;
 /// Sequential map-to-map registration (F_Reg between consecutive submaps) is used only with at
 /// least this inlier ratio and when it corrects level 1's relative pose by less than 0.05 rad and

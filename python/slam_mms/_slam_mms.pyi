@@ -901,6 +901,26 @@ class InsOptions:
     @vehicle_misalignment_sigma_rad.setter
     def vehicle_misalignment_sigma_rad(self, value: float) -> None: ...
     @property
+    def vehicle_lever_arm_m(self) -> float:
+        """The IMU's distance ahead of the vehicle's rear axle (its non-holonomic point) [m]"""
+    @vehicle_lever_arm_m.setter
+    def vehicle_lever_arm_m(self, value: float) -> None: ...
+    @property
+    def vehicle_lever_arm_sigma_m(self) -> float:
+        """1-sigma of the lever arm: > 0 estimates it while the constraint is on, 0: exact [m]"""
+    @vehicle_lever_arm_sigma_m.setter
+    def vehicle_lever_arm_sigma_m(self, value: float) -> None: ...
+    @property
+    def vehicle_sideslip_rad_per_mps2(self) -> float:
+        """The tyres' slip angle per lateral acceleration [rad/(m/s^2)]"""
+    @vehicle_sideslip_rad_per_mps2.setter
+    def vehicle_sideslip_rad_per_mps2(self, value: float) -> None: ...
+    @property
+    def vehicle_sideslip_sigma_rad_per_mps2(self) -> float:
+        """1-sigma of the sideslip: > 0 estimates it while the constraint is on, 0: exact [rad/(m/s^2)]"""
+    @vehicle_sideslip_sigma_rad_per_mps2.setter
+    def vehicle_sideslip_sigma_rad_per_mps2(self, value: float) -> None: ...
+    @property
     def gnss(self) -> GnssPriorOptions:
         """GnssPriorOptions (lever arm, floors, gates, outage timeout)."""
     @gnss.setter

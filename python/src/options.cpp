@@ -172,6 +172,15 @@ void RegisterOptions(py::module_& m) {
       .Field("vehicle_misalignment_sigma_rad", &IO::vehicle_misalignment_sigma_rad,
              "1-sigma of the misalignment: > 0 estimates it while the constraint is on, 0: exact "
              "[rad]")
+      .Field("vehicle_lever_arm_m", &IO::vehicle_lever_arm_m,
+             "The IMU's distance ahead of the vehicle's rear axle (its non-holonomic point) [m]")
+      .Field("vehicle_lever_arm_sigma_m", &IO::vehicle_lever_arm_sigma_m,
+             "1-sigma of the lever arm: > 0 estimates it while the constraint is on, 0: exact [m]")
+      .Field("vehicle_sideslip_rad_per_mps2", &IO::vehicle_sideslip_rad_per_mps2,
+             "The tyres' slip angle per lateral acceleration [rad/(m/s^2)]")
+      .Field("vehicle_sideslip_sigma_rad_per_mps2", &IO::vehicle_sideslip_sigma_rad_per_mps2,
+             "1-sigma of the sideslip: > 0 estimates it while the constraint is on, 0: exact "
+             "[rad/(m/s^2)]")
       .Field("gnss", &IO::gnss, "GnssPriorOptions (lever arm, floors, gates, outage timeout).")
       .Validated()
       .Done();

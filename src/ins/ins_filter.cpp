@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <string>
+#include <tuple>
 
 #include "core/option_error.hpp"
 #include "ins/ins_filter_impl.hpp"
@@ -92,6 +94,25 @@ Status InsFilter::Options::Validate() const {
     return FieldError("vehicle_misalignment_sigma_rad", vehicle_misalignment_sigma_rad,
                       "must be in [0, 0.2] rad (0: the given angles are exact)");
   }
+  // A car's IMU is within a few metres of its rear axle; tyres slip by a few hundredths of a
+  // radian per g (0.005 rad/(m/s^2) is 2.8 deg/g).
+  for (const auto& [name, v, limit] :
+       {std::tuple<const char*, double, double>{"vehicle_lever_arm_m", vehicle_lever_arm_m, 10.0},
+        {"vehicle_sideslip_rad_per_mps2", vehicle_sideslip_rad_per_mps2, 0.05}}) {
+    if (!(std::abs(v) <= limit)) {
+      return FieldError(name, v, ("must be within +-" + std::to_string(limit)).c_str());
+    }
+  }
+  for (const auto& [name, v, limit] :
+       {std::tuple<const char*, double, double>{"vehicle_lever_arm_sigma_m",
+                                                vehicle_lever_arm_sigma_m, 10.0},
+        {"vehicle_sideslip_sigma_rad_per_mps2", vehicle_sideslip_sigma_rad_per_mps2, 0.05}}) {
+    if (!(v >= 0.0 && v <= limit)) {
+      return FieldError(
+          name, v,
+          ("must be in [0, " + std::to_string(limit) + "] (0: the given value is exact)").c_str());
+    }
+  }
   return gnss.Validate();
 }
 
@@ -124,6 +145,7 @@ bool InsFilter::initialized() const { return impl_->initialized; }
 const InsErrorMatrix& InsFilter::covariance() const { return impl_->P; }
 Eigen::Vector3d InsFilter::gnss_bias_world() const { return impl_->x.bn; }
 Eigen::Vector2d InsFilter::vehicle_misalignment_rad() const { return impl_->x.m; }
+Eigen::Vector2d InsFilter::vehicle_lateral_model() const { return impl_->x.l; }
 int InsFilter::num_zero_velocity_updates() const { return impl_->num_zupt; }
 Eigen::Vector3d InsFilter::gravity_world() const { return impl_->g(); }
 

@@ -19,12 +19,14 @@ namespace slam_mms {
 namespace ins_detail {
 
 // Error-state indices.
-constexpr int kP = 0, kV = 3, kTh = 6, kBa = 9, kBg = 12, kBn = 15, kM = 18;
+constexpr int kP = 0, kV = 3, kTh = 6, kBa = 9, kBg = 12, kBn = 15, kM = 18, kL = 20;
 constexpr int kN = kInsErrorDim;
 // Variance of b_gnss while the solution type's errors are white (kept positive for the smoother).
 constexpr double kWhiteBiasVariance = 1e-10;
 // Variance of the misalignment where it is not estimated (positive for the smoother) [rad^2].
 constexpr double kFixedMisalignmentVariance = 1e-12;
+// Variance of the lateral motion model where it is not estimated (positive for the smoother).
+constexpr double kFixedLateralModelVariance = 1e-12;
 
 inline bool PositiveFinite(double x) { return std::isfinite(x) && x > 0.0; }
 
@@ -37,6 +39,7 @@ struct Nominal {
   Eigen::Vector3d bg = Eigen::Vector3d::Zero();
   Eigen::Vector3d bn = Eigen::Vector3d::Zero();  // GNSS position bias (world)
   Eigen::Vector2d m = Eigen::Vector2d::Zero();   // IMU-to-vehicle misalignment (pitch, yaw)
+  Eigen::Vector2d l = Eigen::Vector2d::Zero();   // lateral model (lever arm [m], sideslip)
 };
 
 // R_body_vehicle of the misalignment (pitch about body y, yaw about body z).
@@ -110,8 +113,9 @@ struct InsFilter::Impl {
   Eigen::Vector3d zaru_sum = Eigen::Vector3d::Zero();
   int zaru_n = 0;
   int num_zupt = 0;
-  bool nhc_refusal_logged = false;   // the first refusal of the NHC is logged, not every one
-  bool misalignment_logged = false;  // the first settled misalignment estimate is logged
+  bool nhc_refusal_logged = false;    // the first refusal of the NHC is logged, not every one
+  bool misalignment_logged = false;   // the first settled misalignment estimate is logged
+  bool lateral_model_logged = false;  // likewise the lateral model's
 
   static int ModelIndex(GnssFixType t) {
     return t >= GnssFixType::kRtkFixed ? 0 : t == GnssFixType::kRtkFloat ? 1 : 2;
@@ -143,6 +147,7 @@ struct InsFilter::Impl {
     x.bn.setZero();
     x.m = Eigen::Vector2d(options.vehicle_pitch_misalignment_rad,
                           options.vehicle_yaw_misalignment_rad);
+    x.l = Eigen::Vector2d(options.vehicle_lever_arm_m, options.vehicle_sideslip_rad_per_mps2);
     bias_model = -1;
     bias_cov = kWhiteBiasVariance * Eigen::Matrix3d::Identity();
     last_used_fix.reset();
@@ -181,6 +186,7 @@ struct InsFilter::Impl {
     P.block<3, 3>(kBg, kBg).diagonal().setConstant(std::pow(options.init_sigma_gyro_bias_radps, 2));
     P.block<3, 3>(kBn, kBn) = bias_cov;
     P.block<2, 2>(kM, kM).diagonal().setConstant(MisalignmentVariance());
+    P.block<2, 2>(kL, kL).diagonal() = LateralModelVariance();
   }
 
   // The misalignment is estimated where the constraint is on and its sigma positive.
@@ -190,6 +196,15 @@ struct InsFilter::Impl {
   double MisalignmentVariance() const {
     return EstimatesMisalignment() ? std::pow(options.vehicle_misalignment_sigma_rad, 2)
                                    : kFixedMisalignmentVariance;
+  }
+  // Likewise the lateral model's two parameters, each where its sigma is positive.
+  Eigen::Vector2d LateralModelVariance() const {
+    const auto var = [&](double sigma) {
+      return options.nhc_sigma_mps > 0.0 && sigma > 0.0 ? sigma * sigma
+                                                        : kFixedLateralModelVariance;
+    };
+    return Eigen::Vector2d(var(options.vehicle_lever_arm_sigma_m),
+                           var(options.vehicle_sideslip_sigma_rad_per_mps2));
   }
 
   // A new GNSS solution starts: b_gnss restarts from zero with the stationary covariance `cov`
@@ -230,6 +245,7 @@ struct InsFilter::Impl {
     x.bg += dx.template segment<3>(kBg);
     x.bn += dx.template segment<3>(kBn);
     x.m += dx.template segment<2>(kM);
+    x.l += dx.template segment<2>(kL);
     InsErrorMatrix G = InsErrorMatrix::Identity();
     G.block<3, 3>(kTh, kTh) -= 0.5 * so3::Hat(dth);
     P = G * P * G.transpose();
@@ -305,17 +321,26 @@ struct InsFilter::Impl {
         (!last_nhc || t.SecondsSince(*last_nhc) >= options.zupt_interval_s - 1e-9)) {
       // The vehicle's velocity v_veh = M^T R^T v, M = R_body_vehicle:
       // ~ v_veh_hat + M^T R_hat^T dv + M^T [R_hat^T v_hat]x dtheta + [v_veh_hat]x (0, dm);
-      // rows y, z.
+      // rows y, z. What the lateral model allows of them at the IMU (rate w in the vehicle
+      // frame, lever l0, sideslip l1): (l0 w_z + l1 v_x^2 w_z, -l0 w_y); the constraint is their
+      // difference = 0. Its dependence on v_x and on the gyro bias (through w) is left out:
+      // l1 v_x w_z and l0 * bg are second order.
       const Eigen::Matrix3d Mt = BodyToVehicleRotation(x.m).transpose();
       const Eigen::Matrix3d Rt = x.q.toRotationMatrix().transpose();
       const Eigen::Vector3d vb = Rt * x.v;
       const Eigen::Vector3d vv = Mt * vb;
+      const Eigen::Vector3d wv = Mt * (sample.gyro_radps - x.bg);
+      const Eigen::Vector2d d_lever(wv.z(), -wv.y());
+      const Eigen::Vector2d d_slip(vv.x() * vv.x() * wv.z(), 0.0);
       Eigen::Matrix<double, 3, kN> J = Eigen::Matrix<double, 3, kN>::Zero();
       J.block<3, 3>(0, kV) = Mt * Rt;
       J.block<3, 3>(0, kTh) = Mt * so3::Hat(vb);
       if (EstimatesMisalignment()) J.block<3, 2>(0, kM) = so3::Hat(vv).rightCols<2>();
-      const Eigen::Matrix<double, 2, kN> H = J.bottomRows<2>();
-      const Eigen::Vector2d z = -vv.tail<2>();
+      Eigen::Matrix<double, 2, kN> H = J.bottomRows<2>();
+      // The given values stay exact where not estimated (as the misalignment's).
+      if (options.vehicle_lever_arm_sigma_m > 0.0) H.col(kL) = -d_lever;
+      if (options.vehicle_sideslip_sigma_rad_per_mps2 > 0.0) H.col(kL + 1) = -d_slip;
+      const Eigen::Vector2d z = x.l.x() * d_lever + x.l.y() * d_slip - vv.tail<2>();
       const Eigen::Matrix2d Rm =
           options.nhc_sigma_mps * options.nhc_sigma_mps * Eigen::Matrix2d::Identity();
       last_nhc = t;
@@ -327,9 +352,10 @@ struct InsFilter::Impl {
       if (z.dot(S.ldlt().solve(z)) > kNhcGateChi2) {
         if (!nhc_refusal_logged) {
           nhc_refusal_logged = true;
-          SLAM_MMS_LOG(kInfo) << "InsFilter: the non-holonomic constraint does not hold (body y/z "
-                              << "velocity " << -z.x() << " / " << -z.y()
-                              << " m/s): refused where it fails its innovation test";
+          SLAM_MMS_LOG(kInfo) << "InsFilter: the non-holonomic constraint does not hold (vehicle "
+                              << "y/z velocity " << -z.x() << " / " << -z.y()
+                              << " m/s beyond the lateral model): refused where it fails its "
+                              << "innovation test";
         }
         return;
       }
@@ -345,6 +371,13 @@ struct InsFilter::Impl {
                               << " deg, yaw " << x.m.y() * 180.0 / M_PI << " +- "
                               << sigma.y() * 180.0 / M_PI << " deg";
         }
+      }
+      const Eigen::Vector2d sigma_l = P.block<2, 2>(kL, kL).diagonal().cwiseSqrt();
+      if (!lateral_model_logged && options.vehicle_lever_arm_sigma_m > 0.0 && sigma_l.x() < 0.1) {
+        lateral_model_logged = true;
+        SLAM_MMS_LOG(kInfo) << "InsFilter: the IMU is " << x.l.x() << " +- " << sigma_l.x()
+                            << " m ahead of the vehicle's non-holonomic point; sideslip " << x.l.y()
+                            << " +- " << sigma_l.y() << " rad/(m/s^2)";
       }
     }
   }
@@ -376,6 +409,7 @@ struct InsFilter::Impl {
       st.P_posterior = P;
       st.gnss_bias_prior = st.gnss_bias_posterior = x.bn;
       st.vehicle_misalignment_prior = st.vehicle_misalignment_posterior = x.m;
+      st.vehicle_lateral_model_prior = st.vehicle_lateral_model_posterior = x.l;
       st.F = steps.empty() ? InsErrorMatrix::Identity() : F_since_step;
       steps.push_back(st);
     } else {
@@ -384,6 +418,7 @@ struct InsFilter::Impl {
       st.P_posterior = P;
       st.gnss_bias_posterior = x.bn;
       st.vehicle_misalignment_posterior = x.m;
+      st.vehicle_lateral_model_posterior = x.l;
       st.updated = true;
     }
     F_since_step.setIdentity();

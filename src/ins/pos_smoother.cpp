@@ -15,6 +15,7 @@ namespace {
 struct Auxiliary {
   Eigen::Vector3d bn = Eigen::Vector3d::Zero();
   Eigen::Vector2d m = Eigen::Vector2d::Zero();
+  Eigen::Vector2d l = Eigen::Vector2d::Zero();
 };
 
 // a [-] b in the filter's error definition (a = b [+] d).
@@ -28,6 +29,7 @@ InsErrorVector BoxMinus(const InsState& a, const Auxiliary& aux_a, const InsStat
   d.segment<3>(kBg) = a.gyro_bias_radps - b.gyro_bias_radps;
   d.segment<3>(kBn) = aux_a.bn - aux_b.bn;
   d.segment<2>(kM) = aux_a.m - aux_b.m;
+  d.segment<2>(kL) = aux_a.l - aux_b.l;
   return d;
 }
 
@@ -84,7 +86,9 @@ StatusOr<std::vector<InsState>> PosSmoother::Smooth(const std::vector<InsFilterS
     if (!FiniteState(s.prior) || !FiniteState(s.posterior) || !s.P_prior.allFinite() ||
         !s.P_posterior.allFinite() || !s.F.allFinite() || !s.gnss_bias_prior.allFinite() ||
         !s.gnss_bias_posterior.allFinite() || !s.vehicle_misalignment_prior.allFinite() ||
-        !s.vehicle_misalignment_posterior.allFinite()) {
+        !s.vehicle_misalignment_posterior.allFinite() ||
+        !s.vehicle_lateral_model_prior.allFinite() ||
+        !s.vehicle_lateral_model_posterior.allFinite()) {
       return InvalidArgumentError("PosSmoother::Smooth: step " + std::to_string(k) +
                                   " holds a non-finite state, covariance or transition");
     }
@@ -92,10 +96,12 @@ StatusOr<std::vector<InsState>> PosSmoother::Smooth(const std::vector<InsFilterS
   std::vector<InsState> xs(n);
   std::vector<Auxiliary> aux(n);
   const auto prior_aux = [](const InsFilterStep& s) {
-    return Auxiliary{s.gnss_bias_prior, s.vehicle_misalignment_prior};
+    return Auxiliary{s.gnss_bias_prior, s.vehicle_misalignment_prior,
+                     s.vehicle_lateral_model_prior};
   };
   const auto posterior_aux = [](const InsFilterStep& s) {
-    return Auxiliary{s.gnss_bias_posterior, s.vehicle_misalignment_posterior};
+    return Auxiliary{s.gnss_bias_posterior, s.vehicle_misalignment_posterior,
+                     s.vehicle_lateral_model_posterior};
   };
   std::vector<InsErrorMatrix> Ps(n);
   xs[n - 1] = steps[n - 1].posterior;
@@ -128,6 +134,7 @@ StatusOr<std::vector<InsState>> PosSmoother::Smooth(const std::vector<InsFilterS
     aux[k] = posterior_aux(cur);
     aux[k].bn += dx.segment<3>(kBn);
     aux[k].m += dx.segment<2>(kM);
+    aux[k].l += dx.segment<2>(kL);
   }
   for (size_t k = 0; k < n; ++k) {
     xs[k].stamp = steps[k].stamp;

@@ -57,15 +57,18 @@ TEST(PosSmootherTest, RtsEqualsBatchLeastSquaresOnALinearModel) {
   F(0, 12) = 0.05;               // a gyro-bias coupling, so every block is exercised
   F.block<3, 3>(15, 15) *= 0.9;  // the GNSS bias: Gauss-Markov
   F(4, 19) = 0.1;                // the misalignment (a random constant) couples into a velocity
+  F(5, 20) = 0.05;               // and the lateral model (random constants)
   VectorNd q_diag;
   q_diag << Eigen::Vector3d::Constant(1e-4), Eigen::Vector3d::Constant(4e-3),
       Eigen::Vector3d::Constant(1e-6), Eigen::Vector3d::Constant(1e-5),
-      Eigen::Vector3d::Constant(1e-8), Eigen::Vector3d::Constant(2e-3), Eigen::Vector2d(1e-9, 1e-9);
+      Eigen::Vector3d::Constant(1e-8), Eigen::Vector3d::Constant(2e-3), Eigen::Vector2d(1e-9, 1e-9),
+      Eigen::Vector2d(1e-9, 1e-9);
   const InsErrorMatrix Q = q_diag.asDiagonal();
   VectorNd p0_diag;
   p0_diag << Eigen::Vector3d::Constant(0.25), Eigen::Vector3d::Constant(0.04),
       Eigen::Vector3d::Constant(1e-4), Eigen::Vector3d::Constant(1e-3),
-      Eigen::Vector3d::Constant(1e-6), Eigen::Vector3d::Constant(0.01), Eigen::Vector2d(3e-4, 3e-4);
+      Eigen::Vector3d::Constant(1e-6), Eigen::Vector3d::Constant(0.01), Eigen::Vector2d(3e-4, 3e-4),
+      Eigen::Vector2d(0.5, 1e-4);
   const InsErrorMatrix P0 = p0_diag.asDiagonal();
   VectorNd m0 = VectorNd::Zero();
   m0.head<6>() << 1.0, -2.0, 0.5, 10.0, 0.3, -0.1;
@@ -98,7 +101,10 @@ TEST(PosSmootherTest, RtsEqualsBatchLeastSquaresOnALinearModel) {
     z.H = Eigen::MatrixXd::Zero(m, kN);
     z.H.leftCols(m).setIdentity();
     z.H.block<3, 3>(0, 15).setIdentity();  // the position fix holds the GNSS bias
-    if (m == 6) z.H.block<2, 2>(4, 18) = 5.0 * Eigen::Matrix2d::Identity();  // as the NHC does
+    if (m == 6) {                          // as the NHC does
+      z.H.block<2, 2>(4, 18) = 5.0 * Eigen::Matrix2d::Identity();
+      z.H.block<2, 2>(4, 20) << -0.3, -20.0, 0.1, 0.0;
+    }
     z.R = Eigen::MatrixXd::Identity(m, m) * 0.01;
     z.z = z.H * truth[k] + 0.1 * randn(m);
     meas[k] = z;
@@ -118,7 +124,8 @@ TEST(PosSmootherTest, RtsEqualsBatchLeastSquaresOnALinearModel) {
     }
     st.prior = ToState(x, st.stamp);
     st.gnss_bias_prior = x.segment<3>(15);
-    st.vehicle_misalignment_prior = x.tail<2>();
+    st.vehicle_misalignment_prior = x.segment<2>(18);
+    st.vehicle_lateral_model_prior = x.tail<2>();
     st.P_prior = P;
     if (meas[k]) {
       const Meas& z = *meas[k];
@@ -131,7 +138,8 @@ TEST(PosSmootherTest, RtsEqualsBatchLeastSquaresOnALinearModel) {
     }
     st.posterior = ToState(x, st.stamp);
     st.gnss_bias_posterior = x.segment<3>(15);
-    st.vehicle_misalignment_posterior = x.tail<2>();
+    st.vehicle_misalignment_posterior = x.segment<2>(18);
+    st.vehicle_lateral_model_posterior = x.tail<2>();
     st.P_posterior = P;
     steps.push_back(st);
   }

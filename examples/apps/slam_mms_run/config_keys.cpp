@@ -307,6 +307,12 @@ const std::vector<std::pair<std::string, KeyHandler>>& Handlers() {
     SLAM_MMS_KEY_D("ins.vehicle_yaw_misalignment_rad", o->system.ins.vehicle_yaw_misalignment_rad);
     SLAM_MMS_KEY_D("ins.vehicle_misalignment_sigma_rad",
                    o->system.ins.vehicle_misalignment_sigma_rad);
+    SLAM_MMS_KEY_D("ins.vehicle_lever_arm_m", o->system.ins.vehicle_lever_arm_m);
+    SLAM_MMS_KEY_D("ins.vehicle_lever_arm_sigma_m", o->system.ins.vehicle_lever_arm_sigma_m);
+    SLAM_MMS_KEY_D("ins.vehicle_sideslip_rad_per_mps2",
+                   o->system.ins.vehicle_sideslip_rad_per_mps2);
+    SLAM_MMS_KEY_D("ins.vehicle_sideslip_sigma_rad_per_mps2",
+                   o->system.ins.vehicle_sideslip_sigma_rad_per_mps2);
     // GNSS (GnssPrior).
     h.emplace_back("ins.gnss.t_body_antenna",
                    Vector3([](Options* o) { return &o->system.ins.gnss.t_body_antenna; }));

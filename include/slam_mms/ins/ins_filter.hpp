@@ -1,18 +1,20 @@
 #pragma once
 // InsFilter: the POS of a traditional mobile mapping system (paper §4, the `gnss_ins` baseline) and
-// the motion prior of the SLAM-integrated one: a 20-state error-state EKF fusing IMU samples with
+// the motion prior of the SLAM-integrated one: a 22-state error-state EKF fusing IMU samples with
 // GNSS position fixes (through GnssPrior's use / down-weight / reject decisions), or, instead, an
 // external POS solution (a commercial INS's poses) that is only stored and interpolated.
 //
 // Model (documented simplifications):
 // - Nominal state: p_world, v_world, R_world_body, accel bias ba, gyro bias bg, GNSS position bias
-//   b_gnss, IMU-to-vehicle misalignment m (pitch, yaw; see the constraint below); `world` is the
+//   b_gnss, IMU-to-vehicle misalignment m (pitch, yaw) and the vehicle's lateral model l (lever
+//   arm, sideslip; see the constraint below); `world` is the
 //   local ENU frame of GnssPrior. Gravity is constant in world, g = (0, 0, -gravity): Somigliana's
 //   normal gravity at the origin's latitude and height by default (or a given constant). Earth
 //   rotation (15 deg/h) and transport rate are neglected: fine for a tactical IMU over minutes, and
 //   a tactical gyro could not gyrocompass anyway (so static alignment needs a given yaw).
 // - Error state [dp (world, additive), dv (world), dtheta (right: R = R_hat Exp(dtheta)), dba,
-//   dbg, db_gnss (world), dm (additive)], IMU biases as random walks, m a random constant.
+//   dbg, db_gnss (world), dm, dl (additive)], IMU biases as random walks, m and l random
+//   constants.
 //   Propagation between consecutive samples uses the mean of the two samples (second order); a GNSS
 //   fix between samples propagates to the fix with the last sample held. A fix older than the state
 //   (latency <= max_fix_latency_s) is compared with the antenna position extrapolated back by the
@@ -38,7 +40,10 @@
 //   vehicle_misalignment_sigma_rad (0: the given angles are taken as exact). A real IMU is mounted
 //   a few tenths of a degree off the car's axes (and an OXTS's heading is off its travel
 //   direction by as much); a constraint that takes the IMU's axes for the car's turns the heading
-//   onto the travel direction, against the GNSS (docs/ins.md).
+//   onto the travel direction, against the GNSS (docs/ins.md). Likewise the car's wheels keep to
+//   its x axis only at the rear axle, and slip by an angle proportional to the lateral
+//   acceleration: the constraint allows the IMU's lateral velocity the lateral model gives (its
+//   lever arm ahead of the axle, the sideslip coefficient; estimated the same way).
 // - During GNSS outages (no usable fix) the filter propagates the IMU alone and its covariance
 //   grows.
 //
@@ -61,18 +66,20 @@
 namespace slam_mms {
 
 using Matrix15d = Eigen::Matrix<double, 15, 15>;
-/// Dimension of InsFilter's error state [dp, dv, dtheta, dba, dbg, db_gnss, dm]; dm: the
-/// IMU-to-vehicle misalignment (pitch, yaw) [rad].
-constexpr int kInsErrorDim = 20;
+/// Dimension of InsFilter's error state [dp, dv, dtheta, dba, dbg, db_gnss, dm, dl]; dm: the
+/// IMU-to-vehicle misalignment (pitch, yaw) [rad]; dl: the vehicle's lateral motion model (the
+/// IMU's lever arm ahead of the non-holonomic point [m], the sideslip coefficient [rad/(m/s^2)]).
+constexpr int kInsErrorDim = 22;
 using InsErrorMatrix = Eigen::Matrix<double, kInsErrorDim, kInsErrorDim>;
 using InsErrorVector = Eigen::Matrix<double, kInsErrorDim, 1>;
 
 /// One step of the forward filter as a smoother needs it (InsFilter::Options::record_steps): the
-/// nominal state and the 20x20 error covariance [dp, dv, dtheta, dba, dbg, db_gnss, dm] after the
-/// propagation to `stamp` (a priori) and after the measurement updates at `stamp` (a posteriori;
-/// equal to the a-priori ones where no fix was used), and the error-state transition matrix from
-/// the previous step's a-posteriori error to this step's a-priori error (identity for the first
-/// step). The nominal states' cov_T_world_body is the filter's pose covariance at that point.
+/// nominal state and the 22x22 error covariance [dp, dv, dtheta, dba, dbg, db_gnss, dm, dl] after
+/// the propagation to `stamp` (a priori) and after the measurement updates at `stamp` (a
+/// posteriori; equal to the a-priori ones where no fix was used), and the error-state transition
+/// matrix from the previous step's a-posteriori error to this step's a-priori error (identity for
+/// the first step). The nominal states' cov_T_world_body is the filter's pose covariance at that
+/// point.
 struct InsFilterStep {
   Timestamp stamp;
   InsState prior;
@@ -82,6 +89,9 @@ struct InsFilterStep {
   /// IMU-to-vehicle misalignment (pitch, yaw) [rad].
   Eigen::Vector2d vehicle_misalignment_prior = Eigen::Vector2d::Zero();
   Eigen::Vector2d vehicle_misalignment_posterior = Eigen::Vector2d::Zero();
+  /// The vehicle's lateral motion model (lever arm [m], sideslip coefficient [rad/(m/s^2)]).
+  Eigen::Vector2d vehicle_lateral_model_prior = Eigen::Vector2d::Zero();
+  Eigen::Vector2d vehicle_lateral_model_posterior = Eigen::Vector2d::Zero();
   InsErrorMatrix P_prior = InsErrorMatrix::Zero();
   InsErrorMatrix P_posterior = InsErrorMatrix::Zero();
   InsErrorMatrix F = InsErrorMatrix::Identity();
@@ -150,6 +160,21 @@ class InsFilter {
     /// on; 0 takes them as exact. 1 deg by default: a unit mounted by hand, an OXTS whose heading
     /// is off the travel direction (KITTI: -0.24 / 0.04 / 0.47 deg, 10th/50th/90th percentile).
     double vehicle_misalignment_sigma_rad = 0.0175;
+    /// The vehicle's lateral motion the constraint allows: a car's wheels roll without sliding
+    /// sideways only at its rear axle (its non-holonomic point), and its tyres slip by an angle
+    /// proportional to the lateral acceleration. The IMU's velocity in the vehicle frame is
+    /// v_y = lever * w_z + sideslip * v_x * a_lat (a_lat = v_x * w_z), v_z = -lever * w_y, with
+    /// `lever` the IMU's distance ahead of the rear axle along the vehicle's x axis [m] and
+    /// `sideslip` the angle of the axle's velocity to the left of the vehicle's x axis per
+    /// lateral acceleration [rad/(m/s^2)] (a car's tyres: a few thousandths, negative, its nose
+    /// turns into the turn). Both start from the given values and are estimated (random
+    /// constants) with the sigmas where those are > 0 (0: the given value is exact). An IMU 1 m
+    /// ahead of the axle moves sideways by 0.5 m/s at 0.5 rad/s of yaw rate: a constraint
+    /// without the lever arm turns the heading by 4 deg at 7 m/s.
+    double vehicle_lever_arm_m = 0.0;
+    double vehicle_lever_arm_sigma_m = 1.0;
+    double vehicle_sideslip_rad_per_mps2 = 0.0;
+    double vehicle_sideslip_sigma_rad_per_mps2 = 0.005;
     /// Keep every step (InsFilterStep) since the initialisation for a forward-backward smoother
     /// (PosSmoother). Memory: about 8.6 kB per IMU sample or fix (100 Hz IMU + 10 Hz GNSS: 56 MB
     /// per minute, 3.4 GB per hour: smooth long drives in pieces). Not bounded by history_s.
@@ -210,14 +235,18 @@ class InsFilter {
   /// The state at `t`, interpolated between stored states (pose by slerp, velocity and covariance
   /// linearly), or extrapolated with the last IMU sample up to max_extrapolation_s past the last.
   StatusOr<InsState> StateAt(Timestamp t) const;
-  /// 20x20 error-state covariance [dp, dv, dtheta, dba, dbg, db_gnss, dm] of the latest state.
+  /// 22x22 error-state covariance [dp, dv, dtheta, dba, dbg, db_gnss, dm, dl] of the latest state.
   const InsErrorMatrix& covariance() const;
   /// The GNSS error model's bias (antenna position error of the current solution type) [m].
   Eigen::Vector3d gnss_bias_world() const;
   /// The estimated IMU-to-vehicle misalignment (pitch, yaw) [rad] (the options' angles where the
   /// non-holonomic constraint is off or the angles are taken as exact); its covariance is the
-  /// last 2x2 block of covariance().
+  /// 2x2 block of covariance() at 18.
   Eigen::Vector2d vehicle_misalignment_rad() const;
+  /// The estimated lateral motion model of the vehicle (the IMU's lever arm ahead of the
+  /// non-holonomic point [m], the sideslip coefficient [rad/(m/s^2)]; the options' values where
+  /// the constraint is off or they are taken as exact); its covariance is the last 2x2 block.
+  Eigen::Vector2d vehicle_lateral_model() const;
   /// Zero-velocity updates applied since the initialisation.
   int num_zero_velocity_updates() const;
   /// Every stored state, oldest first (the GNSS/INS-only trajectory).

@@ -165,6 +165,18 @@ double MaxIn(const DriveRun& r, const std::vector<double>& v, double a, double b
   return m;
 }
 
+double RmsIn(const DriveRun& r, const std::vector<double>& v, double a, double b) {
+  double ss = 0.0;
+  int n = 0;
+  for (size_t i = 0; i < v.size(); ++i) {
+    if (r.t[i] >= a && r.t[i] < b) {
+      ss += v[i] * v[i];
+      ++n;
+    }
+  }
+  return n > 0 ? std::sqrt(ss / n) : 0.0;
+}
+
 double ValueAt(const DriveRun& r, const std::vector<double>& v, double t) {
   for (size_t i = 0; i < v.size(); ++i)
     if (r.t[i] >= t - 1e-6) return v[i];
@@ -418,15 +430,7 @@ TEST(InsFilterModelsTest, NonHolonomicConstraintEstimatesTheImuMisalignment) {
       InsFilter f = InsFilter::Create(o).value();
       const DriveRun r =
           RunModelDrive(MisalignedCar(kPitch, kYaw), 120.0, rx, ErrorProcess(), &f, seed, &imu);
-      double ss = 0.0;
-      int n = 0;
-      for (size_t i = 0; i < r.t.size(); ++i) {
-        if (r.t[i] >= 30.0 && r.t[i] < 90.0) {
-          ss += r.yaw_deg[i] * r.yaw_deg[i];
-          ++n;
-        }
-      }
-      yaw_rms[c] += std::sqrt(ss / n) / kSeeds;
+      yaw_rms[c] += RmsIn(r, r.yaw_deg, 30.0, 90.0) / kSeeds;
       outage[c] += MaxIn(r, r.pos_err, 90.0, 121.0) / kSeeds;
       const Eigen::Vector2d m = f.vehicle_misalignment_rad() * 180.0 / M_PI;
       if (c == 2) {
@@ -519,15 +523,7 @@ TEST(InsFilterModelsTest, NonHolonomicConstraintEstimatesTheLeverArmToTheRearAxl
       InsFilter f = InsFilter::Create(o).value();
       const DriveRun r =
           RunModelDrive(CarWithLeverArm(kLever, kSlip), 120.0, rx, ErrorProcess(), &f, seed, &imu);
-      double ss = 0.0;
-      int n = 0;
-      for (size_t i = 0; i < r.t.size(); ++i) {
-        if (r.t[i] >= 30.0 && r.t[i] < 90.0) {
-          ss += r.yaw_deg[i] * r.yaw_deg[i];
-          ++n;
-        }
-      }
-      yaw_rms[c] += std::sqrt(ss / n) / kSeeds;
+      yaw_rms[c] += RmsIn(r, r.yaw_deg, 30.0, 90.0) / kSeeds;
       outage[c] += MaxIn(r, r.pos_err, 90.0, 121.0) / kSeeds;
       const Eigen::Vector2d l = f.vehicle_lateral_model();
       if (c == 2) {

@@ -70,7 +70,7 @@ class PosSmoother {
   /// strictly time-ordered or holds a non-finite or non-positive-definite a-priori covariance.
   static StatusOr<std::vector<InsState>> Smooth(const std::vector<InsFilterStep>& steps);
 
-  /// Same, also returning the smoothed 20x20 error covariances (about the smoothed states).
+  /// Same, also returning the smoothed 22x22 error covariances (about the smoothed states).
   static StatusOr<std::vector<InsState>> Smooth(const std::vector<InsFilterStep>& steps,
                                                 std::vector<InsErrorMatrix>* P_smoothed);
 };

@@ -176,8 +176,9 @@ class InsFilter {
     double vehicle_sideslip_rad_per_mps2 = 0.0;
     double vehicle_sideslip_sigma_rad_per_mps2 = 0.005;
     /// Keep every step (InsFilterStep) since the initialisation for a forward-backward smoother
-    /// (PosSmoother). Memory: about 8.6 kB per IMU sample or fix (100 Hz IMU + 10 Hz GNSS: 56 MB
-    /// per minute, 3.4 GB per hour: smooth long drives in pieces). Not bounded by history_s.
+    /// (PosSmoother). Memory: sizeof(InsFilterStep), 12.8 kB, per IMU sample or fix (100 Hz IMU
+    /// + 10 Hz GNSS: 84 MB per minute, 5.1 GB per hour: smooth long drives in pieces). Not bounded
+    /// by history_s.
     bool record_steps = false;
 
     [[nodiscard]] Status Validate() const;

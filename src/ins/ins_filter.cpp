@@ -4,7 +4,6 @@
 #include <cmath>
 #include <sstream>
 #include <string>
-#include <tuple>
 
 #include "core/option_error.hpp"
 #include "ins/ins_filter_impl.hpp"
@@ -96,22 +95,20 @@ Status InsFilter::Options::Validate() const {
   }
   // A car's IMU is within a few metres of its rear axle; tyres slip by a few hundredths of a
   // radian per g (0.005 rad/(m/s^2) is 2.8 deg/g).
-  for (const auto& [name, v, limit] :
-       {std::tuple<const char*, double, double>{"vehicle_lever_arm_m", vehicle_lever_arm_m, 10.0},
-        {"vehicle_sideslip_rad_per_mps2", vehicle_sideslip_rad_per_mps2, 0.05}}) {
-    if (!(std::abs(v) <= limit)) {
-      return FieldError(name, v, ("must be within +-" + std::to_string(limit)).c_str());
-    }
+  if (!(std::abs(vehicle_lever_arm_m) <= 10.0))
+    return FieldError("vehicle_lever_arm_m", vehicle_lever_arm_m, "must be within +-10 m");
+  if (!(vehicle_lever_arm_sigma_m >= 0.0 && vehicle_lever_arm_sigma_m <= 10.0)) {
+    return FieldError("vehicle_lever_arm_sigma_m", vehicle_lever_arm_sigma_m,
+                      "must be in [0, 10] m (0: the given lever arm is exact)");
   }
-  for (const auto& [name, v, limit] :
-       {std::tuple<const char*, double, double>{"vehicle_lever_arm_sigma_m",
-                                                vehicle_lever_arm_sigma_m, 10.0},
-        {"vehicle_sideslip_sigma_rad_per_mps2", vehicle_sideslip_sigma_rad_per_mps2, 0.05}}) {
-    if (!(v >= 0.0 && v <= limit)) {
-      return FieldError(
-          name, v,
-          ("must be in [0, " + std::to_string(limit) + "] (0: the given value is exact)").c_str());
-    }
+  if (!(std::abs(vehicle_sideslip_rad_per_mps2) <= 0.05)) {
+    return FieldError("vehicle_sideslip_rad_per_mps2", vehicle_sideslip_rad_per_mps2,
+                      "must be within +-0.05 rad/(m/s^2)");
+  }
+  if (!(vehicle_sideslip_sigma_rad_per_mps2 >= 0.0 &&
+        vehicle_sideslip_sigma_rad_per_mps2 <= 0.05)) {
+    return FieldError("vehicle_sideslip_sigma_rad_per_mps2", vehicle_sideslip_sigma_rad_per_mps2,
+                      "must be in [0, 0.05] rad/(m/s^2) (0: the given sideslip is exact)");
   }
   return gnss.Validate();
 }

@@ -197,14 +197,16 @@ struct InsFilter::Impl {
     return EstimatesMisalignment() ? std::pow(options.vehicle_misalignment_sigma_rad, 2)
                                    : kFixedMisalignmentVariance;
   }
-  // Likewise the lateral model's two parameters, each where its sigma is positive.
+  // The lateral model's sigmas (lever arm, sideslip) where each is estimated (the constraint on,
+  // the sigma positive); 0 where the given value is exact.
+  Eigen::Vector2d LateralModelSigmas() const {
+    if (!(options.nhc_sigma_mps > 0.0)) return Eigen::Vector2d::Zero();
+    return Eigen::Vector2d(options.vehicle_lever_arm_sigma_m,
+                           options.vehicle_sideslip_sigma_rad_per_mps2);
+  }
   Eigen::Vector2d LateralModelVariance() const {
-    const auto var = [&](double sigma) {
-      return options.nhc_sigma_mps > 0.0 && sigma > 0.0 ? sigma * sigma
-                                                        : kFixedLateralModelVariance;
-    };
-    return Eigen::Vector2d(var(options.vehicle_lever_arm_sigma_m),
-                           var(options.vehicle_sideslip_sigma_rad_per_mps2));
+    const Eigen::Vector2d s = LateralModelSigmas();
+    return (s.array() > 0.0).select(s.array().square(), kFixedLateralModelVariance).matrix();
   }
 
   // A new GNSS solution starts: b_gnss restarts from zero with the stationary covariance `cov`
@@ -338,8 +340,9 @@ struct InsFilter::Impl {
       if (EstimatesMisalignment()) J.block<3, 2>(0, kM) = so3::Hat(vv).rightCols<2>();
       Eigen::Matrix<double, 2, kN> H = J.bottomRows<2>();
       // The given values stay exact where not estimated (as the misalignment's).
-      if (options.vehicle_lever_arm_sigma_m > 0.0) H.col(kL) = -d_lever;
-      if (options.vehicle_sideslip_sigma_rad_per_mps2 > 0.0) H.col(kL + 1) = -d_slip;
+      const Eigen::Vector2d lateral_sigmas = LateralModelSigmas();
+      if (lateral_sigmas.x() > 0.0) H.col(kL) = -d_lever;
+      if (lateral_sigmas.y() > 0.0) H.col(kL + 1) = -d_slip;
       const Eigen::Vector2d z = x.l.x() * d_lever + x.l.y() * d_slip - vv.tail<2>();
       const Eigen::Matrix2d Rm =
           options.nhc_sigma_mps * options.nhc_sigma_mps * Eigen::Matrix2d::Identity();
@@ -372,12 +375,15 @@ struct InsFilter::Impl {
                               << sigma.y() * 180.0 / M_PI << " deg";
         }
       }
-      const Eigen::Vector2d sigma_l = P.block<2, 2>(kL, kL).diagonal().cwiseSqrt();
-      if (!lateral_model_logged && options.vehicle_lever_arm_sigma_m > 0.0 && sigma_l.x() < 0.1) {
-        lateral_model_logged = true;
-        SLAM_MMS_LOG(kInfo) << "InsFilter: the IMU is " << x.l.x() << " +- " << sigma_l.x()
-                            << " m ahead of the vehicle's non-holonomic point; sideslip " << x.l.y()
-                            << " +- " << sigma_l.y() << " rad/(m/s^2)";
+      if (!lateral_model_logged && lateral_sigmas.x() > 0.0) {
+        // Once the lever arm is known to 0.1 m.
+        const Eigen::Vector2d sigma_l = P.block<2, 2>(kL, kL).diagonal().cwiseSqrt();
+        if (sigma_l.x() < 0.1) {
+          lateral_model_logged = true;
+          SLAM_MMS_LOG(kInfo) << "InsFilter: the IMU is " << x.l.x() << " +- " << sigma_l.x()
+                              << " m ahead of the vehicle's non-holonomic point; sideslip "
+                              << x.l.y() << " +- " << sigma_l.y() << " rad/(m/s^2)";
+        }
       }
     }
   }

@@ -644,6 +644,21 @@ TEST(InsFilterModelsTest, ModelOptionsAreValidated) {
   o.vehicle_misalignment_sigma_rad = -0.01;
   s = InsFilter::Create(o).status();
   EXPECT_NE(s.message().find("vehicle_misalignment_sigma_rad"), std::string::npos) << s.message();
+  // The lateral model: each field named.
+  const auto named = [](void (*set)(InsFilter::Options*), const char* field) {
+    InsFilter::Options bad;
+    set(&bad);
+    const Status st = InsFilter::Create(bad).status();
+    EXPECT_EQ(st.code(), StatusCode::kInvalidArgument) << field;
+    EXPECT_NE(st.message().find(field), std::string::npos) << st.message();
+  };
+  named([](InsFilter::Options* b) { b->vehicle_lever_arm_m = 12.0; }, "vehicle_lever_arm_m");
+  named([](InsFilter::Options* b) { b->vehicle_lever_arm_sigma_m = -1.0; },
+        "vehicle_lever_arm_sigma_m");
+  named([](InsFilter::Options* b) { b->vehicle_sideslip_rad_per_mps2 = std::nan(""); },
+        "vehicle_sideslip_rad_per_mps2");
+  named([](InsFilter::Options* b) { b->vehicle_sideslip_sigma_rad_per_mps2 = 0.1; },
+        "vehicle_sideslip_sigma_rad_per_mps2");
 }
 
 }  // namespace

@@ -101,7 +101,8 @@ TEST(PosSmootherTest, RtsEqualsBatchLeastSquaresOnALinearModel) {
     z.H = Eigen::MatrixXd::Zero(m, kN);
     z.H.leftCols(m).setIdentity();
     z.H.block<3, 3>(0, 15).setIdentity();  // the position fix holds the GNSS bias
-    if (m == 6) {                          // as the NHC does
+    if (m == 6) {
+      // As the NHC does: the misalignment and the lateral model in the velocity rows.
       z.H.block<2, 2>(4, 18) = 5.0 * Eigen::Matrix2d::Identity();
       z.H.block<2, 2>(4, 20) << -0.3, -20.0, 0.1, 0.0;
     }

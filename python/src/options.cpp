@@ -165,6 +165,10 @@ void RegisterOptions(py::module_& m) {
       .Field("zupt_interval_s", &IO::zupt_interval_s, "[s]")
       .Field("nhc_sigma_mps", &IO::nhc_sigma_mps, "Non-holonomic constraint sigma, 0: off [m/s]")
       .Field("nhc_min_speed_mps", &IO::nhc_min_speed_mps, "[m/s]")
+      .Field("nhc_lateral_correlation_time_s", &IO::nhc_lateral_correlation_time_s,
+             "Correlation time of the constraint's lateral errors, 0: white [s]")
+      .Field("nhc_vertical_correlation_time_s", &IO::nhc_vertical_correlation_time_s,
+             "Correlation time of the constraint's vertical errors, 0: white [s]")
       .Field("vehicle_pitch_misalignment_rad", &IO::vehicle_pitch_misalignment_rad,
              "IMU-to-vehicle misalignment the constraint starts from: pitch about body y [rad]")
       .Field("vehicle_yaw_misalignment_rad", &IO::vehicle_yaw_misalignment_rad,

@@ -84,6 +84,12 @@ Status InsFilter::Options::Validate() const {
     return FieldError("nhc_sigma_mps", nhc_sigma_mps, "must be >= 0 (0: off)");
   if (!(nhc_min_speed_mps >= 0.0) || !std::isfinite(nhc_min_speed_mps))
     return FieldError("nhc_min_speed_mps", nhc_min_speed_mps, "must be >= 0");
+  for (const auto& [name, v] :
+       {std::pair<const char*, double>{"nhc_lateral_correlation_time_s",
+                                       nhc_lateral_correlation_time_s},
+        {"nhc_vertical_correlation_time_s", nhc_vertical_correlation_time_s}}) {
+    if (!(v >= 0.0 && v <= 60.0)) return FieldError(name, v, "must be within [0, 60] s (0: white)");
+  }
   for (const auto& [name, v] : {std::pair<const char*, double>{"vehicle_pitch_misalignment_rad",
                                                                vehicle_pitch_misalignment_rad},
                                 {"vehicle_yaw_misalignment_rad", vehicle_yaw_misalignment_rad}}) {

@@ -344,8 +344,15 @@ struct InsFilter::Impl {
       if (lateral_sigmas.x() > 0.0) H.col(kL) = -d_lever;
       if (lateral_sigmas.y() > 0.0) H.col(kL + 1) = -d_slip;
       const Eigen::Vector2d z = x.l.x() * d_lever + x.l.y() * d_slip - vv.tail<2>();
-      const Eigen::Matrix2d Rm =
-          options.nhc_sigma_mps * options.nhc_sigma_mps * Eigen::Matrix2d::Identity();
+      // A correlated error as the white noise of its low-frequency spectral density (the
+      // interval since the last update, refused ones included, at least the nominal one).
+      const double dt_nhc =
+          std::max(last_nhc ? t.SecondsSince(*last_nhc) : 0.0, options.zupt_interval_s);
+      const Eigen::Vector2d tau(options.nhc_lateral_correlation_time_s,
+                                options.nhc_vertical_correlation_time_s);
+      const Eigen::Vector2d correlation_factor = (2.0 * tau / std::max(dt_nhc, 1e-3)).cwiseMax(1.0);
+      const Eigen::Matrix2d Rm = Eigen::Matrix2d(
+          (options.nhc_sigma_mps * options.nhc_sigma_mps * correlation_factor).asDiagonal());
       last_nhc = t;
       // The innovation test: where the vehicle does not keep to its x axis (not a car, a skid,
       // an IMU mounted otherwise, broken input motion), the constraint is refused rather than

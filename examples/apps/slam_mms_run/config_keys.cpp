@@ -302,6 +302,10 @@ const std::vector<std::pair<std::string, KeyHandler>>& Handlers() {
     SLAM_MMS_KEY_D("ins.zupt_interval_s", o->system.ins.zupt_interval_s);
     SLAM_MMS_KEY_D("ins.nhc_sigma_mps", o->system.ins.nhc_sigma_mps);
     SLAM_MMS_KEY_D("ins.nhc_min_speed_mps", o->system.ins.nhc_min_speed_mps);
+    SLAM_MMS_KEY_D("ins.nhc_lateral_correlation_time_s",
+                   o->system.ins.nhc_lateral_correlation_time_s);
+    SLAM_MMS_KEY_D("ins.nhc_vertical_correlation_time_s",
+                   o->system.ins.nhc_vertical_correlation_time_s);
     SLAM_MMS_KEY_D("ins.vehicle_pitch_misalignment_rad",
                    o->system.ins.vehicle_pitch_misalignment_rad);
     SLAM_MMS_KEY_D("ins.vehicle_yaw_misalignment_rad", o->system.ins.vehicle_yaw_misalignment_rad);

@@ -152,6 +152,16 @@ class InsFilter {
     /// the vehicle's, see ApplyInputModels).
     double nhc_sigma_mps = 0.0;
     double nhc_min_speed_mps = 1.0;  ///< Applied above this estimated speed [m/s].
+    /// Correlation times of the constraint's errors, lateral (y) and vertical (z) rows [s]; 0:
+    /// white (default). A car's velocity off its axes is not white noise: tyre slip, the road's
+    /// camber and grade changes, suspension pitch under braking last seconds (KITTI's records,
+    /// 40 drives: 2.6 s lateral, 0.8 s vertical; docs/ins.md). Taken as white at the
+    /// constraint's rate, n updates of one error count as n independent ones; with a correlation
+    /// time tau each update's variance is nhc_sigma_mps^2 * max(1, 2 tau / dt) (dt: the time
+    /// since the last constraint update), the white noise of the same spectral density at low
+    /// frequencies, which is what a drift in heading or height integrates.
+    double nhc_lateral_correlation_time_s = 0.0;
+    double nhc_vertical_correlation_time_s = 0.0;
     /// IMU-to-vehicle misalignment the constraint starts from: the vehicle frame is the body
     /// frame turned by pitch about body y and yaw about body z [rad] (a calibrated mounting).
     double vehicle_pitch_misalignment_rad = 0.0;

@@ -886,6 +886,16 @@ class InsOptions:
     @nhc_min_speed_mps.setter
     def nhc_min_speed_mps(self, value: float) -> None: ...
     @property
+    def nhc_lateral_correlation_time_s(self) -> float:
+        """Correlation time of the constraint's lateral errors, 0: white [s]"""
+    @nhc_lateral_correlation_time_s.setter
+    def nhc_lateral_correlation_time_s(self, value: float) -> None: ...
+    @property
+    def nhc_vertical_correlation_time_s(self) -> float:
+        """Correlation time of the constraint's vertical errors, 0: white [s]"""
+    @nhc_vertical_correlation_time_s.setter
+    def nhc_vertical_correlation_time_s(self, value: float) -> None: ...
+    @property
     def vehicle_pitch_misalignment_rad(self) -> float:
         """IMU-to-vehicle misalignment the constraint starts from: pitch about body y [rad]"""
     @vehicle_pitch_misalignment_rad.setter

@@ -13,24 +13,14 @@ white-noise constraint at 10 Hz under-states its variance by (x 2 tau_int * 10 H
   scripts/experiments/oxts_constraint_correlation.py [--data ../shared/data] [--min-speed 3]
 """
 import argparse
-import glob
 import os
-import tarfile
 
 import numpy as np
 
+from oxts_records import drive_files, records
+
 RATE_HZ = 10.0
 MAX_LAG = 100  # 10 s
-
-
-def records(path):
-    with tarfile.open(path) as t:
-        rows = []
-        for m in t.getmembers():
-            if "/oxts/data/" in m.name and m.name.endswith(".txt"):
-                rows.append((m.name, np.array(t.extractfile(m).read().split(), float)))
-    rows.sort(key=lambda r: r[0])
-    return np.array([r[1] for r in rows])
 
 
 def autocorrelation(r, segments):
@@ -62,9 +52,7 @@ def main():
     ap.add_argument("--min-speed", type=float, default=3.0, help="[m/s]")
     ap.add_argument("--min-samples", type=int, default=200, help="records above the speed")
     args = ap.parse_args()
-    files = sorted(glob.glob(os.path.join(args.data, "kitti_oxts", "*.tar.gz")))
-    if not files:
-        raise SystemExit(f"no kitti_oxts/*.tar.gz under {args.data}")
+    files = drive_files(args.data)
     rows = []
     for f in files:
         a = records(f)

@@ -11,21 +11,11 @@ standard deviations and their medians over the drives with yaw rates above --min
   scripts/experiments/oxts_lateral_fit.py [--data ../shared/data] [--min-yaw-rate 0.3]
 """
 import argparse
-import glob
 import os
-import tarfile
 
 import numpy as np
 
-
-def records(path):
-    with tarfile.open(path) as t:
-        rows = []
-        for m in t.getmembers():
-            if "/oxts/data/" in m.name and m.name.endswith(".txt"):
-                rows.append((m.name, np.array(t.extractfile(m).read().split(), float)))
-    rows.sort(key=lambda r: r[0])
-    return np.array([r[1] for r in rows])
+from oxts_records import drive_files, records
 
 
 def main():
@@ -33,9 +23,7 @@ def main():
     ap.add_argument("--data", default=os.environ.get("SLAM_MMS_SHARED_DATA", "../shared/data"))
     ap.add_argument("--min-yaw-rate", type=float, default=0.3, help="[rad/s]")
     args = ap.parse_args()
-    files = sorted(glob.glob(os.path.join(args.data, "kitti_oxts", "*.tar.gz")))
-    if not files:
-        raise SystemExit(f"no kitti_oxts/*.tar.gz under {args.data}")
+    files = drive_files(args.data)
     summary = []
     for f in files:
         a = records(f)

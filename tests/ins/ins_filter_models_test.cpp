@@ -178,6 +178,19 @@ double RmsIn(const DriveRun& r, const std::vector<double>& v, double a, double b
   return n > 0 ? std::sqrt(ss / n) : 0.0;
 }
 
+// The mean of v over the epochs in [a, b) (0 where there are none).
+double MeanIn(const DriveRun& r, const std::vector<double>& v, double a, double b) {
+  double sum = 0.0;
+  int n = 0;
+  for (size_t i = 0; i < v.size(); ++i) {
+    if (r.t[i] >= a && r.t[i] < b) {
+      sum += v[i];
+      ++n;
+    }
+  }
+  return n > 0 ? sum / n : 0.0;
+}
+
 double ValueAt(const DriveRun& r, const std::vector<double>& v, double t) {
   for (size_t i = 0; i < v.size(); ++i)
     if (r.t[i] >= t - 1e-6) return v[i];
@@ -603,12 +616,8 @@ TEST(InsFilterModelsTest, CorrelatedConstraintErrorsAreNotTakenAsWhite) {
           RunModelDrive(PitchingCar(seed), 120.0, rx, ErrorProcess(), &f, seed, &imu);
       up[c] += MaxIn(r, r.up_err, 60.0, 121.0) / kSeeds;
       outage[c] += MaxIn(r, r.pos_err, 60.0, 121.0) / kSeeds;
-      double sum = 0.0;
-      int n = 0;
-      for (size_t i = 0; i < r.t.size(); ++i) {
-        if (r.t[i] > 60.0) sum += r.nees_pos[i], ++n;
-      }
-      nees[c] += sum / std::max(n, 1) / kSeeds;
+      // The outage's epochs after its start (one a second).
+      nees[c] += MeanIn(r, r.nees_pos, 61.0, 121.0) / kSeeds;
     }
   }
   std::printf(
@@ -644,15 +653,12 @@ TEST(InsFilterModelsTest, StatedImuNoiseBoundsTheOutageDrift) {
       const DriveRun r =
           RunModelDrive(AnalyticDrive(), 150.0, rx, ErrorProcess(), &f, seed, &tactical);
       const double max_err = MaxIn(r, r.pos_err, 90.0, 151.0);
-      double sum = 0.0;
-      int n = 0;
-      for (size_t i = 0; i < r.t.size(); ++i) {
-        if (r.t[i] > 90.0 && r.t[i] <= 150.0) sum += r.nees_pos[i], ++n;
-      }
+      // The outage's epochs after its start (one a second).
+      const double mean_nees = MeanIn(r, r.nees_pos, 91.0, 151.0);
       std::printf("seed %u, %s: max position error in the outage %.3f m, mean NEES %.2f\n", seed,
-                  model == 0 ? "defaults" : "stated noise", max_err, sum / std::max(n, 1));
+                  model == 0 ? "defaults" : "stated noise", max_err, mean_nees);
       outage[model] += max_err / kSeeds;
-      nees_in[model] += sum / std::max(n, 1) / kSeeds;
+      nees_in[model] += mean_nees / kSeeds;
     }
   }
   std::printf(

@@ -263,10 +263,20 @@ StatusOr<std::vector<SubmapPoseUpdate>> SubmapManager::OnSubmapFinished(
                      : std::nullopt;
       if (reg && reg->inlier_ratio >= noise::kMapToMapMinInlierRatio) {
         const Vector6d correction = se3::Log(rec->T_prev_this.inverse() * reg->T_target_source);
-        if (correction.head<3>().norm() < noise::kMapToMapMaxCorrectionRotRad &&
-            correction.tail<3>().norm() < noise::kMapToMapMaxCorrectionTransM) {
-          SLAM_MMS_RETURN_IF_ERROR(m.graph->AddRegistrationFactor(
-              m.last_id, submap_id, reg->T_target_source, m.RegistrationCovariance(*reg)));
+        const bool accepted = correction.head<3>().norm() < noise::kMapToMapMaxCorrectionRotRad &&
+                              correction.tail<3>().norm() < noise::kMapToMapMaxCorrectionTransM;
+        const Matrix6d cov = m.RegistrationCovariance(*reg);
+        SLAM_MMS_LOG(kDebug) << "level 2: map-to-map " << prev->id << " -> " << submap_id
+                             << ": inliers " << reg->inlier_ratio << ", correction "
+                             << correction.head<3>().norm() * 180.0 / M_PI << " deg "
+                             << correction.tail<3>().norm() << " m, sigma "
+                             << std::sqrt(cov(0, 0)) * 180.0 / M_PI << " / "
+                             << std::sqrt(cov(1, 1)) * 180.0 / M_PI << " / "
+                             << std::sqrt(cov(2, 2)) * 180.0 / M_PI << " deg -> "
+                             << (accepted ? "accepted" : "rejected");
+        if (accepted) {
+          SLAM_MMS_RETURN_IF_ERROR(
+              m.graph->AddRegistrationFactor(m.last_id, submap_id, reg->T_target_source, cov));
           ++m.stats.map_to_map_accepted;
         }
       }

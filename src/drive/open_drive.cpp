@@ -27,6 +27,9 @@ class StreamsOverride final : public DriveReader {
         lidar_offset_ns_(std::llround(extrinsics.lidar_time_offset_s * 1e9)) {
     streams_.T_body_lidar = extrinsics.T_body_lidar;
     if (extrinsics.t_body_antenna_m) streams_.t_body_antenna_m = extrinsics.t_body_antenna_m;
+    if (extrinsics.imu_frame_is_vehicle_frame) {
+      streams_.imu_frame_is_vehicle_frame = *extrinsics.imu_frame_is_vehicle_frame;
+    }
   }
   StreamsOverride(std::unique_ptr<DriveReader> owned, const DriveReader* base,
                   const ImuNoiseSpec& imu_noise, const std::string& source)
@@ -173,9 +176,10 @@ StatusOr<std::unique_ptr<DriveReader>> OpenDrive(const std::filesystem::path& pa
       }
       SLAM_MMS_ASSIGN_OR_RETURN(std::unique_ptr<RosbagDriveReader> bag,
                                 RosbagDriveReader::Open(path, bo));
-      // The bag reader took T_body_lidar and the antenna: only a clock offset needs the wrapper
-      // (hosts see the RosbagDriveReader itself otherwise).
-      return with_overrides(std::move(bag), extrinsics && extrinsics->lidar_time_offset_s == 0.0);
+      // The bag reader took T_body_lidar and the antenna: only a clock offset or the IMU frame's
+      // statement needs the wrapper (hosts see the RosbagDriveReader itself otherwise).
+      return with_overrides(std::move(bag), extrinsics && extrinsics->lidar_time_offset_s == 0.0 &&
+                                                !extrinsics->imu_frame_is_vehicle_frame);
 #else
       break;
 #endif

@@ -99,6 +99,7 @@ Status WriteStreams(const DriveStreams& s, const fs::path& dir, const FolderWrit
   DriveExtrinsics e;
   e.T_body_lidar = s.T_body_lidar;
   e.t_body_antenna_m = s.t_body_antenna_m;
+  if (s.imu_frame_is_vehicle_frame) e.imu_frame_is_vehicle_frame = true;
   SLAM_MMS_RETURN_IF_ERROR(WriteExtrinsicsYaml(e, dir / "extrinsics.yaml"));
   if (s.imu_noise) {
     SLAM_MMS_RETURN_IF_ERROR(WriteImuNoiseYaml(*s.imu_noise, dir / kImuNoiseFileName));

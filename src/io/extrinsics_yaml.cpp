@@ -118,6 +118,13 @@ StatusOr<DriveExtrinsics> ParseExtrinsicsYaml(const std::string& text, const std
       } else if (key == "lidar_time_offset_s") {
         SLAM_MMS_RETURN_IF_ERROR(io_internal::YamlFiniteNumber(
             kv.second, YamlWhere(file, kv.second) + ": " + key, " [s]", &out.lidar_time_offset_s));
+      } else if (key == "imu_frame_is_vehicle_frame") {
+        const std::string v = kv.second.IsScalar() ? kv.second.Scalar() : std::string();
+        if (v != "true" && v != "false") {
+          return DataLossError(YamlWhere(file, kv.first) + ": " + key +
+                               " must be true or false, got '" + v + "'");
+        }
+        out.imu_frame_is_vehicle_frame = v == "true";
       } else {
         SLAM_MMS_LOG(kInfo) << YamlWhere(file, kv.first) << ": key '" << key << "' ignored";
       }
@@ -162,6 +169,11 @@ std::string FormatExtrinsicsYaml(const DriveExtrinsics& e) {
     s += "# a LiDAR stamp s is the time s + lidar_time_offset_s on the IMU/GNSS clock [s].\n"
          "lidar_time_offset_s: " +
          FormatDouble(e.lidar_time_offset_s) + "\n";
+  }
+  if (e.imu_frame_is_vehicle_frame) {
+    s += "# the body (IMU) frame is the vehicle's: x forward, y left, z up.\n"
+         "imu_frame_is_vehicle_frame: ";
+    s += *e.imu_frame_is_vehicle_frame ? "true\n" : "false\n";
   }
   return s;
 }

@@ -228,6 +228,7 @@ Status FolderDriveReader::LoadStreams() {
     SLAM_MMS_ASSIGN_OR_RETURN(const DriveExtrinsics e, ReadExtrinsicsYaml(extrinsics));
     s.T_body_lidar = e.T_body_lidar;
     s.t_body_antenna_m = e.t_body_antenna_m;
+    s.imu_frame_is_vehicle_frame = e.imu_frame_is_vehicle_frame.value_or(false);
   } else if (options_.allow_missing_extrinsics) {
     SLAM_MMS_LOG(kWarning) << extrinsics.string() << " not found; using identity T_body_lidar";
   } else {

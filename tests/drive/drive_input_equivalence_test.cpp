@@ -110,6 +110,9 @@ void ExpectEquivalent(const fs::path& kitti_drive, int64_t last_frame, const fs:
     }
     auto reader = OpenDrive(*written, so);
     ASSERT_TRUE(reader.ok()) << reader.status().ToString();
+    // The IMU frame's statement travels with the drive (extrinsics.yaml), so the same models apply.
+    EXPECT_EQ((*reader)->streams().imu_frame_is_vehicle_frame,
+              (*kitti)->streams().imu_frame_is_vehicle_frame);
     const Trajectory t = RunFull(**reader);
     ASSERT_EQ(t.size(), reference.size());
     double max_m = 0.0, max_rad = 0.0;

@@ -152,6 +152,36 @@ TEST_F(KittiCalibrationTest, YamlCarriesTheTimeOffsetExactly) {
   EXPECT_THAT(two.status().message(), HasSubstr("d.yaml:2: a second YAML document"));
 }
 
+// The statement that the IMU frame is the vehicle's (a KITTI OXTS mounting): written only where
+// stated, read back as stated; absent = not stated; anything but true/false names file, line, key.
+TEST_F(KittiCalibrationTest, YamlStatesWhetherTheImuFrameIsTheVehicles) {
+  DriveExtrinsics e = NonTrivialExtrinsics();
+  EXPECT_THAT(FormatExtrinsicsYaml(e), ::testing::Not(HasSubstr("imu_frame_is_vehicle_frame")));
+  auto unstated = ParseExtrinsicsYaml(FormatExtrinsicsYaml(e), "u.yaml");
+  ASSERT_TRUE(unstated.ok()) << unstated.status().ToString();
+  EXPECT_FALSE(unstated->imu_frame_is_vehicle_frame.has_value());
+  for (const bool stated : {true, false}) {
+    e.imu_frame_is_vehicle_frame = stated;
+    const std::string text = FormatExtrinsicsYaml(e);
+    EXPECT_THAT(text, HasSubstr(std::string("\nimu_frame_is_vehicle_frame: ") +
+                                (stated ? "true" : "false")));
+    auto back = ParseExtrinsicsYaml(text, "s.yaml");
+    ASSERT_TRUE(back.ok()) << back.status().ToString();
+    ASSERT_TRUE(back->imu_frame_is_vehicle_frame.has_value());
+    EXPECT_EQ(*back->imu_frame_is_vehicle_frame, stated);
+    EXPECT_EQ(back->T_body_lidar.matrix(), e.T_body_lidar.matrix());
+  }
+  for (const std::string bad : {"yes", "1", "[true]", "", "True"}) {
+    auto r = ParseExtrinsicsYaml(
+        "T_body_lidar: {xyz: [0, 0, 0], rpy_deg: [0, 0, 0]}\nimu_frame_is_vehicle_frame: " + bad +
+            "\n",
+        "b.yaml");
+    ASSERT_FALSE(r.ok()) << bad;
+    EXPECT_EQ(r.status().code(), StatusCode::kDataLoss);
+    EXPECT_THAT(r.status().message(), HasSubstr("b.yaml:2: imu_frame_is_vehicle_frame")) << bad;
+  }
+}
+
 TEST_F(KittiCalibrationTest, ReadExtrinsicsFilePicksTheFormatByExtension) {
   const DriveExtrinsics e = NonTrivialExtrinsics();
   ASSERT_TRUE(WriteExtrinsicsYaml(e, dir_ / "a.yaml").ok());

@@ -77,8 +77,10 @@ struct DriveStreams {
   /// True where the input states that its IMU (body) frame is the vehicle's: x forward, z up,
   /// mounted on a wheeled vehicle, so that its sideways and vertical velocities stay near zero
   /// (the non-holonomic constraint, MappingSystem::Options::vehicle_nhc_sigma_mps). KITTI raw
-  /// (the OXTS frame, also the simulator's drives): true. A folder or a bag says nothing of the
-  /// IMU's mounting: false.
+  /// (the OXTS frame, also the simulator's drives): true. A folder: its extrinsics.yaml's
+  /// `imu_frame_is_vehicle_frame` (slam_mms_convert writes it where the source states it), else
+  /// false. A bag says nothing of the IMU's mounting: false, unless an --extrinsics file states it
+  /// (DriveExtrinsics::imu_frame_is_vehicle_frame).
   bool imu_frame_is_vehicle_frame = false;
 };
 

@@ -5,6 +5,7 @@
 //   T_body_lidar: [r00, r01, r02, tx, r10, r11, r12, ty, r20, r21, r22, tz, 0, 0, 0, 1]
 //   t_body_antenna_m: [x, y, z]      # optional: GNSS antenna lever arm in the body frame
 //   lidar_time_offset_s: t           # optional (default 0): see DriveExtrinsics
+//   imu_frame_is_vehicle_frame: true # optional: see DriveExtrinsics
 //
 // or, for T_body_lidar, `{xyz: [x, y, z], rpy_deg: [roll, pitch, yaw]}` with
 // R = Rz(yaw) Ry(pitch) Rx(roll). The 4x4 matrix is row-major; its rotation must be orthonormal
@@ -34,6 +35,11 @@ struct DriveExtrinsics {
   /// The LiDAR clock's offset [s]: a LiDAR stamp s is the time s + lidar_time_offset_s on the
   /// IMU/GNSS clock.
   double lidar_time_offset_s = 0.0;
+  /// Whether the body (IMU) frame is the vehicle's: x forward, y left, z up, as a KITTI OXTS is
+  /// mounted (DriveStreams::imu_frame_is_vehicle_frame; where true, RunDrive's POS may hold the
+  /// vehicle's non-holonomic constraint, ApplyInputModels). Empty: not stated (a folder reader
+  /// then takes false; an override keeps the reader's own).
+  std::optional<bool> imu_frame_is_vehicle_frame;
 };
 
 /// Reads an extrinsics file (see the file comment).
@@ -44,7 +50,7 @@ struct DriveExtrinsics {
                                                             const std::string& file);
 
 /// The text WriteExtrinsicsYaml writes (T_body_lidar as 16 numbers; lidar_time_offset_s only when
-/// nonzero).
+/// nonzero; imu_frame_is_vehicle_frame only when stated).
 std::string FormatExtrinsicsYaml(const DriveExtrinsics& extrinsics);
 
 /// Writes `extrinsics` to `file` (kUnavailable when it cannot be written).

@@ -2428,8 +2428,8 @@ def set_min_log_level(level: LogLevel) -> None:
 def write_drive_folder(reader: DriveReader, dir: os.PathLike[str], scan_format: str = 'pcd_binary', gnss_format: str = 'csv', write_point_time: bool = False, nmea_time_decimals: int = 3, overwrite: bool = False) -> None:
     """The C++ WriteDriveFolder: any DriveReader's drive as a plain drive folder (docs/drive_folder.md) that FolderDriveReader reads back."""
 
-def write_extrinsics_yaml(path: os.PathLike[str], T_body_lidar: object, t_body_antenna_m: object = None) -> None:
-    """extrinsics.yaml (the drive folder's, also --extrinsics of a bag) with T_body_lidar 4 x 4."""
+def write_extrinsics_yaml(path: os.PathLike[str], T_body_lidar: object, t_body_antenna_m: object = None, imu_frame_is_vehicle_frame: Optional[bool] = None) -> None:
+    """extrinsics.yaml (the drive folder's, also --extrinsics of a bag) with T_body_lidar 4 x 4; imu_frame_is_vehicle_frame: the statement that the IMU frame is the car's (None: not stated)."""
 
 def write_georef_json(origin: GeodeticPoint, out_dir: os.PathLike[str], crs: str = '') -> None:
     """Writes out_dir/georef.json (slam_mms_run writes it once, for the first method's origin)."""

@@ -399,8 +399,10 @@ void RegisterReaders(py::module_& m) {
       "(docs/drive_folder.md) that FolderDriveReader reads back.");
   m.def(
       "write_extrinsics_yaml",
-      [](const std::filesystem::path& path, py::object T_body_lidar, py::object t_body_antenna_m) {
+      [](const std::filesystem::path& path, py::object T_body_lidar, py::object t_body_antenna_m,
+         std::optional<bool> imu_frame_is_vehicle_frame) {
         DriveExtrinsics e;
+        e.imu_frame_is_vehicle_frame = imu_frame_is_vehicle_frame;
         e.T_body_lidar = ArrayToIsometry(T_body_lidar, "T_body_lidar");
         if (!t_body_antenna_m.is_none()) {
           auto a = py::array_t<double, py::array::forcecast>::ensure(t_body_antenna_m);
@@ -412,7 +414,10 @@ void RegisterReaders(py::module_& m) {
         ThrowIfError(WriteExtrinsicsYaml(e, path));
       },
       py::arg("path"), py::arg("T_body_lidar"), py::arg("t_body_antenna_m") = py::none(),
-      "extrinsics.yaml (the drive folder's, also --extrinsics of a bag) with T_body_lidar 4 x 4.");
+      py::arg("imu_frame_is_vehicle_frame") = py::none(),
+      "extrinsics.yaml (the drive folder's, also --extrinsics of a bag) with T_body_lidar 4 x 4; "
+      "imu_frame_is_vehicle_frame: the statement that the IMU frame is the car's (None: not "
+      "stated).");
   m.attr("HAVE_FOLDER_READER") = true;
 #else
   m.attr("HAVE_FOLDER_READER") = false;

@@ -103,9 +103,11 @@ def test_rosbag_gives_the_kitti_raw_trajectory(sim_drive, kitti_full, tmp_path):
     # A bag holds no calibration: the extrinsics.yaml of a folder, passed as extrinsics=.
     yaml = tmp_path / "extrinsics.yaml"
     slam_mms.write_extrinsics_yaml(yaml, reader.streams.T_body_lidar,
-                                   reader.streams.t_body_antenna_m)
+                                   reader.streams.t_body_antenna_m,
+                                   reader.streams.imu_frame_is_vehicle_frame)
     r = slam_mms.run_drive(bag, mode="full", extrinsics=yaml)
     assert isinstance(r.reader, slam_mms.RosbagDriveReader)
+    assert r.reader.streams.imu_frame_is_vehicle_frame  # stated by the file, as KITTI raw states it
     assert r.run.complete and len(r.trajectory) == 10
     dp, dr = _max_differences(r, kitti_full)
     assert dp <= 1e-3 and dr <= 1e-4, (dp, dr)

@@ -169,6 +169,7 @@ StatusOr<std::unique_ptr<DriveReader>> OpenDrive(const std::filesystem::path& pa
         // Also given to the bag reader, which checks them.
         bo.T_body_lidar = extrinsics->T_body_lidar;
         bo.t_body_antenna_m = extrinsics->t_body_antenna_m;
+        bo.imu_frame_is_vehicle_frame = extrinsics->imu_frame_is_vehicle_frame.value_or(false);
       } else {
         SLAM_MMS_LOG(kWarning) << path.string()
                                << ": no extrinsics given (--extrinsics FILE): T_body_lidar = "
@@ -176,10 +177,9 @@ StatusOr<std::unique_ptr<DriveReader>> OpenDrive(const std::filesystem::path& pa
       }
       SLAM_MMS_ASSIGN_OR_RETURN(std::unique_ptr<RosbagDriveReader> bag,
                                 RosbagDriveReader::Open(path, bo));
-      // The bag reader took T_body_lidar and the antenna: only a clock offset or the IMU frame's
-      // statement needs the wrapper (hosts see the RosbagDriveReader itself otherwise).
-      return with_overrides(std::move(bag), extrinsics && extrinsics->lidar_time_offset_s == 0.0 &&
-                                                !extrinsics->imu_frame_is_vehicle_frame);
+      // The bag reader took T_body_lidar, the antenna and the IMU frame's statement: only a clock
+      // offset needs the wrapper (hosts see the RosbagDriveReader itself otherwise).
+      return with_overrides(std::move(bag), extrinsics && extrinsics->lidar_time_offset_s == 0.0);
 #else
       break;
 #endif

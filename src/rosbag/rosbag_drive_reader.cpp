@@ -474,6 +474,7 @@ StatusOr<std::unique_ptr<RosbagDriveReader>> RosbagDriveReader::Open(const fs::p
   }
   impl->streams.T_body_lidar = options.T_body_lidar;
   impl->streams.t_body_antenna_m = options.t_body_antenna_m;
+  impl->streams.imu_frame_is_vehicle_frame = options.imu_frame_is_vehicle_frame;
   SLAM_MMS_LOG(kInfo) << impl->name << ": " << impl->scans.size() << " scans on "
                       << impl->lidar_topic << ", " << impl->streams.imu.size() << " IMU samples on "
                       << impl->imu_topic << ", " << impl->streams.gnss.size() << " GNSS fixes"

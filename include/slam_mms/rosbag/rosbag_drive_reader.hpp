@@ -95,6 +95,9 @@ class RosbagDriveReader final : public DriveReader {
     /// Calibration, not in a bag (slam_mms_run reads it from --extrinsics FILE.yaml).
     Eigen::Isometry3d T_body_lidar = Eigen::Isometry3d::Identity();
     std::optional<Eigen::Vector3d> t_body_antenna_m;
+    /// Whether the IMU frame is the vehicle's (DriveStreams::imu_frame_is_vehicle_frame; a bag
+    /// does not say: an --extrinsics file's imu_frame_is_vehicle_frame).
+    bool imu_frame_is_vehicle_frame = false;
     /// Scan range: message numbers on the lidar topic (0-based), inclusive; -1 = the last one.
     int64_t first_scan = 0;
     int64_t last_scan = -1;

@@ -378,6 +378,7 @@ std::string ToJson(const Args& a, const std::vector<TrajectoryEval>& traj,
     e["ate_max_m"] = Num(t.ate.ate_max_m);
     e["rot_rmse_deg"] = Num(t.ate.rot_rmse_deg);
     e["rot_rmse_rpy_deg"] = Vec(t.ate.rot_rmse_rpy_deg);
+    e["rot_mean_rpy_deg"] = Vec(t.ate.rot_mean_rpy_deg);
     e["t_rel_pct"] = Num(t.rel.t_rel_pct);
     e["r_rel_deg_per_100m"] = Num(t.rel.r_rel_deg_per_100m);
     e["relative_error_segments"] = t.rel.num_segments;

@@ -80,7 +80,7 @@ class DriveResult:
         report: the report.json dict (written by the C++ report writer), or None when
             ``evaluate=False``: ``{"input": {"drive", "scans", "duration_s", "ground_truth"},
             "gnss_outages": [[start_s, duration_s], ...], "methods": {mode: {"ate_rmse_m",
-            "ate_rmse_xyz_m", "rot_rmse_deg", "rot_rmse_rpy_deg", "t_rel_pct",
+            "ate_rmse_xyz_m", "rot_rmse_deg", "rot_rmse_rpy_deg", "rot_mean_rpy_deg", "t_rel_pct",
             "r_rel_deg_per_100m", "max_pos_err_in_outage_m", "max_rot_err_in_outage_deg", "mme",
             "scans_per_s", "peak_rss_mb"}}, "ground_truth_map": {"mme"}}``; metrics that could
             not be computed (no ground truth, too short for any segment) are None;

@@ -100,6 +100,8 @@ void RegisterEval(py::module_& m) {
       .def_readonly("ate_max_m", &AteResult::ate_max_m)
       .def_readonly("rot_rmse_deg", &AteResult::rot_rmse_deg)
       .def_readonly("rot_rmse_rpy_deg", &AteResult::rot_rmse_rpy_deg)
+      .def_readonly("rot_mean_rpy_deg", &AteResult::rot_mean_rpy_deg,
+                    "Mean roll/pitch/yaw difference [deg], signed (estimate - ground truth).")
       .def_readonly("rot_max_deg", &AteResult::rot_max_deg)
       .def_property_readonly("scale", [](const AteResult& r) { return r.T_gt_est.scale; })
       .def_property_readonly("R_gt_est", [](const AteResult& r) { return r.T_gt_est.R; })
@@ -275,6 +277,7 @@ void RegisterEval(py::module_& m) {
       .def_readwrite("ate_rmse_xyz_m", &MethodReport::ate_rmse_xyz_m)
       .def_readwrite("rot_rmse_deg", &MethodReport::rot_rmse_deg)
       .def_readwrite("rot_rmse_rpy_deg", &MethodReport::rot_rmse_rpy_deg)
+      .def_readwrite("rot_mean_rpy_deg", &MethodReport::rot_mean_rpy_deg)
       .def_readwrite("t_rel_pct", &MethodReport::t_rel_pct)
       .def_readwrite("r_rel_deg_per_100m", &MethodReport::r_rel_deg_per_100m)
       .def_readwrite("max_pos_err_in_outage_m", &MethodReport::max_pos_err_in_outage_m)

@@ -56,6 +56,7 @@ MethodReport MakeMethodReport(const AteResult* ate, const RelativeErrorResult* r
     m.ate_rmse_xyz_m = ate->ate_rmse_xyz_m;
     m.rot_rmse_deg = ate->rot_rmse_deg;
     m.rot_rmse_rpy_deg = ate->rot_rmse_rpy_deg;
+    m.rot_mean_rpy_deg = ate->rot_mean_rpy_deg;
   }
   if (relative != nullptr && relative->num_segments > 0) {
     m.t_rel_pct = Finite(relative->t_rel_pct);
@@ -139,6 +140,7 @@ StatusOr<std::string> ReportToJson(const EvalReport& report) {
     jm["ate_rmse_xyz_m"] = Vector(m.ate_rmse_xyz_m);
     jm["rot_rmse_deg"] = Number(m.rot_rmse_deg);
     jm["rot_rmse_rpy_deg"] = Vector(m.rot_rmse_rpy_deg);
+    jm["rot_mean_rpy_deg"] = Vector(m.rot_mean_rpy_deg);
     jm["t_rel_pct"] = Number(m.t_rel_pct);
     jm["r_rel_deg_per_100m"] = Number(m.r_rel_deg_per_100m);
     jm["max_pos_err_in_outage_m"] = Number(m.max_pos_err_in_outage_m);

@@ -118,6 +118,7 @@ StatusOr<AteResult> SummarizeErrors(std::vector<PoseError> errors) {
   const double n = static_cast<double>(errors.size());
   Eigen::Vector3d sq_xyz = Eigen::Vector3d::Zero();
   Eigen::Vector3d sq_rpy = Eigen::Vector3d::Zero();
+  Eigen::Vector3d sum_rpy = Eigen::Vector3d::Zero();
   double sum = 0.0;
   double sq_rot = 0.0;
   std::vector<double> norms;
@@ -125,6 +126,7 @@ StatusOr<AteResult> SummarizeErrors(std::vector<PoseError> errors) {
   for (const PoseError& e : errors) {
     sq_xyz += e.position_error_world.cwiseAbs2();
     sq_rpy += e.rpy_error_rad.cwiseAbs2();
+    sum_rpy += e.rpy_error_rad;
     sq_rot += e.rotation_error_rad * e.rotation_error_rad;
     sum += e.position_error_m;
     r.ate_max_m = std::max(r.ate_max_m, e.position_error_m);
@@ -139,6 +141,7 @@ StatusOr<AteResult> SummarizeErrors(std::vector<PoseError> errors) {
   r.ate_median_m = norms.size() % 2 == 1 ? norms[m] : 0.5 * (norms[m - 1] + norms[m]);
   r.rot_rmse_deg = std::sqrt(sq_rot / n) * kRadToDeg;
   r.rot_rmse_rpy_deg = (sq_rpy / n).cwiseSqrt() * kRadToDeg;
+  r.rot_mean_rpy_deg = sum_rpy / n * kRadToDeg;
   r.num_matched = errors.size();
   r.errors = std::move(errors);
   return r;

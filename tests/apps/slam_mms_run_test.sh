@@ -47,8 +47,8 @@ check_report() {
       fail "report.json top-level/input keys differ from the schema: $(cat "$report")"
     for m in "$@"; do
       jq -e --arg m "$m" '.methods[$m] | keys == ["ate_rmse_m","ate_rmse_xyz_m","max_pos_err_in_outage_m",
-        "max_rot_err_in_outage_deg","mme","nees","peak_rss_mb","r_rel_deg_per_100m","rot_rmse_deg",
-        "rot_rmse_rpy_deg","scans_per_s","t_rel_pct"]' "$report" >/dev/null ||
+        "max_rot_err_in_outage_deg","mme","nees","peak_rss_mb","r_rel_deg_per_100m",
+        "rot_mean_rpy_deg","rot_rmse_deg","rot_rmse_rpy_deg","scans_per_s","t_rel_pct"]' "$report" >/dev/null ||
         fail "report.json methods.$m keys differ from the schema: $(cat "$report")"
     done
   else
@@ -423,15 +423,21 @@ PY
   calibrate_extrinsics)
     # Boresight self-calibration on a simulated drive whose calibration file is 0.5 deg off in yaw
     # and whose LiDAR clock lags 20 ms; the estimate written, then taken back by a second run.
+    # The boresight is estimated against the offline (smoothed) POS, so its yaw is the LiDAR's
+    # relative to the POS's heading: it is checked against the truth less that POS's own mean
+    # heading error (methods.gnss_ins_smoothed.rot_mean_rpy_deg, the same POS), which no
+    # LiDAR-to-POS calibration can see. 8 s of straight driving hardly observe the heading: the
+    # POS's is 0.01-1 deg off over seeds 1-5, and against the plain truth the check passed on 3 of 5
+    # seeds by chance (docs/sweep.md, "Session 31").
     sim_bin=$(dirname "$bin")/slam_mms_sim
     "$sim_bin" --scenario demo --duration 8 --lidar-time-offset-s 0.02 \
       --calib-error-rpy-deg 0,0,0.5 --no-scene-cloud --out "$tmp/sim" >"$tmp/sim.log" 2>&1 ||
       fail "slam_mms_sim: $(tail -5 "$tmp/sim.log")"
     sim_drive=$(find "$tmp/sim" -maxdepth 2 -type d -name '*_sync' | head -1)
-    run "$tmp/log" --kitti-raw "$sim_drive" --out "$tmp/out" --mode gnss_ins \
+    run "$tmp/log" --kitti-raw "$sim_drive" --out "$tmp/out" --mode gnss_ins_smoothed \
       --calibrate-extrinsics || fail "exit status $? with --calibrate-extrinsics: $(tail -30 "$tmp/log")"
     grep -q "^\[calibration\] correction rpy" "$tmp/log" || fail "no calibration summary: $(cat "$tmp/log")"
-    check_report "$tmp/out/report.json" gnss_ins
+    check_report "$tmp/out/report.json" gnss_ins_smoothed
     check_files "$tmp/out" calib_imu_to_velo_estimated.txt
     grep -q "^R: " "$tmp/out/calib_imu_to_velo_estimated.txt" &&
       grep -q "^T: " "$tmp/out/calib_imu_to_velo_estimated.txt" || fail "calibration file not in KITTI format"
@@ -443,8 +449,12 @@ PY
              (.T_body_lidar_estimated | length == 4) and (.correction_rpy_deg | length == 3) and
              (.sigma_xyz_m | length == 3) and ((.time_offset_s | type) == "number") and
              .calibration_file == "calib_imu_to_velo_estimated.txt" and .scans_used >= 10 and
-             .observable.yaw and (.correction_rpy_deg[2] + 0.5 | fabs) < 0.1' \
-        "$tmp/out/report.json" >/dev/null || fail "report.json extrinsics: $(jq .extrinsics "$tmp/out/report.json")"
+             .observable.yaw' "$tmp/out/report.json" >/dev/null ||
+        fail "report.json extrinsics: $(jq .extrinsics "$tmp/out/report.json")"
+      jq -e '(.extrinsics.correction_rpy_deg[2] + 0.5 +
+              .methods.gnss_ins_smoothed.rot_mean_rpy_deg[2] | fabs) < 0.1' \
+        "$tmp/out/report.json" >/dev/null ||
+        fail "yaw correction $(jq .extrinsics.correction_rpy_deg "$tmp/out/report.json") against -0.5 deg less the POS's heading error $(jq .methods.gnss_ins_smoothed.rot_mean_rpy_deg "$tmp/out/report.json")"
     fi
     # Calibrating again from the estimate: the file's clock offset is the total from the drive's
     # own stamps (the estimate's again, not estimate + estimate), and the ground truth is kept.

@@ -39,6 +39,7 @@ EvalReport SampleReport() {
   full.ate_rmse_xyz_m = Eigen::Vector3d(0.2, 0.3, 0.1);
   full.rot_rmse_deg = 0.5;
   full.rot_rmse_rpy_deg = Eigen::Vector3d(0.1, 0.2, 0.4);
+  full.rot_mean_rpy_deg = Eigen::Vector3d(-0.05, 0.1, -0.3);
   full.t_rel_pct = 1.25;
   full.r_rel_deg_per_100m = 0.3;
   full.max_pos_err_in_outage_m = 1.1;
@@ -110,6 +111,7 @@ TEST(ReportTest, JsonHasTheSchemaKeysAndRoundTrips) {
                                                 "ate_rmse_xyz_m",
                                                 "rot_rmse_deg",
                                                 "rot_rmse_rpy_deg",
+                                                "rot_mean_rpy_deg",
                                                 "t_rel_pct",
                                                 "r_rel_deg_per_100m",
                                                 "max_pos_err_in_outage_m",
@@ -125,6 +127,8 @@ TEST(ReportTest, JsonHasTheSchemaKeysAndRoundTrips) {
   EXPECT_EQ(full["ate_rmse_m"].get<double>(), 0.42);
   ASSERT_EQ(full["rot_rmse_rpy_deg"].size(), 3u);
   EXPECT_EQ(full["rot_rmse_rpy_deg"][2].get<double>(), 0.4);
+  ASSERT_EQ(full["rot_mean_rpy_deg"].size(), 3u);
+  EXPECT_EQ(full["rot_mean_rpy_deg"][2].get<double>(), -0.3);  // signed
   EXPECT_EQ(full["peak_rss_mb"].get<double>(), 812.0);
   const Json& lidar = methods["lidar_only"];
   EXPECT_EQ(Keys(lidar), method_keys);

@@ -100,8 +100,23 @@ TEST(TrajectoryErrorTest, KnownYawOffsetGivesRotationRmse) {
   EXPECT_NEAR(r->rot_rmse_rpy_deg.x(), 0.0, 1e-9);
   EXPECT_NEAR(r->rot_rmse_rpy_deg.y(), 0.0, 1e-9);
   EXPECT_NEAR(r->rot_rmse_rpy_deg.z(), 2.0, 1e-9);
+  EXPECT_NEAR(r->rot_mean_rpy_deg.z(), 2.0, 1e-9);  // a constant offset: its mean, signed
+  EXPECT_NEAR(r->rot_mean_rpy_deg.x(), 0.0, 1e-9);
   // Small roll/pitch: the total angle is the yaw offset up to second order.
   EXPECT_NEAR(r->rot_rmse_deg, 2.0, 1e-3);
+  // A yaw error alternating -1 / +3 deg: mean +1, RMS sqrt(5).
+  int k = 0;
+  const Trajectory alternating = MakeTrajectory(0.0, 9.9, 0.1, [&k](double t) {  // 100 poses
+    Eigen::Isometry3d T = CurvePose(t);
+    const Eigen::Vector3d rpy = RollPitchYaw(T.linear());
+    T.linear() = FromRollPitchYaw(rpy(0), rpy(1), rpy(2) + ((k++ % 2) == 0 ? -1.0 : 3.0) * kDeg);
+    return T;
+  });
+  const StatusOr<AteResult> a = ComputeAte(alternating, gt);
+  ASSERT_TRUE(a.ok());
+  ASSERT_EQ(a->num_matched % 2, 0u);
+  EXPECT_NEAR(a->rot_mean_rpy_deg.z(), 1.0, 1e-9);
+  EXPECT_NEAR(a->rot_rmse_rpy_deg.z(), std::sqrt(5.0), 1e-9);
 }
 
 TEST(TrajectoryErrorTest, YawErrorWrapsAcrossPi) {
@@ -118,6 +133,7 @@ TEST(TrajectoryErrorTest, YawErrorWrapsAcrossPi) {
   const StatusOr<AteResult> r = ComputeAte(est, gt);
   ASSERT_TRUE(r.ok());
   EXPECT_NEAR(r->rot_rmse_rpy_deg.z(), 2.0, 1e-9);
+  EXPECT_NEAR(r->rot_mean_rpy_deg.z(), 2.0, 1e-9);  // wrapped before the mean
   EXPECT_NEAR(r->rot_rmse_deg, 2.0, 1e-9);
 }
 

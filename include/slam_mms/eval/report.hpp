@@ -14,9 +14,9 @@
 //    "gnss_outages": [[start_s, duration_s], ...],
 //    "methods": {"full"|"gnss_ins"|"gnss_ins_smoothed"|"lidar_only": {
 //        "ate_rmse_m": f, "ate_rmse_xyz_m": [f,f,f], "rot_rmse_deg": f, "rot_rmse_rpy_deg":
-//        [f,f,f], "t_rel_pct": f|null, "r_rel_deg_per_100m": f|null, "max_pos_err_in_outage_m":
-//        f|null, "max_rot_err_in_outage_deg": f|null, "mme": f, "scans_per_s": f, "peak_rss_mb":
-//        f}},
+//        [f,f,f], "rot_mean_rpy_deg": [f,f,f] (signed), "t_rel_pct": f|null, "r_rel_deg_per_100m":
+//        f|null, "max_pos_err_in_outage_m": f|null, "max_rot_err_in_outage_deg": f|null, "mme": f,
+//        "scans_per_s": f, "peak_rss_mb": f}},
 //    "ground_truth_map": {"mme": f|null},
 //    "options": {...}|null,                 + the effective MappingSystem options (config tree)
 //    "georef": {...}|null,                  + the output CRS and origin (georef.json's object)
@@ -75,6 +75,7 @@ struct MethodReport {
   std::optional<Eigen::Vector3d> ate_rmse_xyz_m;
   std::optional<double> rot_rmse_deg;
   std::optional<Eigen::Vector3d> rot_rmse_rpy_deg;
+  std::optional<Eigen::Vector3d> rot_mean_rpy_deg;  ///< AteResult::rot_mean_rpy_deg (signed).
   std::optional<double> t_rel_pct;
   std::optional<double> r_rel_deg_per_100m;
   std::optional<double> max_pos_err_in_outage_m;

@@ -94,6 +94,10 @@ struct AteResult {
   double rot_rmse_deg = 0.0;  ///< RMSE of the angle of R_gt^T R_est.
   Eigen::Vector3d rot_rmse_rpy_deg =
       Eigen::Vector3d::Zero();  ///< RMSE of the roll/pitch/yaw differences.
+  /// Mean of the roll/pitch/yaw differences (estimate - ground truth, each wrapped to
+  /// [-180, 180) deg): the signed bias, e.g. a POS's heading error that a LiDAR-to-POS
+  /// calibration inherits.
+  Eigen::Vector3d rot_mean_rpy_deg = Eigen::Vector3d::Zero();
   double rot_max_deg = 0.0;
 
   std::vector<PoseError> errors;  ///< One per matched pose, in time order.

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <deque>
 #include <optional>
+#include <sstream>
 #include <string>
 
 #include "core/option_error.hpp"
@@ -35,6 +36,16 @@ Eigen::Isometry3d BodyPoseAt(const SubmapRecord& rec, Timestamp t) {
   const size_t j = static_cast<size_t>(it - stamps.begin());
   const double alpha = t.SecondsSince(stamps[j - 1]) / stamps[j].SecondsSince(stamps[j - 1]);
   return InterpolatePose(rec.T_submap_scan[j - 1], rec.T_submap_scan[j], alpha);
+}
+
+constexpr double kRadToDeg = 180.0 / M_PI;
+
+/// "a / b / c deg": the rotation sigmas of a pose covariance (rotation first), for the logs.
+std::string RotationSigmasDeg(const Matrix6d& cov) {
+  std::ostringstream out;
+  out << std::sqrt(cov(0, 0)) * kRadToDeg << " / " << std::sqrt(cov(1, 1)) * kRadToDeg << " / "
+      << std::sqrt(cov(2, 2)) * kRadToDeg << " deg";
+  return out.str();
 }
 
 }  // namespace
@@ -239,9 +250,7 @@ StatusOr<std::vector<SubmapPoseUpdate>> SubmapManager::OnSubmapFinished(
           0.5 * (pos_attitude->cov_rotation + pos_attitude->cov_rotation.transpose());
       cov.topLeftCorner<3, 3>() = c + 1e-10 * Eigen::Matrix3d::Identity();
       SLAM_MMS_LOG(kDebug) << "level 2: submap " << submap_id << " attitude prior from the POS, "
-                           << std::sqrt(cov(0, 0)) * 180.0 / M_PI << " / "
-                           << std::sqrt(cov(1, 1)) * 180.0 / M_PI << " / "
-                           << std::sqrt(cov(2, 2)) * 180.0 / M_PI << " deg";
+                           << RotationSigmasDeg(cov);
     }
     SLAM_MMS_RETURN_IF_ERROR(m.graph->AddPosePrior(submap_id, T_prior, cov));
   }
@@ -268,11 +277,9 @@ StatusOr<std::vector<SubmapPoseUpdate>> SubmapManager::OnSubmapFinished(
         const Matrix6d cov = m.RegistrationCovariance(*reg);
         SLAM_MMS_LOG(kDebug) << "level 2: map-to-map " << prev->id << " -> " << submap_id
                              << ": inliers " << reg->inlier_ratio << ", correction "
-                             << correction.head<3>().norm() * 180.0 / M_PI << " deg "
+                             << correction.head<3>().norm() * kRadToDeg << " deg "
                              << correction.tail<3>().norm() << " m, sigma "
-                             << std::sqrt(cov(0, 0)) * 180.0 / M_PI << " / "
-                             << std::sqrt(cov(1, 1)) * 180.0 / M_PI << " / "
-                             << std::sqrt(cov(2, 2)) * 180.0 / M_PI << " deg -> "
+                             << RotationSigmasDeg(cov) << " -> "
                              << (accepted ? "accepted" : "rejected");
         if (accepted) {
           SLAM_MMS_RETURN_IF_ERROR(

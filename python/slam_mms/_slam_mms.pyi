@@ -1149,6 +1149,11 @@ class Level2Options:
     @gnss_correlation_s.setter
     def gnss_correlation_s(self, value: float) -> None: ...
     @property
+    def pos_attitude_correlation_s(self) -> float:
+        """[s]"""
+    @pos_attitude_correlation_s.setter
+    def pos_attitude_correlation_s(self, value: float) -> None: ...
+    @property
     def attitude_prior_sigma_rad(self) -> float:
         """[rad]"""
     @attitude_prior_sigma_rad.setter

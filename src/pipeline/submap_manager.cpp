@@ -73,6 +73,9 @@ Status Level2Options::Validate() const {
   if (!(gnss_correlation_s >= 0.0)) {
     return bad("gnss_correlation_s", gnss_correlation_s, "must be >= 0");
   }
+  if (!(pos_attitude_correlation_s >= 0.0)) {
+    return bad("pos_attitude_correlation_s", pos_attitude_correlation_s, "must be >= 0");
+  }
   if (!(attitude_prior_sigma_rad >= 0.0)) {
     return bad("attitude_prior_sigma_rad", attitude_prior_sigma_rad, "must be >= 0");
   }
@@ -91,6 +94,8 @@ struct SubmapManager::Impl {
   };
   std::deque<PendingGnss> pending_gnss;
   std::optional<Timestamp> last_gnss_stamp;  // of the last fix attached
+  std::optional<Timestamp>
+      last_attitude_prior_stamp;  // submap start of the last POS attitude prior
   int32_t last_id = -1;
 
   /// Registers source (frame b) against target (frame a) from T_a_b_init; empty when it fails.
@@ -248,7 +253,15 @@ StatusOr<std::vector<SubmapPoseUpdate>> SubmapManager::OnSubmapFinished(
       T_prior.linear() = pos_attitude->R_world_submap;
       const Eigen::Matrix3d c =
           0.5 * (pos_attitude->cov_rotation + pos_attitude->cov_rotation.transpose());
-      cov.topLeftCorner<3, 3>() = c + 1e-10 * Eigen::Matrix3d::Identity();
+      // Options::pos_attitude_correlation_s: the priors within the window count as one.
+      double correlated = 1.0;
+      if (m.opt.pos_attitude_correlation_s > 0.0 && m.last_attitude_prior_stamp) {
+        const double dt = std::clamp(rec->start.SecondsSince(*m.last_attitude_prior_stamp), 1e-3,
+                                     m.opt.pos_attitude_correlation_s);
+        correlated = m.opt.pos_attitude_correlation_s / dt;
+      }
+      m.last_attitude_prior_stamp = rec->start;
+      cov.topLeftCorner<3, 3>() = correlated * c + 1e-10 * Eigen::Matrix3d::Identity();
       SLAM_MMS_LOG(kDebug) << "level 2: submap " << submap_id << " attitude prior from the POS, "
                            << RotationSigmasDeg(cov);
     }

@@ -244,6 +244,60 @@ TEST(SubmapManagerTest, NoTriggerNoSolveUntilFinish) {
   EXPECT_LT(TransError((*fin)[kFinished - 1].T_world_submap, TrueSubmap(kFinished - 1)), 0.2);
 }
 
+// A POS's attitude error is correlated over the whole drive (an initial heading error persists),
+// so one error on every submap's attitude prior, taken as independent, outweighs the GNSS track
+// and the registrations by the number of submaps (docs/pipeline.md, "POS attitude priors").
+// Level 1 is exact here, the fixes RTK (3 cm, counted as correlated over 10 s), the POS's yaw
+// 0.3 deg off on every submap with a stated 0.1 deg.
+double YawErrorWithBiasedPosAttitudeDeg(double pos_attitude_correlation_s) {
+  SubmapManager::Options o = ChainOptions();
+  o.gnss_correlation_s = 10.0;
+  o.pos_attitude_correlation_s = pos_attitude_correlation_s;
+  auto mgr = SubmapManager::Create(o, 1);
+  if (!mgr.ok()) return NAN;
+  constexpr double kDeg = M_PI / 180.0;
+  FakeSource source;
+  auto exact = [](int i) {
+    SubmapRecord r = MakeRecord(i);
+    r.T_world_submap = TrueSubmap(i);
+    if (i > 0) r.T_prev_this = TrueSubmap(i - 1).inverse() * TrueSubmap(i);
+    return r;
+  };
+  source.records.push_back(exact(0));
+  std::mt19937 rng(23);
+  SubmapManager::PosAttitude pos;
+  pos.cov_rotation = (0.1 * kDeg) * (0.1 * kDeg) * Eigen::Matrix3d::Identity();
+  for (int i = 0; i < kFinished; ++i) {
+    source.records.push_back(exact(i + 1));
+    FeedGnss(**mgr, i, rng);
+    pos.R_world_submap = TrueSubmap(i).linear() *
+                         Eigen::AngleAxisd(0.3 * kDeg, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    if (!(*mgr)->OnSubmapFinished(source, i, false, pos).ok()) return NAN;
+  }
+  auto fin = (*mgr)->Finish(source);
+  if (!fin.ok()) return NAN;
+  double sum = 0.0;
+  for (int i = 0; i < kFinished; ++i) {
+    sum += so3::Log(Eigen::Matrix3d(TrueSubmap(i).linear().transpose() *
+                                    (*fin)[i].T_world_submap.linear()))
+               .z();
+  }
+  return sum / kFinished / kDeg;
+}
+
+TEST(SubmapManagerTest, PosAttitudePriorsWithinTheCorrelationWindowCountAsOne) {
+  const double independent = YawErrorWithBiasedPosAttitudeDeg(0.0);
+  const double correlated = YawErrorWithBiasedPosAttitudeDeg(60.0);
+  ASSERT_TRUE(std::isfinite(independent) && std::isfinite(correlated));
+  // The GNSS track (36 fixes over 45 m, 3 cm each x20 for the 10 s correlation) holds the yaw to
+  // about 0.1 deg. Four independent 0.1 deg priors weigh 4x that: the yaw goes 0.3 x 4 / 5 =
+  // 0.24 deg towards the POS. In a 60 s window the first prior counts whole and the three after
+  // it 5 / 60 each (1.25 priors): 0.3 x 1.25 / 2.25 = 0.17 deg.
+  EXPECT_GT(independent, 0.2);
+  EXPECT_LT(correlated, independent - 0.05);
+  EXPECT_GE(correlated, 0.0);  // still pulled towards the POS, not past the truth
+}
+
 TEST(SubmapManagerTest, CreateRejectsBadOptionByName) {
   SubmapManager::Options o;
   o.loop_distance_m = 0.0;

@@ -40,6 +40,19 @@ Eigen::Isometry3d BodyPoseAt(const SubmapRecord& rec, Timestamp t) {
 
 constexpr double kRadToDeg = 180.0 / M_PI;
 
+/// How many measurements share one error when the error is correlated over `window_s` and the
+/// previous one was taken at `*last` (Options::gnss_correlation_s, pos_attitude_correlation_s):
+/// window / (time since it), at least 1; 1 for the first one or where window_s is 0. Sets
+/// `*last` to `now`. A measurement's covariance is multiplied by it.
+double CorrelatedCount(double window_s, std::optional<Timestamp>* last, Timestamp now) {
+  double count = 1.0;
+  if (window_s > 0.0 && last->has_value()) {
+    count = window_s / std::clamp(now.SecondsSince(**last), 1e-3, window_s);
+  }
+  *last = now;
+  return count;
+}
+
 /// "a / b / c deg": the rotation sigmas of a pose covariance (rotation first), for the logs.
 std::string RotationSigmasDeg(const Matrix6d& cov) {
   std::ostringstream out;
@@ -137,13 +150,8 @@ struct SubmapManager::Impl {
       const PendingGnss g = pending_gnss.front();
       pending_gnss.pop_front();
       if (g.m.stamp.SecondsSince(rec.start) < -noise::kGnssBeforeSubmapS) continue;
-      double correlated = 1.0;  // how many fixes share one error (Options::gnss_correlation_s)
-      if (opt.gnss_correlation_s > 0.0 && last_gnss_stamp) {
-        const double dt =
-            std::clamp(g.m.stamp.SecondsSince(*last_gnss_stamp), 1e-3, opt.gnss_correlation_s);
-        correlated = opt.gnss_correlation_s / dt;
-      }
-      last_gnss_stamp = g.m.stamp;
+      const double correlated =
+          CorrelatedCount(opt.gnss_correlation_s, &last_gnss_stamp, g.m.stamp);
       const Eigen::Matrix3d cov =
           correlated * opt.gnss_sigma_scale * opt.gnss_sigma_scale * g.m.cov_world_antenna;
       SLAM_MMS_RETURN_IF_ERROR(graph->AddGnssPrior(rec.id, g.m.p_world_antenna, cov,
@@ -254,13 +262,8 @@ StatusOr<std::vector<SubmapPoseUpdate>> SubmapManager::OnSubmapFinished(
       const Eigen::Matrix3d c =
           0.5 * (pos_attitude->cov_rotation + pos_attitude->cov_rotation.transpose());
       // Options::pos_attitude_correlation_s: the priors within the window count as one.
-      double correlated = 1.0;
-      if (m.opt.pos_attitude_correlation_s > 0.0 && m.last_attitude_prior_stamp) {
-        const double dt = std::clamp(rec->start.SecondsSince(*m.last_attitude_prior_stamp), 1e-3,
-                                     m.opt.pos_attitude_correlation_s);
-        correlated = m.opt.pos_attitude_correlation_s / dt;
-      }
-      m.last_attitude_prior_stamp = rec->start;
+      const double correlated = CorrelatedCount(m.opt.pos_attitude_correlation_s,
+                                                &m.last_attitude_prior_stamp, rec->start);
       cov.topLeftCorner<3, 3>() = correlated * c + 1e-10 * Eigen::Matrix3d::Identity();
       SLAM_MMS_LOG(kDebug) << "level 2: submap " << submap_id << " attitude prior from the POS, "
                            << RotationSigmasDeg(cov);

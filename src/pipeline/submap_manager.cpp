@@ -107,8 +107,8 @@ struct SubmapManager::Impl {
   };
   std::deque<PendingGnss> pending_gnss;
   std::optional<Timestamp> last_gnss_stamp;  // of the last fix attached
-  std::optional<Timestamp>
-      last_attitude_prior_stamp;  // submap start of the last POS attitude prior
+  /// The start of the submap that got the last POS attitude prior.
+  std::optional<Timestamp> last_attitude_prior_stamp;
   int32_t last_id = -1;
 
   /// Registers source (frame b) against target (frame a) from T_a_b_init; empty when it fails.

@@ -11,6 +11,7 @@
 #include <string>
 #include <utility>
 
+#include "backend/attitude_chain_factor.hpp"
 #include "backend/backend_math.hpp"
 #include "backend/ceres_solve.hpp"
 #include "backend/gnss_position_factor.hpp"
@@ -304,6 +305,34 @@ Status SubmapGraph::AddPosePrior(SubmapId id, const Eigen::Isometry3d& T_world_s
   return OkStatus();
 }
 
+Status SubmapGraph::AddAttitudeChainFactor(SubmapId a, SubmapId b, const Eigen::Matrix3d& R_world_a,
+                                           const Eigen::Matrix3d& cov_a,
+                                           const Eigen::Matrix3d& R_world_b,
+                                           const Eigen::Matrix3d& cov_b, double rho) {
+  Impl& m = *impl_;
+  SLAM_MMS_ASSIGN_OR_RETURN(auto nodes, m.Pair(a, b, "AddAttitudeChainFactor"));
+  if (nodes.first->index > nodes.second->index) {
+    return InvalidArgumentError("SubmapGraph::AddAttitudeChainFactor: submap " + Id(a) +
+                                " was added after " + Id(b));
+  }
+  auto cost = AttitudeChainFactor::Create(R_world_a, cov_a, R_world_b, cov_b, rho);
+  if (!cost.ok()) return cost.status().WithContext("SubmapGraph::AddAttitudeChainFactor");
+  m.problem->AddResidualBlock(cost->release(), nullptr, nodes.first->pose.data(),
+                              nodes.second->pose.data());
+  SubmapGraphFactor f;
+  f.kind = SubmapFactorKind::kAttitudeChain;
+  f.a = a;
+  f.b = b;
+  f.T.linear() = R_world_b;
+  f.T_a.linear() = R_world_a;
+  f.covariance = Matrix6d::Zero();
+  f.covariance.topLeftCorner<3, 3>() = cov_b;
+  f.covariance.bottomRightCorner<3, 3>() = cov_a;
+  f.correlation = rho;
+  m.factors.push_back(f);
+  return OkStatus();
+}
+
 Status SubmapGraph::AddGnssPrior(SubmapId id, const Eigen::Vector3d& p_world_antenna,
                                  const Eigen::Matrix3d& covariance,
                                  const Eigen::Isometry3d& T_submap_body,
@@ -390,6 +419,7 @@ const char* SubmapFactorKindName(SubmapFactorKind kind) {
     case SubmapFactorKind::kLoop: return "loop";
     case SubmapFactorKind::kPosePrior: return "pose_prior";
     case SubmapFactorKind::kGnss: return "gnss";
+    case SubmapFactorKind::kAttitudeChain: return "attitude_chain";
   }
   return "unknown";
 }
@@ -397,7 +427,7 @@ const char* SubmapFactorKindName(SubmapFactorKind kind) {
 bool SubmapFactorKindFromName(const char* name, SubmapFactorKind* kind) {
   for (SubmapFactorKind k :
        {SubmapFactorKind::kRegistration, SubmapFactorKind::kReckon, SubmapFactorKind::kLoop,
-        SubmapFactorKind::kPosePrior, SubmapFactorKind::kGnss}) {
+        SubmapFactorKind::kPosePrior, SubmapFactorKind::kGnss, SubmapFactorKind::kAttitudeChain}) {
     if (std::string(SubmapFactorKindName(k)) == name) {
       *kind = k;
       return true;

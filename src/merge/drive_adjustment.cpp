@@ -54,6 +54,9 @@ void MoveDrive(const Eigen::Isometry3d& T_new_old, DriveResult* d) {
   for (SubmapGraphFactor& f : d->factors) {
     if (f.kind == SubmapFactorKind::kPosePrior) {
       f.T = T_new_old * f.T;  // right-perturbation covariance: unchanged
+    } else if (f.kind == SubmapFactorKind::kAttitudeChain) {
+      f.T = T_new_old * f.T;  // likewise
+      f.T_a = T_new_old * f.T_a;
     } else if (f.kind == SubmapFactorKind::kGnss) {
       f.p_world_antenna = T_new_old * f.p_world_antenna;
       const Eigen::Matrix3d c = f.covariance.topLeftCorner<3, 3>();
@@ -240,6 +243,13 @@ StatusOr<SubmapGraph> BuildGraph(const std::vector<DriveAdjustment::Drive>& driv
           break;
         case SubmapFactorKind::kPosePrior:
           if (o.use_pose_priors) st = graph.AddPosePrior(a, f.T, f.covariance);
+          break;
+        case SubmapFactorKind::kAttitudeChain:
+          if (o.use_pose_priors) {
+            st = graph.AddAttitudeChainFactor(a, b, f.T_a.linear(),
+                                              f.covariance.bottomRightCorner<3, 3>(), f.T.linear(),
+                                              f.covariance.topLeftCorner<3, 3>(), f.correlation);
+          }
           break;
         case SubmapFactorKind::kGnss:
           st = graph.AddGnssPrior(a, f.p_world_antenna, f.covariance.topLeftCorner<3, 3>(),

@@ -176,6 +176,10 @@ Status WriteDriveResult(const DriveResult& result, const fs::path& dir) {
     } else {
       jf["T"] = PoseJson(f.T);
     }
+    if (f.kind == SubmapFactorKind::kAttitudeChain) {
+      jf["T_a"] = PoseJson(f.T_a);
+      jf["correlation"] = f.correlation;
+    }
     jf["covariance"] = CovarianceJson(f.covariance);
     if (f.kind == SubmapFactorKind::kRegistration) {
       jf["loss"] = {{"type", RobustLossTypeName(f.loss.type)}, {"scale", f.loss.scale}};
@@ -339,6 +343,14 @@ StatusOr<DriveResult> ReadDriveResult(const fs::path& dir, const DriveResultRead
       f.gnss_bias = static_cast<int>(bias);
     } else {
       SLAM_MMS_ASSIGN_OR_RETURN(f.T, r.Get<Eigen::Isometry3d>(jf, w, "T", &Reader::Pose));
+    }
+    if (f.kind == SubmapFactorKind::kAttitudeChain) {
+      SLAM_MMS_ASSIGN_OR_RETURN(f.T_a, r.Get<Eigen::Isometry3d>(jf, w, "T_a", &Reader::Pose));
+      SLAM_MMS_ASSIGN_OR_RETURN(f.correlation,
+                                r.Get<double>(jf, w, "correlation", &Reader::Number));
+      if (!(f.correlation >= 0.0 && f.correlation <= 1.0)) {
+        return r.Bad(w + ".correlation", "must be in [0, 1]");
+      }
     }
     if (f.kind == SubmapFactorKind::kRegistration) {
       SLAM_MMS_ASSIGN_OR_RETURN(const Json* loss, r.Field(jf, w, "loss"));

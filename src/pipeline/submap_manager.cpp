@@ -41,7 +41,7 @@ Eigen::Isometry3d BodyPoseAt(const SubmapRecord& rec, Timestamp t) {
 constexpr double kRadToDeg = 180.0 / M_PI;
 
 /// How many measurements share one error when the error is correlated over `window_s` and the
-/// previous one was taken at `*last` (Options::gnss_correlation_s, pos_attitude_correlation_s):
+/// previous one was taken at `*last` (Options::gnss_correlation_s):
 /// window / (time since it), at least 1; 1 for the first one or where window_s is 0. Sets
 /// `*last` to `now`. A measurement's covariance is multiplied by it.
 double CorrelatedCount(double window_s, std::optional<Timestamp>* last, Timestamp now) {
@@ -107,8 +107,14 @@ struct SubmapManager::Impl {
   };
   std::deque<PendingGnss> pending_gnss;
   std::optional<Timestamp> last_gnss_stamp;  // of the last fix attached
-  /// The start of the submap that got the last POS attitude prior.
-  std::optional<Timestamp> last_attitude_prior_stamp;
+  /// The last submap that got the POS attitude (Options::pos_attitude_correlation_s).
+  struct LastPosAttitude {
+    int32_t id = -1;
+    Timestamp start;
+    Eigen::Matrix3d R_world_submap = Eigen::Matrix3d::Identity();
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Identity();
+  };
+  std::optional<LastPosAttitude> last_pos_attitude;
   int32_t last_id = -1;
 
   /// Registers source (frame b) against target (frame a) from T_a_b_init; empty when it fails.
@@ -252,6 +258,7 @@ StatusOr<std::vector<SubmapPoseUpdate>> SubmapManager::OnSubmapFinished(
     cov.diagonal() << s_rp * s_rp, s_rp * s_rp, noise::kFreeYawVariance,
         noise::kFreePositionVariance, noise::kFreePositionVariance, noise::kFreePositionVariance;
     Eigen::Isometry3d T_prior = rec->T_world_submap;
+    bool chained_pos_attitude = false;
     if (pos_attitude && pos_attitude->cov_rotation.allFinite() &&
         pos_attitude->R_world_submap.allFinite()) {
       // The POS's attitude with its own covariance, yaw included (plus (1e-5 rad)^2: never
@@ -260,15 +267,32 @@ StatusOr<std::vector<SubmapPoseUpdate>> SubmapManager::OnSubmapFinished(
       // whole standing drives of the sweep by 2-13 deg while level 1 held 0.2 deg).
       T_prior.linear() = pos_attitude->R_world_submap;
       const Eigen::Matrix3d c =
-          0.5 * (pos_attitude->cov_rotation + pos_attitude->cov_rotation.transpose());
-      // Options::pos_attitude_correlation_s: the priors within the window count as one.
-      const double correlated = CorrelatedCount(m.opt.pos_attitude_correlation_s,
-                                                &m.last_attitude_prior_stamp, rec->start);
-      cov.topLeftCorner<3, 3>() = correlated * c + 1e-10 * Eigen::Matrix3d::Identity();
-      SLAM_MMS_LOG(kDebug) << "level 2: submap " << submap_id << " attitude prior from the POS, "
-                           << RotationSigmasDeg(cov);
+          0.5 * (pos_attitude->cov_rotation + pos_attitude->cov_rotation.transpose()) +
+          1e-10 * Eigen::Matrix3d::Identity();
+      cov.topLeftCorner<3, 3>() = c;
+      const std::optional<Impl::LastPosAttitude> last = m.last_pos_attitude;
+      const bool chained = m.opt.pos_attitude_correlation_s > 0.0 && last.has_value() &&
+                           m.graph->HasSubmap(last->id);
+      m.last_pos_attitude =
+          Impl::LastPosAttitude{submap_id, rec->start, pos_attitude->R_world_submap, c};
+      if (chained) {
+        // Options::pos_attitude_correlation_s: the error's correlation with the last one's.
+        const double dt = std::max(0.0, rec->start.SecondsSince(last->start));
+        const double rho = std::exp(-dt / m.opt.pos_attitude_correlation_s);
+        SLAM_MMS_LOG(kDebug) << "level 2: submap " << submap_id << " POS attitude chained to "
+                             << last->id << " (rho " << rho << "), " << RotationSigmasDeg(cov);
+        SLAM_MMS_RETURN_IF_ERROR(
+            m.graph->AddAttitudeChainFactor(last->id, submap_id, last->R_world_submap, last->cov,
+                                            pos_attitude->R_world_submap, c, rho));
+        chained_pos_attitude = true;
+      } else {
+        SLAM_MMS_LOG(kDebug) << "level 2: submap " << submap_id << " attitude prior from the POS, "
+                             << RotationSigmasDeg(cov);
+      }
     }
-    SLAM_MMS_RETURN_IF_ERROR(m.graph->AddPosePrior(submap_id, T_prior, cov));
+    if (!chained_pos_attitude) {
+      SLAM_MMS_RETURN_IF_ERROR(m.graph->AddPosePrior(submap_id, T_prior, cov));
+    }
   }
   const SubmapRecord* prev = m.last_id >= 0 ? FindSubmap(submaps, m.last_id) : nullptr;
   if (prev != nullptr) {

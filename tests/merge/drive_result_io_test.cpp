@@ -67,7 +67,15 @@ DriveResult Sample() {
   SubmapGraphFactor prior;
   prior.kind = SubmapFactorKind::kPosePrior;
   prior.a = prior.b = 11;
-  r.factors = {reg, gnss, prior};
+  SubmapGraphFactor chain;
+  chain.kind = SubmapFactorKind::kAttitudeChain;
+  chain.a = 11;
+  chain.b = 12;
+  chain.T.linear() = Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  chain.T_a.linear() = Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  chain.covariance = Matrix6d::Identity() * 3e-6;
+  chain.correlation = 0.9200444146293233;
+  r.factors = {reg, gnss, prior, chain};
   return r;
 }
 
@@ -94,11 +102,16 @@ TEST(DriveResultIoTest, RoundTripsLosslessly) {
   EXPECT_EQ(b->submaps[1].map_cloud.size(), 50u);
   EXPECT_EQ(b->submaps[1].registration_cloud.size(), 25u);
   EXPECT_EQ(b->submaps[1].map_cloud.intensities()[3], 0.75f);
-  ASSERT_EQ(b->factors.size(), 3u);
+  ASSERT_EQ(b->factors.size(), 4u);
   EXPECT_EQ(b->factors[0].kind, SubmapFactorKind::kRegistration);
   EXPECT_EQ(b->factors[0].loss.type, RobustLossType::kHuber);
   EXPECT_EQ(b->factors[1].p_world_antenna, a.factors[1].p_world_antenna);
   EXPECT_EQ(b->factors[1].t_body_antenna, a.factors[1].t_body_antenna);
+  EXPECT_EQ(b->factors[3].kind, SubmapFactorKind::kAttitudeChain);
+  EXPECT_EQ(b->factors[3].correlation, a.factors[3].correlation);
+  EXPECT_TRUE(b->factors[3].T_a.isApprox(a.factors[3].T_a, 1e-15));
+  EXPECT_TRUE(b->factors[3].T.isApprox(a.factors[3].T, 1e-15));
+  EXPECT_EQ(b->factors[3].covariance, a.factors[3].covariance);
   EXPECT_EQ(b->gnss_availability[1].availability, GnssAvailability::kOutage);
   // Write, read, write again: the same numbers (a pose's quaternion within its last digit).
   ASSERT_TRUE(WriteDriveResult(*b, dir / "two").ok());
@@ -137,6 +150,10 @@ TEST(DriveResultIoTest, BadFilesAreNamed) {
   expect("version");
   rewrite("\"kind\": \"gnss\"", "\"kind\": \"magic\"");
   expect("factors[1].kind");
+  rewrite("\"correlation\": 0.9200444146293233", "\"correlation\": 1.5");
+  expect("factors[3].correlation");
+  rewrite("\"correlation\": 0.9200444146293233", "\"correlation_x\": 0.5");
+  expect("factors[3]: missing correlation");
   rewrite("\"scan_id\": 201", "\"scan_id\": \"x\"");
   expect("submaps[2].scans[1].scan_id");
   std::ofstream(file, std::ios::binary | std::ios::trunc) << good.substr(0, good.size() / 2);

@@ -285,14 +285,15 @@ double YawErrorWithBiasedPosAttitudeDeg(double pos_attitude_correlation_s) {
   return sum / kFinished / kDeg;
 }
 
-TEST(SubmapManagerTest, PosAttitudePriorsWithinTheCorrelationWindowCountAsOne) {
+TEST(SubmapManagerTest, CorrelatedPosAttitudeErrorsAreChainedNotCountedPerSubmap) {
   const double independent = YawErrorWithBiasedPosAttitudeDeg(0.0);
   const double correlated = YawErrorWithBiasedPosAttitudeDeg(60.0);
   ASSERT_TRUE(std::isfinite(independent) && std::isfinite(correlated));
   // The GNSS track (36 fixes over 38 m, 3 cm each x20 for the 10 s correlation) holds the yaw to
   // about 0.1 deg. Four independent 0.1 deg priors weigh 4x that: the yaw goes 0.3 x 4 / 5 =
-  // 0.24 deg towards the POS. In a 60 s window the first prior counts whole and the three after
-  // it 5 / 60 each (1.25 priors): 0.3 x 1.25 / 2.25 = 0.17 deg.
+  // 0.24 deg towards the POS. Chained with tau = 60 s (rho = exp(-5 / 60) = 0.92 between
+  // submaps) a common error weighs (N (1 - rho) + 2 rho) / (1 + rho) = 1.12 priors:
+  // 0.3 x 1.12 / 2.12 = 0.16 deg.
   EXPECT_GT(independent, 0.2);
   EXPECT_LT(correlated, independent - 0.05);
   EXPECT_GE(correlated, 0.0);  // still pulled towards the POS, not past the truth

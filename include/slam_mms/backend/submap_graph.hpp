@@ -145,6 +145,16 @@ class SubmapGraph {
   /// on straight roads (a rotation about the direction of travel moves no position).
   Status AddPosePrior(SubmapId id, const Eigen::Isometry3d& T_world_submap,
                       const Matrix6d& covariance);
+  /// Attitudes R~_world_a and R~_world_b of submaps a and b (a added before b) measured by one
+  /// source whose errors are correlated: in world axes a first-order Gauss-Markov process with
+  /// correlation `rho` (exp(-dt / tau), in [0, 1]) between the two, marginal covariances cov_a and
+  /// cov_b (3x3, right perturbation in each submap's axes, as AddPosePrior's rotation block). A
+  /// chain of them behind one AddPosePrior on the first submap is the measurements' joint density
+  /// (backend/attitude_chain_factor.hpp): rho = 0 independent priors, rho -> 1 one prior plus
+  /// the measured relative attitudes.
+  Status AddAttitudeChainFactor(SubmapId a, SubmapId b, const Eigen::Matrix3d& R_world_a,
+                                const Eigen::Matrix3d& cov_a, const Eigen::Matrix3d& R_world_b,
+                                const Eigen::Matrix3d& cov_b, double rho);
   /// `gnss_bias` >= 0: the fix measures p_antenna + b with b the bias of that key (added before
   /// with AddGnssBias); -1: no bias.
   Status AddGnssPrior(SubmapId id, const Eigen::Vector3d& p_world_antenna,

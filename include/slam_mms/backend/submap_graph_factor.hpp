@@ -22,9 +22,13 @@ enum class SubmapFactorKind {
   kLoop,          ///< F_Loop: T_a_b of a verified loop (the graph's loop_loss).
   kPosePrior,     ///< A 6-DoF prior T_world_submap on submap a.
   kGnss,          ///< F_GNSS: p_world_antenna on submap a (3x3 covariance in the top-left block).
+  /// Attitudes measured on submaps a and b with correlated errors (SubmapGraph::
+  /// AddAttitudeChainFactor): R_world_b in T, R_world_a in T_a, cov_b in the top-left 3x3 block,
+  /// cov_a in the bottom-right one, rho in `correlation`.
+  kAttitudeChain,
 };
 
-/// "registration", "reckon", "loop", "pose_prior", "gnss".
+/// "registration", "reckon", "loop", "pose_prior", "gnss", "attitude_chain".
 const char* SubmapFactorKindName(SubmapFactorKind kind);
 /// The kind of a name of SubmapFactorKindName; false where unknown.
 bool SubmapFactorKindFromName(const char* name, SubmapFactorKind* kind);
@@ -44,6 +48,9 @@ struct SubmapGraphFactor {
   Eigen::Isometry3d T_submap_body = Eigen::Isometry3d::Identity();
   Eigen::Vector3d t_body_antenna = Eigen::Vector3d::Zero();
   int gnss_bias = -1;  ///< The GNSS bias (SubmapGraph::AddGnssBias) the fix shares; -1: none.
+  // kAttitudeChain only:
+  Eigen::Isometry3d T_a = Eigen::Isometry3d::Identity();  ///< Its rotation: R_world_a measured.
+  double correlation = 0.0;                               ///< rho of the two errors.
 };
 
 }  // namespace slam_mms

@@ -46,10 +46,11 @@ struct Level2Options {
   /// disables the prior.
   double attitude_prior_sigma_rad = 0.0175;
   /// A POS's attitude error is time-correlated (an initial heading error persists until motion
-  /// observes it), so the POS attitude priors of the submaps within this window [s] count as
-  /// one: each prior's covariance is multiplied by window / (time since the previous submap's
-  /// prior), at least 1, as the GNSS fixes' (gnss_correlation_s). 0 takes every submap's POS
-  /// attitude as independent. >= 0.
+  /// observes it): with this correlation time tau [s] > 0 the POS attitude errors of successive
+  /// submaps are a first-order Gauss-Markov process (correlation exp(-dt / tau) between submaps
+  /// dt apart): the first submap's POS attitude is a prior, every later one an attitude chain
+  /// factor to the previous one (SubmapGraph::AddAttitudeChainFactor), together the exact joint
+  /// density of the errors. 0 takes every submap's POS attitude as an independent prior. >= 0.
   double pos_attitude_correlation_s = 0.0;
   int max_iterations = 100;  ///< Levenberg-Marquardt iterations of a level-2 solve, > 0.
   /// Map-to-map registration and loop verification.

@@ -357,6 +357,7 @@ void RegisterOptions(py::module_& m) {
       .Field("gnss_sigma_scale", &SO::gnss_sigma_scale, "")
       .Field("gnss_correlation_s", &SO::gnss_correlation_s, "[s]")
       .Field("pos_attitude_correlation_s", &SO::pos_attitude_correlation_s, "[s]")
+      .Field("pos_attitude_cross_covariance", &SO::pos_attitude_cross_covariance, "")
       .Field("attitude_prior_sigma_rad", &SO::attitude_prior_sigma_rad, "[rad]")
       .Field("max_iterations", &SO::max_iterations, "")
       .Field("icp", &SO::icp, "PointIcpOptions")

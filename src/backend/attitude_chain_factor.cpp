@@ -3,43 +3,17 @@
 #include <ceres/autodiff_cost_function.h>
 #include <ceres/rotation.h>
 
-#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
-#include <algorithm>
-#include <cmath>
 
+#include "backend/backend_math.hpp"
 #include "backend/pose_block.hpp"
 
 namespace slam_mms {
 namespace {
 
-/// Sigma^-1/2 (symmetric): the same whitening whichever way the axes are turned.
-Eigen::Matrix3d InverseSqrt(const Eigen::Matrix3d& cov) {
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(0.5 * (cov + cov.transpose()));
-  return es.eigenvectors() * es.eigenvalues().cwiseSqrt().cwiseInverse().asDiagonal() *
-         es.eigenvectors().transpose();
-}
-
-bool IsRotation(const Eigen::Matrix3d& R) {
-  return R.allFinite() && (R.transpose() * R - Eigen::Matrix3d::Identity()).norm() < 1e-6 &&
-         R.determinant() > 0.0;
-}
-
-Status CheckCovariance(const Eigen::Matrix3d& c, const char* which) {
-  if (!c.allFinite() || (c - c.transpose()).norm() > 1e-9 * std::max(1.0, c.norm())) {
-    return InvalidArgumentError(std::string("AttitudeChainFactor: ") + which +
-                                " is not a finite symmetric matrix");
-  }
-  if (Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(c).eigenvalues().minCoeff() <= 0.0) {
-    return InvalidArgumentError(std::string("AttitudeChainFactor: ") + which +
-                                " is not positive definite");
-  }
-  return OkStatus();
-}
-
 struct Residual {
   Eigen::Quaterniond q_a_inv, q_b_inv;  // R~^T of each measurement
-  Eigen::Matrix3d W_a, W_b;             // rho Sigma_a^-1/2 and Sigma_b^-1/2, over sqrt(1 - rho^2)
+  Eigen::Matrix3d W_a, W_b;             // S A and S, S^T S = Q^-1
 
   template <typename T>
   static Eigen::Matrix<T, 3, 1> WorldError(const T* pose, const Eigen::Quaterniond& q_inv) {
@@ -62,24 +36,24 @@ struct Residual {
 }  // namespace
 
 StatusOr<std::unique_ptr<ceres::CostFunction>> AttitudeChainFactor::Create(
-    const Eigen::Matrix3d& R_world_a, const Eigen::Matrix3d& cov_a,
-    const Eigen::Matrix3d& R_world_b, const Eigen::Matrix3d& cov_b, double rho) {
-  if (!IsRotation(R_world_a) || !IsRotation(R_world_b)) {
-    return InvalidArgumentError("AttitudeChainFactor: a measured attitude is not a rotation");
+    const Eigen::Matrix3d& R_world_a, const Eigen::Matrix3d& R_world_b,
+    const Eigen::Matrix3d& transition, const Eigen::Matrix3d& covariance) {
+  for (const Eigen::Matrix3d* R : {&R_world_a, &R_world_b}) {
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = *R;
+    SLAM_MMS_RETURN_IF_ERROR(
+        backend_internal::ValidatePose(T, "AttitudeChainFactor: measured attitude"));
   }
-  SLAM_MMS_RETURN_IF_ERROR(CheckCovariance(cov_a, "covariance of a"));
-  SLAM_MMS_RETURN_IF_ERROR(CheckCovariance(cov_b, "covariance of b"));
-  if (!(rho >= 0.0 && rho <= 1.0)) {
-    return InvalidArgumentError("AttitudeChainFactor: rho = " + std::to_string(rho) +
-                                "; must be in [0, 1]");
+  if (!transition.allFinite()) {
+    return InvalidArgumentError("AttitudeChainFactor: the transition is not finite");
   }
+  SLAM_MMS_RETURN_IF_ERROR(
+      backend_internal::ValidateCovariance<3>(covariance, "AttitudeChainFactor covariance"));
   auto r = std::make_unique<Residual>();
   r->q_a_inv = Eigen::Quaterniond(R_world_a).normalized().conjugate();
   r->q_b_inv = Eigen::Quaterniond(R_world_b).normalized().conjugate();
-  const double scale = 1.0 / std::sqrt(std::max(1.0 - rho * rho, kMinInnovationShare));
-  // World axes: Sigma_w = R~ Sigma R~^T.
-  r->W_a = rho * scale * InverseSqrt(R_world_a * cov_a * R_world_a.transpose());
-  r->W_b = scale * InverseSqrt(R_world_b * cov_b * R_world_b.transpose());
+  r->W_b = backend_internal::SqrtInformation<3>(covariance);
+  r->W_a = r->W_b * transition;
   return std::unique_ptr<ceres::CostFunction>(
       new ceres::AutoDiffCostFunction<Residual, 3, kPoseBlockSize, kPoseBlockSize>(r.release()));
 }

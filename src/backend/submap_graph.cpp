@@ -305,17 +305,82 @@ Status SubmapGraph::AddPosePrior(SubmapId id, const Eigen::Isometry3d& T_world_s
   return OkStatus();
 }
 
+namespace {
+
+/// Sigma^(power) of a symmetric positive definite matrix (power +-1/2), symmetric root.
+Eigen::Matrix3d SymmetricPower(const Eigen::Matrix3d& cov, double power) {
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(0.5 * (cov + cov.transpose()));
+  return es.eigenvectors() * es.eigenvalues().array().pow(power).matrix().asDiagonal() *
+         es.eigenvectors().transpose();
+}
+
+Status ValidateAttitude(const Eigen::Matrix3d& R, const Eigen::Matrix3d& cov,
+                        const std::string& what) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = R;
+  SLAM_MMS_RETURN_IF_ERROR(ValidatePose(T, what));
+  return ValidateCovariance<3>(cov, what);
+}
+
+}  // namespace
+
+StatusOr<AttitudeChain> AttitudeChainFromCrossCovariance(const Eigen::Matrix3d& R_world_a,
+                                                         const Eigen::Matrix3d& cov_a,
+                                                         const Eigen::Matrix3d& R_world_b,
+                                                         const Eigen::Matrix3d& cov_b,
+                                                         const Eigen::Matrix3d& cross_ba) {
+  const std::string what = "AttitudeChainFromCrossCovariance";
+  SLAM_MMS_RETURN_IF_ERROR(ValidateAttitude(R_world_a, cov_a, what + " (a)"));
+  SLAM_MMS_RETURN_IF_ERROR(ValidateAttitude(R_world_b, cov_b, what + " (b)"));
+  if (!cross_ba.allFinite()) return InvalidArgumentError(what + ": cross-covariance not finite");
+  // World axes: eps = R e.
+  const Eigen::Matrix3d Saa = R_world_a * cov_a * R_world_a.transpose();
+  const Eigen::Matrix3d Sbb = R_world_b * cov_b * R_world_b.transpose();
+  const Eigen::Matrix3d Sba = R_world_b * cross_ba * R_world_a.transpose();
+  Eigen::Matrix<double, 6, 6> joint;
+  joint << Saa, Sba.transpose(), Sba, Sbb;
+  joint = 0.5 * (joint + joint.transpose());
+  if (Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>>(joint).eigenvalues().minCoeff() <=
+      0.0) {
+    return InvalidArgumentError(what +
+                                ": the joint covariance of a and b is not positive definite");
+  }
+  AttitudeChain c;
+  c.transition = Saa.ldlt().solve(Sba.transpose()).transpose();
+  const Eigen::Matrix3d Q = Sbb - c.transition * Sba.transpose();
+  c.covariance = 0.5 * (Q + Q.transpose()) + kAttitudeChainMinInnovationShare * Sbb;
+  return c;
+}
+
+StatusOr<AttitudeChain> GaussMarkovAttitudeChain(const Eigen::Matrix3d& R_world_a,
+                                                 const Eigen::Matrix3d& cov_a,
+                                                 const Eigen::Matrix3d& R_world_b,
+                                                 const Eigen::Matrix3d& cov_b, double rho) {
+  const std::string what = "GaussMarkovAttitudeChain";
+  SLAM_MMS_RETURN_IF_ERROR(ValidateAttitude(R_world_a, cov_a, what + " (a)"));
+  SLAM_MMS_RETURN_IF_ERROR(ValidateAttitude(R_world_b, cov_b, what + " (b)"));
+  if (!(rho >= 0.0 && rho <= 1.0)) {
+    return InvalidArgumentError(what + ": rho = " + std::to_string(rho) + "; must be in [0, 1]");
+  }
+  const Eigen::Matrix3d Saa = R_world_a * cov_a * R_world_a.transpose();
+  const Eigen::Matrix3d Sbb = R_world_b * cov_b * R_world_b.transpose();
+  AttitudeChain c;
+  c.transition = rho * SymmetricPower(Sbb, 0.5) * SymmetricPower(Saa, -0.5);
+  c.covariance = std::max(1.0 - rho * rho, kAttitudeChainMinInnovationShare) * Sbb;
+  c.covariance = 0.5 * (c.covariance + c.covariance.transpose());
+  return c;
+}
+
 Status SubmapGraph::AddAttitudeChainFactor(SubmapId a, SubmapId b, const Eigen::Matrix3d& R_world_a,
-                                           const Eigen::Matrix3d& cov_a,
                                            const Eigen::Matrix3d& R_world_b,
-                                           const Eigen::Matrix3d& cov_b, double rho) {
+                                           const AttitudeChain& chain) {
   Impl& m = *impl_;
   SLAM_MMS_ASSIGN_OR_RETURN(auto nodes, m.Pair(a, b, "AddAttitudeChainFactor"));
   if (nodes.first->index > nodes.second->index) {
     return InvalidArgumentError("SubmapGraph::AddAttitudeChainFactor: submap " + Id(a) +
                                 " was added after " + Id(b));
   }
-  auto cost = AttitudeChainFactor::Create(R_world_a, cov_a, R_world_b, cov_b, rho);
+  auto cost = AttitudeChainFactor::Create(R_world_a, R_world_b, chain.transition, chain.covariance);
   if (!cost.ok()) return cost.status().WithContext("SubmapGraph::AddAttitudeChainFactor");
   m.problem->AddResidualBlock(cost->release(), nullptr, nodes.first->pose.data(),
                               nodes.second->pose.data());
@@ -326,9 +391,8 @@ Status SubmapGraph::AddAttitudeChainFactor(SubmapId a, SubmapId b, const Eigen::
   f.T.linear() = R_world_b;
   f.T_a.linear() = R_world_a;
   f.covariance = Matrix6d::Zero();
-  f.covariance.topLeftCorner<3, 3>() = cov_b;
-  f.covariance.bottomRightCorner<3, 3>() = cov_a;
-  f.correlation = rho;
+  f.covariance.topLeftCorner<3, 3>() = chain.covariance;
+  f.transition = chain.transition;
   m.factors.push_back(f);
   return OkStatus();
 }

@@ -430,6 +430,39 @@ StatusOr<InsState> InsFilter::CurrentState() const {
   return ToInsState(impl_->history.back());
 }
 
+Status InsFilter::MarkAttitudeEpoch() {
+  Impl& im = *impl_;
+  if (im.mode == Mode::kExternal) {
+    return FailedPreconditionError("InsFilter::MarkAttitudeEpoch: external POS (no covariances)");
+  }
+  if (!im.initialized || im.history.empty()) {
+    return FailedPreconditionError("InsFilter::MarkAttitudeEpoch: not initialised");
+  }
+  Impl::AttitudeEpoch e;
+  e.stamp = im.x.stamp;
+  e.R = im.x.q.toRotationMatrix();
+  e.cov = im.P.block<3, 3>(kTh, kTh);
+  e.cross = im.P.middleCols<3>(kTh);
+  im.attitude_epoch = e;
+  return OkStatus();
+}
+
+StatusOr<InsFilter::AttitudeCorrelation> InsFilter::AttitudeSinceEpoch() const {
+  const Impl& im = *impl_;
+  if (!im.attitude_epoch) {
+    return FailedPreconditionError("InsFilter::AttitudeSinceEpoch: no epoch marked");
+  }
+  AttitudeCorrelation c;
+  c.epoch = im.attitude_epoch->stamp;
+  c.now = im.x.stamp;
+  c.R_world_body_epoch = im.attitude_epoch->R;
+  c.R_world_body_now = im.x.q.toRotationMatrix();
+  c.cov_epoch = im.attitude_epoch->cov;
+  c.cov_now = im.P.block<3, 3>(kTh, kTh);
+  c.cross = im.attitude_epoch->cross.middleRows<3>(kTh);
+  return c;
+}
+
 StatusOr<InsState> InsFilter::StateAt(Timestamp t) const {
   const auto& h = impl_->history;
   if (h.empty()) return FailedPreconditionError("InsFilter::StateAt: not initialised");

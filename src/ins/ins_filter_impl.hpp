@@ -97,6 +97,14 @@ struct InsFilter::Impl {
   InsErrorMatrix P = InsErrorMatrix::Zero();
   std::optional<ImuSample> last_imu;
   std::deque<HistoryEntry> history;
+  // MarkAttitudeEpoch: Cov(dx, dtheta at the epoch), transformed with every transition of P.
+  struct AttitudeEpoch {
+    Timestamp stamp;
+    Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Identity();
+    Eigen::Matrix<double, kN, 3> cross = Eigen::Matrix<double, kN, 3>::Zero();
+  };
+  std::optional<AttitudeEpoch> attitude_epoch;
   // Smoother record (options.record_steps): the transition since the last recorded step.
   std::vector<InsFilterStep> steps;
   InsErrorMatrix F_since_step = InsErrorMatrix::Identity();
@@ -171,6 +179,7 @@ struct InsFilter::Impl {
   /// `sigma_rpy`: the attitude's stated roll, pitch, yaw sigmas [rad] (else the options').
   void InitCovariance(double sigma_p_h, double sigma_p_v,
                       const std::optional<Eigen::Vector3d>& sigma_rpy = std::nullopt) {
+    attitude_epoch.reset();
     P.setZero();
     P.block<3, 3>(kP, kP).diagonal() << sigma_p_h * sigma_p_h, sigma_p_h * sigma_p_h,
         sigma_p_v * sigma_p_v;
@@ -217,6 +226,7 @@ struct InsFilter::Impl {
     Fr.block<3, 3>(kBn, kBn).setZero();
     P = Fr * P * Fr.transpose();
     P.block<3, 3>(kBn, kBn) = cov;
+    if (attitude_epoch) attitude_epoch->cross = Fr * attitude_epoch->cross;
     x.bn.setZero();
     bias_cov = cov;
     bias_tau_s = tau_s;
@@ -252,6 +262,8 @@ struct InsFilter::Impl {
     G.block<3, 3>(kTh, kTh) -= 0.5 * so3::Hat(dth);
     P = G * P * G.transpose();
     P = 0.5 * (P + P.transpose());
+    // The filtered error after the update, G ((I - K H) dx - K n), n independent of the past.
+    if (attitude_epoch) attitude_epoch->cross = G * (IKH * attitude_epoch->cross);
   }
 
   // Zero-velocity update (+ gyro bias from the mean rate) while the IMU is still and the speed
@@ -474,6 +486,7 @@ struct InsFilter::Impl {
     Q.block<3, 3>(kBn, kBn) = (1.0 - e_bn * e_bn) * bias_cov;
     P = F * P * F.transpose() + Q;
     P = 0.5 * (P + P.transpose());
+    if (attitude_epoch) attitude_epoch->cross = F * attitude_epoch->cross;
     if (options.record_steps) {
       F_since_step = F * F_since_step;
       propagated_since_step = true;

@@ -55,8 +55,12 @@ void MoveDrive(const Eigen::Isometry3d& T_new_old, DriveResult* d) {
     if (f.kind == SubmapFactorKind::kPosePrior) {
       f.T = T_new_old * f.T;  // right-perturbation covariance: unchanged
     } else if (f.kind == SubmapFactorKind::kAttitudeChain) {
-      f.T = T_new_old * f.T;  // likewise
+      // The chain is in world axes: eps' = R eps, so A' = R A R^T, Q' = R Q R^T.
+      f.T = T_new_old * f.T;
       f.T_a = T_new_old * f.T_a;
+      f.transition = R * f.transition * R.transpose();
+      const Eigen::Matrix3d q = f.covariance.topLeftCorner<3, 3>();
+      f.covariance.topLeftCorner<3, 3>() = R * q * R.transpose();
     } else if (f.kind == SubmapFactorKind::kGnss) {
       f.p_world_antenna = T_new_old * f.p_world_antenna;
       const Eigen::Matrix3d c = f.covariance.topLeftCorner<3, 3>();
@@ -246,9 +250,10 @@ StatusOr<SubmapGraph> BuildGraph(const std::vector<DriveAdjustment::Drive>& driv
           break;
         case SubmapFactorKind::kAttitudeChain:
           if (o.use_pose_priors) {
-            st = graph.AddAttitudeChainFactor(a, b, f.T_a.linear(),
-                                              f.covariance.bottomRightCorner<3, 3>(), f.T.linear(),
-                                              f.covariance.topLeftCorner<3, 3>(), f.correlation);
+            AttitudeChain chain;
+            chain.transition = f.transition;
+            chain.covariance = f.covariance.topLeftCorner<3, 3>();
+            st = graph.AddAttitudeChainFactor(a, b, f.T_a.linear(), f.T.linear(), chain);
           }
           break;
         case SubmapFactorKind::kGnss:

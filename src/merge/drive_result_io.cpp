@@ -25,6 +25,14 @@ Json PoseJson(const Eigen::Isometry3d& T) {
 
 Json VectorJson(const Eigen::Vector3d& v) { return Json::array({v.x(), v.y(), v.z()}); }
 
+Json MatrixJson(const Eigen::Matrix3d& m) {
+  Json a = Json::array();
+  for (int r = 0; r < 3; ++r) {
+    for (int k = 0; k < 3; ++k) a.push_back(m(r, k));
+  }
+  return a;
+}
+
 Json CovarianceJson(const Matrix6d& c) {
   Json a = Json::array();
   for (int r = 0; r < 6; ++r) {
@@ -84,6 +92,15 @@ struct Reader {
     T.linear() = q.normalized().toRotationMatrix();
     T.translation() = v.head<3>();
     return T;
+  }
+
+  StatusOr<Eigen::Matrix3d> Matrix3(const Json& j, const std::string& where) const {
+    SLAM_MMS_ASSIGN_OR_RETURN(auto v, Numbers<9>(j, where));
+    Eigen::Matrix3d m;
+    for (int r = 0; r < 3; ++r) {
+      for (int k = 0; k < 3; ++k) m(r, k) = v[3 * r + k];
+    }
+    return m;
   }
 
   StatusOr<Matrix6d> Covariance(const Json& j, const std::string& where) const {
@@ -178,7 +195,7 @@ Status WriteDriveResult(const DriveResult& result, const fs::path& dir) {
     }
     if (f.kind == SubmapFactorKind::kAttitudeChain) {
       jf["T_a"] = PoseJson(f.T_a);
-      jf["correlation"] = f.correlation;
+      jf["transition"] = MatrixJson(f.transition);
     }
     jf["covariance"] = CovarianceJson(f.covariance);
     if (f.kind == SubmapFactorKind::kRegistration) {
@@ -346,11 +363,8 @@ StatusOr<DriveResult> ReadDriveResult(const fs::path& dir, const DriveResultRead
     }
     if (f.kind == SubmapFactorKind::kAttitudeChain) {
       SLAM_MMS_ASSIGN_OR_RETURN(f.T_a, r.Get<Eigen::Isometry3d>(jf, w, "T_a", &Reader::Pose));
-      SLAM_MMS_ASSIGN_OR_RETURN(f.correlation,
-                                r.Get<double>(jf, w, "correlation", &Reader::Number));
-      if (!(f.correlation >= 0.0 && f.correlation <= 1.0)) {
-        return r.Bad(w + ".correlation", "must be in [0, 1]");
-      }
+      SLAM_MMS_ASSIGN_OR_RETURN(f.transition,
+                                r.Get<Eigen::Matrix3d>(jf, w, "transition", &Reader::Matrix3));
     }
     if (f.kind == SubmapFactorKind::kRegistration) {
       SLAM_MMS_ASSIGN_OR_RETURN(const Json* loss, r.Field(jf, w, "loss"));

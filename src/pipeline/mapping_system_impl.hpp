@@ -9,6 +9,7 @@
 
 #include <deque>
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <utility>
@@ -46,6 +47,18 @@ struct MappingSystem::Impl {
   bool gnss_returned_pending = false;
   bool have_gnss_fed = false;  // GNSS fixes reached the GnssPrior (also with an external POS)
   size_t submaps_reported = 0;
+  /// Level2Options::pos_attitude_cross_covariance: per submap, the scan stamp at which the POS
+  /// filter's attitude epoch was marked (the first scan where GNSS holds the POS, as
+  /// ReportFinishedSubmaps picks it) and the chain from the previous submap's epoch.
+  struct PosEpoch {
+    Timestamp stamp;
+    std::optional<SubmapManager::PosAttitude::Link> link;
+  };
+  std::map<int32_t, PosEpoch> pos_epochs;
+  int32_t pos_epoch_submap = -1;                     // the submap of the filter's current epoch
+  std::map<int32_t, Timestamp> pos_attitude_stamps;  // the stamp each reported attitude is at
+  /// Marks the POS's attitude epoch at the first scan of a submap where GNSS holds it.
+  void MarkPosEpoch(const Scan& scan, const LocalizationResult& res);
 
   // gnss_ins mode.
   internal::PosMapper pos_mapper;

@@ -130,8 +130,41 @@ StatusOr<bool> MappingSystem::Impl::Localize(const Scan& scan, const ScanMotionI
     return r.status();
   }
   *res = std::move(r).value();
+  MarkPosEpoch(scan, *res);
   SLAM_MMS_RETURN_IF_ERROR(ReportFinishedSubmaps());
   return true;
+}
+
+void MappingSystem::Impl::MarkPosEpoch(const Scan& scan, const LocalizationResult& res) {
+  if (!level2 || !opt.level2.pos_attitude_cross_covariance || external_pos || !ins.initialized() ||
+      res.submap_id == pos_epoch_submap) {
+    return;
+  }
+  // The same scan ReportFinishedSubmaps will take the POS attitude at (checked there by stamp).
+  // The filter is at the newest IMU sample, a fraction of a scan past it: the correlation is
+  // read there (the attitudes themselves are read at the scan).
+  const Timestamp t = scan.stamp_start;
+  if (ins.gnss_prior().AvailabilityAt(t) == GnssAvailability::kOutage || !ins.StateAt(t).ok()) {
+    return;
+  }
+  PosEpoch e;
+  e.stamp = t;
+  if (pos_epoch_submap >= 0) {
+    auto c = ins.AttitudeSinceEpoch();
+    if (c.ok()) {
+      auto chain = AttitudeChainFromCrossCovariance(c->R_world_body_epoch, c->cov_epoch,
+                                                    c->R_world_body_now, c->cov_now, c->cross);
+      if (chain.ok()) {
+        e.link = SubmapManager::PosAttitude::Link{pos_epoch_submap, *chain};
+      } else {
+        SLAM_MMS_LOG(kWarning) << "submap " << res.submap_id
+                               << ": no POS attitude correlation: " << chain.status().message();
+      }
+    }
+  }
+  if (!ins.MarkAttitudeEpoch().ok()) return;
+  pos_epochs[res.submap_id] = e;
+  pos_epoch_submap = res.submap_id;
 }
 
 void MappingSystem::Impl::UpdateOutageState(bool gnss_valid, Timestamp t) {
@@ -180,7 +213,25 @@ Status MappingSystem::Impl::ReportFinishedSubmaps() {
       const Eigen::Matrix3d R_sb = rec.T_submap_scan[j].linear();
       attitude = SubmapManager::PosAttitude{
           s->T_world_body.linear() * R_sb.transpose(),
-          R_sb * s->cov_T_world_body.topLeftCorner<3, 3>() * R_sb.transpose()};
+          R_sb * s->cov_T_world_body.topLeftCorner<3, 3>() * R_sb.transpose(), std::nullopt};
+      pos_attitude_stamps[id] = t;
+      // The POS's own chain from the previous submap's attitude, where both were taken at the
+      // scans the epochs were marked at (MarkPosEpoch).
+      const auto e = pos_epochs.find(id);
+      if (e != pos_epochs.end() && e->second.stamp == t && e->second.link) {
+        const auto prev = pos_attitude_stamps.find(e->second.link->previous_submap);
+        const auto prev_epoch = pos_epochs.find(e->second.link->previous_submap);
+        if (prev != pos_attitude_stamps.end() && prev_epoch != pos_epochs.end() &&
+            prev->second == prev_epoch->second.stamp) {
+          attitude->link = e->second.link;
+        }
+      }
+    }
+    // A later link refers to the last submap with a POS attitude at most: forget older ones.
+    while (pos_attitude_stamps.size() > 1) pos_attitude_stamps.erase(pos_attitude_stamps.begin());
+    const int32_t keep = pos_attitude_stamps.empty() ? id : pos_attitude_stamps.begin()->first;
+    while (!pos_epochs.empty() && pos_epochs.begin()->first < keep) {
+      pos_epochs.erase(pos_epochs.begin());
     }
     SLAM_MMS_ASSIGN_OR_RETURN(const std::vector<SubmapPoseUpdate> updates,
                               level2->OnSubmapFinished(*loc, id, gnss_returned_pending, attitude));

@@ -271,19 +271,33 @@ StatusOr<std::vector<SubmapPoseUpdate>> SubmapManager::OnSubmapFinished(
           1e-10 * Eigen::Matrix3d::Identity();
       cov.topLeftCorner<3, 3>() = c;
       const std::optional<Impl::LastPosAttitude> last = m.last_pos_attitude;
-      const bool chained = m.opt.pos_attitude_correlation_s > 0.0 && last.has_value() &&
-                           m.graph->HasSubmap(last->id);
       m.last_pos_attitude =
           Impl::LastPosAttitude{submap_id, rec->start, pos_attitude->R_world_submap, c};
-      if (chained) {
+      std::optional<AttitudeChain> chain;
+      const char* model = "";
+      const bool have_last = last.has_value() && m.graph->HasSubmap(last->id);
+      if (have_last && m.opt.pos_attitude_cross_covariance && pos_attitude->link &&
+          pos_attitude->link->previous_submap == last->id) {
+        // Options::pos_attitude_cross_covariance: the POS's own conditional.
+        chain = pos_attitude->link->chain;
+        model = "the POS's cross-covariance";
+      } else if (have_last && m.opt.pos_attitude_correlation_s > 0.0) {
         // Options::pos_attitude_correlation_s: the error's correlation with the last one's.
         const double dt = std::max(0.0, rec->start.SecondsSince(last->start));
         const double rho = std::exp(-dt / m.opt.pos_attitude_correlation_s);
+        SLAM_MMS_ASSIGN_OR_RETURN(chain,
+                                  GaussMarkovAttitudeChain(last->R_world_submap, last->cov,
+                                                           pos_attitude->R_world_submap, c, rho));
+        model = "Gauss-Markov";
+      }
+      if (chain) {
+        const Eigen::Vector3d sd = chain->covariance.diagonal().cwiseSqrt() * kRadToDeg;
         SLAM_MMS_LOG(kDebug) << "level 2: submap " << submap_id << " POS attitude chained to "
-                             << last->id << " (rho " << rho << "), " << RotationSigmasDeg(cov);
-        SLAM_MMS_RETURN_IF_ERROR(
-            m.graph->AddAttitudeChainFactor(last->id, submap_id, last->R_world_submap, last->cov,
-                                            pos_attitude->R_world_submap, c, rho));
+                             << last->id << " (" << model << "), innovation " << sd.x() << " / "
+                             << sd.y() << " / " << sd.z() << " deg (world axes), transition diag "
+                             << chain->transition.diagonal().transpose();
+        SLAM_MMS_RETURN_IF_ERROR(m.graph->AddAttitudeChainFactor(
+            last->id, submap_id, last->R_world_submap, pos_attitude->R_world_submap, *chain));
         chained_pos_attitude = true;
       } else {
         SLAM_MMS_LOG(kDebug) << "level 2: submap " << submap_id << " attitude prior from the POS, "

@@ -44,6 +44,13 @@ class SubmapManager {
   struct PosAttitude {
     Eigen::Matrix3d R_world_submap = Eigen::Matrix3d::Identity();
     Eigen::Matrix3d cov_rotation = Eigen::Matrix3d::Identity();
+    /// The POS's own model of this attitude's error given the one it gave for submap
+    /// `previous_submap` (Options::pos_attitude_cross_covariance); absent: none.
+    struct Link {
+      int32_t previous_submap = -1;
+      AttitudeChain chain;
+    };
+    std::optional<Link> link;
   };
   StatusOr<std::vector<SubmapPoseUpdate>> OnSubmapFinished(
       const SubmapSource& submaps, int32_t submap_id, bool gnss_returned_after_outage,

@@ -1,8 +1,9 @@
 // SubmapGraph::AddAttitudeChainFactor (backend/attitude_chain_factor.hpp): attitudes measured on
-// successive submaps with Gauss-Markov correlated errors. Against closed forms: the posterior
-// variance of a common rotation is the generalised least-squares one of an AR(1) sequence,
-// sigma^2 (1 + rho) / (N - (N - 2) rho); rho = 0 is the same as independent priors; the
-// covariances are turned into world axes; bad inputs are refused without touching the graph.
+// successive submaps with correlated errors. Against closed forms: with Gauss-Markov errors the
+// posterior variance of a common rotation is the generalised least-squares one of an AR(1)
+// sequence, sigma^2 (1 + rho) / (N - (N - 2) rho); rho = 0 is the same as independent priors;
+// the covariances are turned into world axes; the chain from a cross-covariance is the joint
+// Gaussian's conditional; bad inputs are refused without touching the graph.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -54,9 +55,11 @@ SubmapGraph Build(const std::vector<Eigen::Isometry3d>& truth, const Eigen::Matr
       prior.topLeftCorner<3, 3>() = cov_body;
       EXPECT_TRUE(g->AddPosePrior(id, truth[i], prior).ok());
     } else {
-      EXPECT_TRUE(g->AddAttitudeChainFactor(id - 1, id, truth[i - 1].linear(), cov_body,
-                                            truth[i].linear(), cov_body, rho)
-                      .ok());
+      auto c = GaussMarkovAttitudeChain(truth[i - 1].linear(), cov_body, truth[i].linear(),
+                                        cov_body, rho);
+      EXPECT_TRUE(c.ok()) << c.status().ToString();
+      EXPECT_TRUE(
+          g->AddAttitudeChainFactor(id - 1, id, truth[i - 1].linear(), truth[i].linear(), *c).ok());
     }
   }
   EXPECT_TRUE(g->AddGnssPrior(0, truth[0].translation(), 1e-6 * Eigen::Matrix3d::Identity()).ok());
@@ -137,9 +140,10 @@ TEST(AttitudeChainTest, ACommonWorldErrorIsFollowedNotAveragedAway) {
         prior.topLeftCorner<3, 3>() = cov;
         EXPECT_TRUE(g->AddPosePrior(i, T, prior).ok());
       } else {
-        EXPECT_TRUE(g->AddAttitudeChainFactor(i - 1, i, R_err * truth[i - 1].linear(), cov, R_meas,
-                                              cov, rho)
-                        .ok());
+        const Eigen::Matrix3d R_prev = R_err * truth[i - 1].linear();
+        auto c = GaussMarkovAttitudeChain(R_prev, cov, R_meas, cov, rho);
+        EXPECT_TRUE(c.ok());
+        EXPECT_TRUE(g->AddAttitudeChainFactor(i - 1, i, R_prev, R_meas, *c).ok());
       }
     }
     for (int i : {0, kN - 1}) {
@@ -157,6 +161,40 @@ TEST(AttitudeChainTest, ACommonWorldErrorIsFollowedNotAveragedAway) {
   EXPECT_GT(correlated, 0.02);  // still pulled towards the POS
 }
 
+TEST(AttitudeChainTest, FromCrossCovarianceIsTheConditionalOfTheJointGaussian) {
+  // Equal isotropic marginals with cross-covariance rho sigma^2: the Gauss-Markov chain.
+  const Eigen::Matrix3d Ra = Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const Eigen::Matrix3d Rb = Eigen::AngleAxisd(0.9, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  const double s2 = std::pow(0.1 * kDeg, 2), rho = 0.8;
+  const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
+  // Cov(e_b, e_a) in body axes for a common world error eps with Cov rho s2 I: Rb^T (rho s2) Ra.
+  auto c = AttitudeChainFromCrossCovariance(Ra, s2 * I, Rb, s2 * I,
+                                            Rb.transpose() * (rho * s2 * I) * Ra);
+  ASSERT_TRUE(c.ok()) << c.status().ToString();
+  auto gm = GaussMarkovAttitudeChain(Ra, s2 * I, Rb, s2 * I, rho);
+  ASSERT_TRUE(gm.ok());
+  EXPECT_TRUE(c->transition.isApprox(rho * I, 1e-9)) << c->transition;
+  EXPECT_TRUE(c->transition.isApprox(gm->transition, 1e-9));
+  EXPECT_TRUE(
+      c->covariance.isApprox((1.0 - rho * rho + kAttitudeChainMinInnovationShare) * s2 * I, 1e-9))
+      << c->covariance;
+  // A heading known to 0.1 deg at a and b, roll and pitch to 0.01, the headings' errors
+  // correlated 0.95 and roll/pitch not at all: b's yaw follows a's, its roll and pitch do not.
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  cov.diagonal() << std::pow(0.01 * kDeg, 2), std::pow(0.01 * kDeg, 2), std::pow(0.1 * kDeg, 2);
+  Eigen::Matrix3d cross = Eigen::Matrix3d::Zero();
+  cross(2, 2) = 0.95 * cov(2, 2);
+  auto yaw = AttitudeChainFromCrossCovariance(I, cov, I, cov, cross);
+  ASSERT_TRUE(yaw.ok());
+  EXPECT_NEAR(yaw->transition(2, 2), 0.95, 1e-9);
+  EXPECT_NEAR(yaw->transition(0, 0), 0.0, 1e-9);
+  EXPECT_NEAR(yaw->covariance(0, 0), (1.0 + kAttitudeChainMinInnovationShare) * cov(0, 0), 1e-15);
+  // A correlation above 1 is no joint covariance.
+  auto bad = AttitudeChainFromCrossCovariance(I, s2 * I, I, s2 * I, 1.2 * s2 * I);
+  ASSERT_FALSE(bad.ok());
+  EXPECT_NE(bad.status().message().find("not positive definite"), std::string::npos);
+}
+
 TEST(AttitudeChainTest, BadInputsAreRefusedAndTheGraphIsUnchanged) {
   const auto truth = Turning(2);
   auto g = SubmapGraph::Create();
@@ -169,18 +207,24 @@ TEST(AttitudeChainTest, BadInputsAreRefusedAndTheGraphIsUnchanged) {
     EXPECT_FALSE(st.ok()) << what;
     EXPECT_NE(st.message().find(what), std::string::npos) << st.ToString();
   };
-  refused(g->AddAttitudeChainFactor(0, 1, R0, cov, R1, cov, 1.5), "rho = 1.5");
-  refused(g->AddAttitudeChainFactor(0, 1, R0, cov, R1, cov, -0.1), "must be in [0, 1]");
-  refused(g->AddAttitudeChainFactor(0, 1, R0, cov, R1, cov, NAN), "must be in [0, 1]");
-  refused(g->AddAttitudeChainFactor(0, 1, 2.0 * R0, cov, R1, cov, 0.5), "not a rotation");
-  refused(g->AddAttitudeChainFactor(0, 1, R0, -cov, R1, cov, 0.5), "not positive definite");
-  Eigen::Matrix3d asym = cov;
-  asym(0, 1) = 1e-3;
-  refused(g->AddAttitudeChainFactor(0, 1, R0, cov, R1, asym, 0.5), "symmetric");
-  refused(g->AddAttitudeChainFactor(0, 7, R0, cov, R1, cov, 0.5), "unknown submap 7");
-  refused(g->AddAttitudeChainFactor(1, 0, R1, cov, R0, cov, 0.5), "added after");
+  refused(GaussMarkovAttitudeChain(R0, cov, R1, cov, 1.5).status(), "rho = 1.5");
+  refused(GaussMarkovAttitudeChain(R0, cov, R1, cov, -0.1).status(), "must be in [0, 1]");
+  refused(GaussMarkovAttitudeChain(R0, cov, R1, cov, NAN).status(), "must be in [0, 1]");
+  refused(GaussMarkovAttitudeChain(2.0 * R0, cov, R1, cov, 0.5).status(), "not orthonormal");
+  refused(GaussMarkovAttitudeChain(R0, -cov, R1, cov, 0.5).status(), "not positive definite");
+  auto good = GaussMarkovAttitudeChain(R0, cov, R1, cov, 0.5);
+  ASSERT_TRUE(good.ok());
+  AttitudeChain asym = *good;
+  asym.covariance(0, 1) = 1e-3;
+  refused(g->AddAttitudeChainFactor(0, 1, R0, R1, asym), "not symmetric");
+  AttitudeChain nan = *good;
+  nan.transition(1, 1) = NAN;
+  refused(g->AddAttitudeChainFactor(0, 1, R0, R1, nan), "transition is not finite");
+  refused(g->AddAttitudeChainFactor(0, 1, R0, 2.0 * R1, *good), "not orthonormal");
+  refused(g->AddAttitudeChainFactor(0, 7, R0, R1, *good), "unknown submap 7");
+  refused(g->AddAttitudeChainFactor(1, 0, R1, R0, *good), "added after");
   EXPECT_TRUE(g->Factors().empty());
-  ASSERT_TRUE(g->AddAttitudeChainFactor(0, 1, R0, cov, R1, cov, 0.5).ok());
+  ASSERT_TRUE(g->AddAttitudeChainFactor(0, 1, R0, R1, *good).ok());
   ASSERT_EQ(g->Factors().size(), 1u);
   const SubmapGraphFactor& f = g->Factors()[0];
   EXPECT_EQ(f.kind, SubmapFactorKind::kAttitudeChain);
@@ -189,8 +233,8 @@ TEST(AttitudeChainTest, BadInputsAreRefusedAndTheGraphIsUnchanged) {
   EXPECT_EQ(f.b, 1);
   EXPECT_TRUE(f.T.linear().isApprox(R1));
   EXPECT_TRUE(f.T_a.linear().isApprox(R0));
-  EXPECT_EQ(f.correlation, 0.5);
-  EXPECT_EQ(Eigen::Matrix3d(f.covariance.bottomRightCorner<3, 3>()), cov);
+  EXPECT_EQ(f.transition, good->transition);
+  EXPECT_EQ(Eigen::Matrix3d(f.covariance.topLeftCorner<3, 3>()), good->covariance);
 }
 
 }  // namespace

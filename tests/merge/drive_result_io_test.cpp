@@ -73,8 +73,9 @@ DriveResult Sample() {
   chain.b = 12;
   chain.T.linear() = Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   chain.T_a.linear() = Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  chain.covariance = Matrix6d::Identity() * 3e-6;
-  chain.correlation = 0.9200444146293233;
+  chain.covariance = Matrix6d::Zero();
+  chain.covariance.topLeftCorner<3, 3>() = Eigen::Matrix3d::Identity() * 3e-6;
+  chain.transition << 0.9200444146293233, 0.01, 0.0, -0.01, 0.92, 0.0, 0.0, 0.0, 0.25;
   r.factors = {reg, gnss, prior, chain};
   return r;
 }
@@ -108,7 +109,7 @@ TEST(DriveResultIoTest, RoundTripsLosslessly) {
   EXPECT_EQ(b->factors[1].p_world_antenna, a.factors[1].p_world_antenna);
   EXPECT_EQ(b->factors[1].t_body_antenna, a.factors[1].t_body_antenna);
   EXPECT_EQ(b->factors[3].kind, SubmapFactorKind::kAttitudeChain);
-  EXPECT_EQ(b->factors[3].correlation, a.factors[3].correlation);
+  EXPECT_EQ(b->factors[3].transition, a.factors[3].transition);
   EXPECT_TRUE(b->factors[3].T_a.isApprox(a.factors[3].T_a, 1e-15));
   EXPECT_TRUE(b->factors[3].T.isApprox(a.factors[3].T, 1e-15));
   EXPECT_EQ(b->factors[3].covariance, a.factors[3].covariance);
@@ -150,10 +151,10 @@ TEST(DriveResultIoTest, BadFilesAreNamed) {
   expect("version");
   rewrite("\"kind\": \"gnss\"", "\"kind\": \"magic\"");
   expect("factors[1].kind");
-  rewrite("\"correlation\": 0.9200444146293233", "\"correlation\": 1.5");
-  expect("factors[3].correlation");
-  rewrite("\"correlation\": 0.9200444146293233", "\"correlation_x\": 0.5");
-  expect("factors[3]: missing correlation");
+  rewrite("0.9200444146293233", "\"x\"");
+  expect("factors[3].transition[0]: not a number");
+  rewrite("\"transition\"", "\"transition_x\"");
+  expect("factors[3]: missing transition");
   rewrite("\"scan_id\": 201", "\"scan_id\": \"x\"");
   expect("submaps[2].scans[1].scan_id");
   std::ofstream(file, std::ios::binary | std::ios::trunc) << good.substr(0, good.size() / 2);

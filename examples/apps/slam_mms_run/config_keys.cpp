@@ -417,6 +417,8 @@ const std::vector<std::pair<std::string, KeyHandler>>& Handlers() {
     SLAM_MMS_KEY_D("level2.gnss_correlation_s", o->system.level2.gnss_correlation_s);
     SLAM_MMS_KEY_D("level2.pos_attitude_correlation_s",
                    o->system.level2.pos_attitude_correlation_s);
+    SLAM_MMS_KEY_B("level2.pos_attitude_cross_covariance",
+                   o->system.level2.pos_attitude_cross_covariance);
     SLAM_MMS_KEY_D("level2.attitude_prior_sigma_rad", o->system.level2.attitude_prior_sigma_rad);
     SLAM_MMS_KEY_I("level2.max_iterations", o->system.level2.max_iterations);
     // The drive runner (RunDrive's passes over the whole drive; DriveRunOptions).

@@ -84,6 +84,33 @@ struct LoopCandidate {
   double distance_m = 0.0;  ///< From the query position to the nearest pose of the submap.
 };
 
+/// The conditional model of two correlated attitude errors for SubmapGraph::
+/// AddAttitudeChainFactor, in world axes: eps_b = transition * eps_a + w, w ~ N(0, covariance).
+struct AttitudeChain {
+  Eigen::Matrix3d transition = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();  ///< [rad^2]
+};
+/// Q is never below this share of b's marginal covariance (the measured relative attitude is
+/// never exact).
+inline constexpr double kAttitudeChainMinInnovationShare = 1e-4;
+/// From the joint covariance of the two errors as a filter states them: cov_a, cov_b (right
+/// perturbations in the body axes of R_world_a, R_world_b, rad^2) and cross_ba = Cov(e_b, e_a):
+/// A = C_ba C_aa^-1, Q = C_bb - A C_ab (world axes) plus the floor. InvalidArgument where the
+/// joint covariance is not positive definite (a correlation above 1).
+StatusOr<AttitudeChain> AttitudeChainFromCrossCovariance(const Eigen::Matrix3d& R_world_a,
+                                                         const Eigen::Matrix3d& cov_a,
+                                                         const Eigen::Matrix3d& R_world_b,
+                                                         const Eigen::Matrix3d& cov_b,
+                                                         const Eigen::Matrix3d& cross_ba);
+/// A first-order Gauss-Markov error with marginal covariances cov_a, cov_b (body axes as above)
+/// and correlation rho in [0, 1] (exp(-dt / tau)): u = Sigma^-1/2 eps (symmetric roots, world
+/// axes) follows u_b = rho u_a + sqrt(1 - rho^2) w: A = rho Sigma_b^1/2 Sigma_a^-1/2,
+/// Q = max(1 - rho^2, floor) Sigma_b.
+StatusOr<AttitudeChain> GaussMarkovAttitudeChain(const Eigen::Matrix3d& R_world_a,
+                                                 const Eigen::Matrix3d& cov_a,
+                                                 const Eigen::Matrix3d& R_world_b,
+                                                 const Eigen::Matrix3d& cov_b, double rho);
+
 class SubmapGraph {
  public:
   struct Options {
@@ -146,15 +173,13 @@ class SubmapGraph {
   Status AddPosePrior(SubmapId id, const Eigen::Isometry3d& T_world_submap,
                       const Matrix6d& covariance);
   /// Attitudes R~_world_a and R~_world_b of submaps a and b (a added before b) measured by one
-  /// source whose errors are correlated: in world axes a first-order Gauss-Markov process with
-  /// correlation `rho` (exp(-dt / tau), in [0, 1]) between the two, marginal covariances cov_a and
-  /// cov_b (3x3, right perturbation in each submap's axes, as AddPosePrior's rotation block). A
-  /// chain of them behind one AddPosePrior on the first submap is the measurements' joint density
-  /// (backend/attitude_chain_factor.hpp): rho = 0 independent priors, rho -> 1 one prior plus
-  /// the measured relative attitudes.
+  /// source whose errors are correlated (a POS): in world axes, eps = Log(R R~^T), b's error given
+  /// a's is eps_b = A eps_a + w, w ~ N(0, Q) (`chain`: AttitudeChainFromCrossCovariance,
+  /// GaussMarkovAttitudeChain). A chain of them behind one AddPosePrior on the first submap is the
+  /// measurements' joint density as a Markov chain (backend/attitude_chain_factor.hpp; A = 0 is
+  /// an independent prior, A -> I with Q -> 0 the measured relative attitude).
   Status AddAttitudeChainFactor(SubmapId a, SubmapId b, const Eigen::Matrix3d& R_world_a,
-                                const Eigen::Matrix3d& cov_a, const Eigen::Matrix3d& R_world_b,
-                                const Eigen::Matrix3d& cov_b, double rho);
+                                const Eigen::Matrix3d& R_world_b, const AttitudeChain& chain);
   /// `gnss_bias` >= 0: the fix measures p_antenna + b with b the bias of that key (added before
   /// with AddGnssBias); -1: no bias.
   Status AddGnssPrior(SubmapId id, const Eigen::Vector3d& p_world_antenna,

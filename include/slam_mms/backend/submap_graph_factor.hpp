@@ -23,8 +23,8 @@ enum class SubmapFactorKind {
   kPosePrior,     ///< A 6-DoF prior T_world_submap on submap a.
   kGnss,          ///< F_GNSS: p_world_antenna on submap a (3x3 covariance in the top-left block).
   /// Attitudes measured on submaps a and b with correlated errors (SubmapGraph::
-  /// AddAttitudeChainFactor): R_world_b in T, R_world_a in T_a, cov_b in the top-left 3x3 block,
-  /// cov_a in the bottom-right one, rho in `correlation`.
+  /// AddAttitudeChainFactor): R_world_b in T, R_world_a in T_a, the chain's covariance Q in the
+  /// top-left 3x3 block (the rest zero), its transition A in `transition`.
   kAttitudeChain,
 };
 
@@ -50,7 +50,7 @@ struct SubmapGraphFactor {
   int gnss_bias = -1;  ///< The GNSS bias (SubmapGraph::AddGnssBias) the fix shares; -1: none.
   // kAttitudeChain only:
   Eigen::Isometry3d T_a = Eigen::Isometry3d::Identity();  ///< Its rotation: R_world_a measured.
-  double correlation = 0.0;                               ///< rho of the two errors.
+  Eigen::Matrix3d transition = Eigen::Matrix3d::Zero();   ///< A of eps_b = A eps_a + w.
 };
 
 }  // namespace slam_mms

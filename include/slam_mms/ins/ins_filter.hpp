@@ -258,6 +258,24 @@ class InsFilter {
   /// non-holonomic point [m], the sideslip coefficient [rad/(m/s^2)]; the options' values where
   /// the constraint is off or they are taken as exact); its covariance is the last 2x2 block.
   Eigen::Vector2d vehicle_lateral_model() const;
+  /// The attitude errors' correlation between two times of the forward filter (level 2's POS
+  /// attitude chain, SubmapGraph::AddAttitudeChainFactor): MarkAttitudeEpoch() starts tracking
+  /// the cross-covariance between the error state and the attitude error of the current state
+  /// (propagated with every transition and update: Cov(dx_now, dtheta_epoch) = prod (I - K H) F
+  /// * P_epoch[:, dtheta]); AttitudeSinceEpoch() reads it for the current state. Errors are right
+  /// perturbations in each time's body axes, as cov_T_world_body's rotation block. A new
+  /// initialisation forgets the epoch (FailedPrecondition until the next mark).
+  struct AttitudeCorrelation {
+    Timestamp epoch, now;
+    Eigen::Matrix3d R_world_body_epoch = Eigen::Matrix3d::Identity();
+    Eigen::Matrix3d R_world_body_now = Eigen::Matrix3d::Identity();
+    Eigen::Matrix3d cov_epoch = Eigen::Matrix3d::Identity();  ///< Cov(dtheta_epoch) [rad^2]
+    Eigen::Matrix3d cov_now = Eigen::Matrix3d::Identity();    ///< Cov(dtheta_now)
+    Eigen::Matrix3d cross = Eigen::Matrix3d::Zero();          ///< Cov(dtheta_now, dtheta_epoch)
+  };
+  /// FailedPrecondition before initialisation or with an external POS.
+  [[nodiscard]] Status MarkAttitudeEpoch();
+  StatusOr<AttitudeCorrelation> AttitudeSinceEpoch() const;
   /// Zero-velocity updates applied since the initialisation.
   int num_zero_velocity_updates() const;
   /// Every stored state, oldest first (the GNSS/INS-only trajectory).

@@ -52,6 +52,12 @@ struct Level2Options {
   /// factor to the previous one (SubmapGraph::AddAttitudeChainFactor), together the exact joint
   /// density of the errors. 0 takes every submap's POS attitude as an independent prior. >= 0.
   double pos_attitude_correlation_s = 0.0;
+  /// Chain the POS attitudes of successive submaps with the POS filter's own cross-covariance of
+  /// their errors (InsFilter::AttitudeSinceEpoch: every transition and update between the two,
+  /// each axis with its own correlation) instead of a stated correlation time; where the POS
+  /// gives none (an external POS, the first submap after an initialisation) as
+  /// pos_attitude_correlation_s says.
+  bool pos_attitude_cross_covariance = false;
   int max_iterations = 100;  ///< Levenberg-Marquardt iterations of a level-2 solve, > 0.
   /// Map-to-map registration and loop verification.
   PointIcpOptions icp;

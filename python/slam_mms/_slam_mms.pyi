@@ -1154,6 +1154,11 @@ class Level2Options:
     @pos_attitude_correlation_s.setter
     def pos_attitude_correlation_s(self, value: float) -> None: ...
     @property
+    def pos_attitude_cross_covariance(self) -> bool:
+        ...
+    @pos_attitude_cross_covariance.setter
+    def pos_attitude_cross_covariance(self, value: bool) -> None: ...
+    @property
     def attitude_prior_sigma_rad(self) -> float:
         """[rad]"""
     @attitude_prior_sigma_rad.setter

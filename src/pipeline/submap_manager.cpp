@@ -41,7 +41,7 @@ Eigen::Isometry3d BodyPoseAt(const SubmapRecord& rec, Timestamp t) {
 constexpr double kRadToDeg = 180.0 / M_PI;
 
 /// How many measurements share one error when the error is correlated over `window_s` and the
-/// previous one was taken at `*last` (Options::gnss_correlation_s):
+/// previous one was taken at `*last` (Options::gnss_correlation_s, pos_attitude_correlation_s):
 /// window / (time since it), at least 1; 1 for the first one or where window_s is 0. Sets
 /// `*last` to `now`. A measurement's covariance is multiplied by it.
 double CorrelatedCount(double window_s, std::optional<Timestamp>* last, Timestamp now) {
@@ -107,12 +107,13 @@ struct SubmapManager::Impl {
   };
   std::deque<PendingGnss> pending_gnss;
   std::optional<Timestamp> last_gnss_stamp;  // of the last fix attached
-  /// The last submap that got the POS attitude (Options::pos_attitude_correlation_s).
+  /// The start of the submap that got the last POS attitude prior.
+  std::optional<Timestamp> last_attitude_prior_stamp;
+  /// The last submap that got the POS attitude, and that attitude
+  /// (Options::pos_attitude_cross_covariance).
   struct LastPosAttitude {
     int32_t id = -1;
-    Timestamp start;
     Eigen::Matrix3d R_world_submap = Eigen::Matrix3d::Identity();
-    Eigen::Matrix3d cov = Eigen::Matrix3d::Identity();
   };
   std::optional<LastPosAttitude> last_pos_attitude;
   int32_t last_id = -1;
@@ -267,37 +268,24 @@ StatusOr<std::vector<SubmapPoseUpdate>> SubmapManager::OnSubmapFinished(
       // whole standing drives of the sweep by 2-13 deg while level 1 held 0.2 deg).
       T_prior.linear() = pos_attitude->R_world_submap;
       const Eigen::Matrix3d c =
-          0.5 * (pos_attitude->cov_rotation + pos_attitude->cov_rotation.transpose()) +
-          1e-10 * Eigen::Matrix3d::Identity();
-      cov.topLeftCorner<3, 3>() = c;
+          0.5 * (pos_attitude->cov_rotation + pos_attitude->cov_rotation.transpose());
+      // Options::pos_attitude_correlation_s: the priors within the window count as one.
+      const double correlated = CorrelatedCount(m.opt.pos_attitude_correlation_s,
+                                                &m.last_attitude_prior_stamp, rec->start);
+      cov.topLeftCorner<3, 3>() = correlated * c + 1e-10 * Eigen::Matrix3d::Identity();
       const std::optional<Impl::LastPosAttitude> last = m.last_pos_attitude;
-      m.last_pos_attitude =
-          Impl::LastPosAttitude{submap_id, rec->start, pos_attitude->R_world_submap, c};
-      std::optional<AttitudeChain> chain;
-      const char* model = "";
-      const bool have_last = last.has_value() && m.graph->HasSubmap(last->id);
-      if (have_last && m.opt.pos_attitude_cross_covariance && pos_attitude->link &&
-          pos_attitude->link->previous_submap == last->id) {
-        // Options::pos_attitude_cross_covariance: the POS's own conditional.
-        chain = pos_attitude->link->chain;
-        model = "the POS's cross-covariance";
-      } else if (have_last && m.opt.pos_attitude_correlation_s > 0.0) {
-        // Options::pos_attitude_correlation_s: the error's correlation with the last one's.
-        const double dt = std::max(0.0, rec->start.SecondsSince(last->start));
-        const double rho = std::exp(-dt / m.opt.pos_attitude_correlation_s);
-        SLAM_MMS_ASSIGN_OR_RETURN(chain,
-                                  GaussMarkovAttitudeChain(last->R_world_submap, last->cov,
-                                                           pos_attitude->R_world_submap, c, rho));
-        model = "Gauss-Markov";
-      }
-      if (chain) {
-        const Eigen::Vector3d sd = chain->covariance.diagonal().cwiseSqrt() * kRadToDeg;
+      m.last_pos_attitude = Impl::LastPosAttitude{submap_id, pos_attitude->R_world_submap};
+      const auto& link = pos_attitude->link;
+      if (m.opt.pos_attitude_cross_covariance && link && last &&
+          link->previous_submap == last->id && m.graph->HasSubmap(last->id)) {
+        // Options::pos_attitude_cross_covariance: the POS's own conditional given the last one.
+        const Eigen::Vector3d sd = link->chain.covariance.diagonal().cwiseSqrt() * kRadToDeg;
         SLAM_MMS_LOG(kDebug) << "level 2: submap " << submap_id << " POS attitude chained to "
-                             << last->id << " (" << model << "), innovation " << sd.x() << " / "
-                             << sd.y() << " / " << sd.z() << " deg (world axes), transition diag "
-                             << chain->transition.diagonal().transpose();
+                             << last->id << ", innovation " << sd.x() << " / " << sd.y() << " / "
+                             << sd.z() << " deg (world axes), transition diagonal "
+                             << link->chain.transition.diagonal().transpose();
         SLAM_MMS_RETURN_IF_ERROR(m.graph->AddAttitudeChainFactor(
-            last->id, submap_id, last->R_world_submap, pos_attitude->R_world_submap, *chain));
+            last->id, submap_id, last->R_world_submap, pos_attitude->R_world_submap, link->chain));
         chained_pos_attitude = true;
       } else {
         SLAM_MMS_LOG(kDebug) << "level 2: submap " << submap_id << " attitude prior from the POS, "

@@ -249,10 +249,16 @@ TEST(SubmapManagerTest, NoTriggerNoSolveUntilFinish) {
 // and the registrations by the number of submaps (docs/pipeline.md, "POS attitude priors").
 // Level 1 is exact here, the fixes RTK (3 cm, counted as correlated over 10 s), the POS's yaw
 // 0.3 deg off on every submap with a stated 0.1 deg.
-double YawErrorWithBiasedPosAttitudeDeg(double pos_attitude_correlation_s) {
+// `link_correlation` >= 0: Options::pos_attitude_cross_covariance, each POS attitude linked to
+// the previous submap's with cross-covariance link_correlation x cov (`link_to_previous` false:
+// linked to a submap level 2 never got, so ignored).
+double YawErrorWithBiasedPosAttitudeDeg(double pos_attitude_correlation_s,
+                                        double link_correlation = -1.0,
+                                        bool link_to_previous = true) {
   SubmapManager::Options o = ChainOptions();
   o.gnss_correlation_s = 10.0;
   o.pos_attitude_correlation_s = pos_attitude_correlation_s;
+  o.pos_attitude_cross_covariance = link_correlation >= 0.0;
   auto mgr = SubmapManager::Create(o, 1);
   if (!mgr.ok()) return NAN;
   constexpr double kDeg = M_PI / 180.0;
@@ -270,8 +276,17 @@ double YawErrorWithBiasedPosAttitudeDeg(double pos_attitude_correlation_s) {
   for (int i = 0; i < kFinished; ++i) {
     source.records.push_back(exact(i + 1));
     FeedGnss(**mgr, i, rng);
+    const Eigen::Matrix3d R_previous = pos.R_world_submap;
     pos.R_world_submap = TrueSubmap(i).linear() *
                          Eigen::AngleAxisd(0.3 * kDeg, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    pos.link.reset();
+    if (link_correlation >= 0.0 && i > 0) {
+      auto chain =
+          AttitudeChainFromCrossCovariance(R_previous, pos.cov_rotation, pos.R_world_submap,
+                                           pos.cov_rotation, link_correlation * pos.cov_rotation);
+      if (!chain.ok()) return NAN;
+      pos.link = SubmapManager::PosAttitude::Link{link_to_previous ? i - 1 : 1000, *chain};
+    }
     if (!(*mgr)->OnSubmapFinished(source, i, false, pos).ok()) return NAN;
   }
   auto fin = (*mgr)->Finish(source);
@@ -285,18 +300,34 @@ double YawErrorWithBiasedPosAttitudeDeg(double pos_attitude_correlation_s) {
   return sum / kFinished / kDeg;
 }
 
-TEST(SubmapManagerTest, CorrelatedPosAttitudeErrorsAreChainedNotCountedPerSubmap) {
+TEST(SubmapManagerTest, PosAttitudePriorsWithinTheCorrelationWindowCountAsOne) {
   const double independent = YawErrorWithBiasedPosAttitudeDeg(0.0);
   const double correlated = YawErrorWithBiasedPosAttitudeDeg(60.0);
   ASSERT_TRUE(std::isfinite(independent) && std::isfinite(correlated));
   // The GNSS track (36 fixes over 38 m, 3 cm each x20 for the 10 s correlation) holds the yaw to
   // about 0.1 deg. Four independent 0.1 deg priors weigh 4x that: the yaw goes 0.3 x 4 / 5 =
-  // 0.24 deg towards the POS. Chained with tau = 60 s (rho = exp(-5 / 60) = 0.92 between
-  // submaps) a common error weighs (N (1 - rho) + 2 rho) / (1 + rho) = 1.12 priors:
-  // 0.3 x 1.12 / 2.12 = 0.16 deg.
+  // 0.24 deg towards the POS. In a 60 s window the first prior counts whole and the three after
+  // it 5 / 60 each (1.25 priors): 0.3 x 1.25 / 2.25 = 0.17 deg.
   EXPECT_GT(independent, 0.2);
   EXPECT_LT(correlated, independent - 0.05);
   EXPECT_GE(correlated, 0.0);  // still pulled towards the POS, not past the truth
+}
+
+TEST(SubmapManagerTest, PosCrossCovarianceChainsTheAttitudes) {
+  const double independent = YawErrorWithBiasedPosAttitudeDeg(0.0);
+  // The POS states its errors 0.99 correlated between submaps: a common error counts about once
+  // ((N (1 - rho) + 2 rho) / (1 + rho) = 1.0 priors of the four): 0.3 x 1.0 / 2.0 = 0.15 deg.
+  const double chained = YawErrorWithBiasedPosAttitudeDeg(0.0, 0.99);
+  // Stated uncorrelated: the same as independent priors.
+  const double uncorrelated = YawErrorWithBiasedPosAttitudeDeg(0.0, 0.0);
+  // A link to a submap that is not the last one with a POS attitude is not used.
+  const double mislinked = YawErrorWithBiasedPosAttitudeDeg(0.0, 0.99, false);
+  ASSERT_TRUE(std::isfinite(independent) && std::isfinite(chained) && std::isfinite(uncorrelated) &&
+              std::isfinite(mislinked));
+  EXPECT_LT(chained, independent - 0.05);
+  EXPECT_GT(chained, 0.05);
+  EXPECT_NEAR(uncorrelated, independent, 0.005);
+  EXPECT_NEAR(mislinked, independent, 1e-9);
 }
 
 TEST(SubmapManagerTest, CreateRejectsBadOptionByName) {

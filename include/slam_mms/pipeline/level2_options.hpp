@@ -46,17 +46,17 @@ struct Level2Options {
   /// disables the prior.
   double attitude_prior_sigma_rad = 0.0175;
   /// A POS's attitude error is time-correlated (an initial heading error persists until motion
-  /// observes it): with this correlation time tau [s] > 0 the POS attitude errors of successive
-  /// submaps are a first-order Gauss-Markov process (correlation exp(-dt / tau) between submaps
-  /// dt apart): the first submap's POS attitude is a prior, every later one an attitude chain
-  /// factor to the previous one (SubmapGraph::AddAttitudeChainFactor), together the exact joint
-  /// density of the errors. 0 takes every submap's POS attitude as an independent prior. >= 0.
+  /// observes it), so the POS attitude priors of the submaps within this window [s] count as
+  /// one: each prior's covariance is multiplied by window / (time since the previous submap's
+  /// prior), at least 1, as the GNSS fixes' (gnss_correlation_s). 0 takes every submap's POS
+  /// attitude as independent. >= 0.
   double pos_attitude_correlation_s = 0.0;
   /// Chain the POS attitudes of successive submaps with the POS filter's own cross-covariance of
   /// their errors (InsFilter::AttitudeSinceEpoch: every transition and update between the two,
-  /// each axis with its own correlation) instead of a stated correlation time; where the POS
-  /// gives none (an external POS, the first submap after an initialisation) as
-  /// pos_attitude_correlation_s says.
+  /// each axis with its own correlation): the first submap's POS attitude a prior, each later
+  /// one an attitude chain factor, the conditional of its error given the previous one's
+  /// (SubmapGraph::AddAttitudeChainFactor). Where the POS gives no cross-covariance (an external
+  /// POS, the first submap after an initialisation or an outage) a prior as above.
   bool pos_attitude_cross_covariance = false;
   int max_iterations = 100;  ///< Levenberg-Marquardt iterations of a level-2 solve, > 0.
   /// Map-to-map registration and loop verification.

@@ -7,7 +7,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <random>
 
 #include "ins/synthetic_drive.hpp"
 #include "slam_mms/core/lie.hpp"
@@ -27,66 +26,42 @@ struct Sample {
   InsFilter::AttitudeCorrelation c;
 };
 
-// One noisy drive (IMU at the filter's stated noise, 2 cm / 3 cm GNSS at 10 Hz, the initial
-// attitude drawn from the filter's initial sigmas); the epoch marked at `epoch_s`, read at `now_s`.
+// One noisy drive (testing::MakeNoisyDrive: the IMU at the filter's stated noise, 2 cm / 3 cm
+// GNSS at 10 Hz, the initial state drawn from the filter's initial sigmas); the epoch marked at
+// `epoch_s`, read at `now_s`.
 Sample RunNoisyDrive(uint32_t seed, double epoch_s, double now_s) {
-  const SyntheticDrive drive;
   InsFilter::Options o;
-  o.gravity_mps2 = drive.gravity();
+  o.gravity_mps2 = SyntheticDrive().gravity();
   o.gnss.t_body_antenna = Eigen::Vector3d(0.5, 0.2, 1.2);
   o.init_sigma_position_m = 0.5;
   o.init_sigma_yaw_rad = 0.5 * M_PI / 180.0;
+  testing::NoisyDriveSigmas sig;
+  sig.roll_pitch_rad = o.init_sigma_roll_pitch_rad;
+  sig.yaw_rad = o.init_sigma_yaw_rad;
+  sig.position_m = o.init_sigma_position_m;
+  sig.velocity_mps = o.init_sigma_velocity_mps;
+  sig.accel_bias_mps2 = o.init_sigma_accel_bias_mps2;
+  sig.gyro_bias_radps = o.init_sigma_gyro_bias_radps;
+  const testing::NoisyDrive d = testing::MakeNoisyDrive(o, now_s, seed, kT0, kOrigin, sig);
   auto f = InsFilter::Create(o);
   EXPECT_TRUE(f.ok());
   InsFilter& filter = *f;
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> n01(0.0, 1.0);
-  auto randn3 = [&]() { return Eigen::Vector3d(n01(rng), n01(rng), n01(rng)); };
-  GnssPrior geo;
-  EXPECT_TRUE(geo.SetOrigin(kOrigin).ok());
   filter.mutable_gnss_prior().SetReferenceTime(kT0);
-  const TruthState s0 = drive.At(0.0);
-  InsState init;
-  init.stamp = kT0;
-  const Eigen::Vector3d dtheta(o.init_sigma_roll_pitch_rad * n01(rng),
-                               o.init_sigma_roll_pitch_rad * n01(rng),
-                               o.init_sigma_yaw_rad * n01(rng));
-  init.T_world_body =
-      MakeIsometry(so3::Exp(dtheta) * s0.R, s0.p + o.init_sigma_position_m * randn3());
-  init.v_world_mps = s0.v + o.init_sigma_velocity_mps * randn3();
-  EXPECT_TRUE(filter.Initialize(init).ok());
+  EXPECT_TRUE(filter.Initialize(d.initial).ok());
   EXPECT_TRUE(filter.mutable_gnss_prior().SetOrigin(kOrigin).ok());
-  Eigen::Vector3d ba = o.init_sigma_accel_bias_mps2 * randn3();
-  Eigen::Vector3d bg = o.init_sigma_gyro_bias_radps * randn3();
+  const SyntheticDrive drive;
   Sample out;
-  const double dt = 0.01;
-  for (int k = 1; k <= static_cast<int>(std::round(now_s / dt)); ++k) {
-    const double t = k * dt;
-    ImuSample s = drive.PerfectImu(t, kT0);
-    ba += o.accel_bias_random_walk * std::sqrt(dt) * randn3();
-    bg += o.gyro_bias_random_walk * std::sqrt(dt) * randn3();
-    s.accel_mps2 += ba + o.accel_noise_density / std::sqrt(dt) * randn3();
-    s.gyro_radps += bg + o.gyro_noise_density / std::sqrt(dt) * randn3();
+  size_t next_fix = 0;
+  for (const ImuSample& s : d.imu) {
     EXPECT_TRUE(filter.AddImu(s).ok());
-    const TruthState truth = drive.At(t);
-    if (k % 10 == 0) {
-      const Eigen::Vector3d p = truth.p + truth.R * o.gnss.t_body_antenna +
-                                Eigen::Vector3d(0.02 * n01(rng), 0.02 * n01(rng), 0.03 * n01(rng));
-      const GeodeticPoint g = geo.ToGeodetic(p).value();
-      GnssFix fix;
-      fix.stamp = s.stamp;
-      fix.latitude_deg = g.latitude_deg;
-      fix.longitude_deg = g.longitude_deg;
-      fix.height_m = g.height_m;
-      fix.sigma_horizontal_m = 0.02;
-      fix.sigma_vertical_m = 0.03;
-      fix.type = GnssFixType::kRtkFixed;
-      EXPECT_TRUE(filter.AddGnss(fix).ok());
+    if (next_fix < d.gnss.size() && d.gnss[next_fix].stamp == s.stamp) {
+      EXPECT_TRUE(filter.AddGnss(d.gnss[next_fix++]).ok());
     }
-    const double eps = 0.5 * dt;
+    const double t = s.stamp.SecondsSince(kT0);
+    const double eps = 0.005;
     if (std::abs(t - epoch_s) < eps || std::abs(t - now_s) < eps) {
       const Eigen::Matrix3d R = filter.CurrentState()->T_world_body.linear();
-      const Eigen::Vector3d e = so3::Log(R.transpose() * truth.R);
+      const Eigen::Vector3d e = so3::Log(R.transpose() * drive.At(t).R);
       if (std::abs(t - epoch_s) < eps) {
         out.e_epoch = e;
         EXPECT_TRUE(filter.MarkAttitudeEpoch().ok());

@@ -211,57 +211,10 @@ TEST(PosSmootherTest, RejectsBadSteps) {
             StatusCode::kFailedPrecondition);
 }
 
-// A noisy 240 s drive along the analytic trajectory: tactical IMU noise and biases (the filter's
-// own model), RTK fixes of 2/3 cm at 10 Hz, GNSS withheld in [100, 160) s.
-struct NoisyDrive {
-  std::vector<ImuSample> imu;
-  std::vector<GnssFix> gnss;
-  InsState initial;
-};
-
-NoisyDrive MakeNoisyDrive(const InsFilter::Options& o, double duration_s, uint32_t seed) {
-  const SyntheticDrive drive;
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> n01(0.0, 1.0);
-  auto randn3 = [&]() { return Eigen::Vector3d(n01(rng), n01(rng), n01(rng)); };
-  GnssPrior geo;
-  EXPECT_TRUE(geo.SetOrigin(kOrigin).ok());
-  NoisyDrive d;
-  const TruthState s0 = drive.At(0.0);
-  d.initial.stamp = kT0;
-  d.initial.T_world_body = MakeIsometry(
-      so3::Exp(Eigen::Vector3d(0.003 * n01(rng), 0.003 * n01(rng), 0.01 * n01(rng))) * s0.R, s0.p);
-  d.initial.v_world_mps = s0.v + 0.05 * randn3();
-  Eigen::Vector3d ba = 0.02 * randn3(), bg = 2e-4 * randn3();
-  const double dt = 0.01;
-  const int n = static_cast<int>(std::round(duration_s / dt));
-  for (int k = 1; k <= n; ++k) {
-    const double t = k * dt;
-    ImuSample s = drive.PerfectImu(t, kT0);
-    ba += o.accel_bias_random_walk * std::sqrt(dt) * randn3();
-    bg += o.gyro_bias_random_walk * std::sqrt(dt) * randn3();
-    s.accel_mps2 += ba + o.accel_noise_density / std::sqrt(dt) * randn3();
-    s.gyro_radps += bg + o.gyro_noise_density / std::sqrt(dt) * randn3();
-    d.imu.push_back(s);
-    if (k % 10 == 0) {
-      const TruthState tr = drive.At(t);
-      const Eigen::Vector3d p_ant =
-          tr.p + tr.R * o.gnss.t_body_antenna +
-          Eigen::Vector3d(0.02 * n01(rng), 0.02 * n01(rng), 0.03 * n01(rng));
-      const GeodeticPoint g = geo.ToGeodetic(p_ant).value();
-      GnssFix fix;
-      fix.stamp = s.stamp;
-      fix.latitude_deg = g.latitude_deg;
-      fix.longitude_deg = g.longitude_deg;
-      fix.height_m = g.height_m;
-      fix.sigma_horizontal_m = 0.02;
-      fix.sigma_vertical_m = 0.03;
-      fix.type = GnssFixType::kRtkFixed;
-      d.gnss.push_back(fix);
-    }
-  }
-  return d;
-}
+// A noisy 240 s drive along the analytic trajectory (testing::MakeNoisyDrive): tactical IMU noise
+// and biases (the filter's own model), RTK fixes of 2/3 cm at 10 Hz, GNSS withheld in [100, 160) s.
+using testing::MakeNoisyDrive;
+using testing::NoisyDrive;
 
 TEST(PosSmootherTest, SmoothedErrorInsideAnOutageIsFarBelowTheForwardError) {
   PosSmoother::Options o;
@@ -270,7 +223,7 @@ TEST(PosSmootherTest, SmoothedErrorInsideAnOutageIsFarBelowTheForwardError) {
   o.origin = kOrigin;
   o.outage_reference = kT0;
   o.gnss_outages = {{100.0, 60.0}};
-  const NoisyDrive d = MakeNoisyDrive(o.ins, 240.0, 3);
+  const NoisyDrive d = MakeNoisyDrive(o.ins, 240.0, 3, kT0, kOrigin);
   auto r = PosSmoother::Run(o, d.imu, d.gnss, d.initial);
   ASSERT_TRUE(r.ok()) << r.status().ToString();
   ASSERT_EQ(r->forward.size(), r->smoothed.size());

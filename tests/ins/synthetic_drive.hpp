@@ -3,12 +3,18 @@
 // and the exact velocity, acceleration, attitude, body angular rate and specific force, so a
 // perfect IMU and perfect GNSS can be generated at any time. World = ENU, body x forward, z up.
 
+#include <gtest/gtest.h>
+
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cmath>
+#include <random>
+#include <vector>
 
 #include "slam_mms/core/lie.hpp"
 #include "slam_mms/core/sensor_data.hpp"
+#include "slam_mms/ins/gnss_prior.hpp"
+#include "slam_mms/ins/ins_filter.hpp"
 
 namespace slam_mms::testing {
 
@@ -67,5 +73,70 @@ class SyntheticDrive {
   static constexpr double kRoll = 0.03, kWr = 0.4, kPitch = 0.02, kWp = 0.25;
   double g_;
 };
+
+// A noisy drive along SyntheticDrive from `t0`, world origin `origin`: the IMU with the noise
+// and bias random walks of the filter options `o`, RTK fixes of 2 / 3 cm (horizontal / vertical)
+// at 10 Hz of the antenna at o.gnss.t_body_antenna, and an initial state drawn around the truth.
+struct NoisyDrive {
+  std::vector<ImuSample> imu;  // 100 Hz
+  std::vector<GnssFix> gnss;   // stamped with every tenth IMU sample
+  InsState initial;
+};
+
+// The initial errors' sigmas: roll, pitch, yaw [rad] (world axes), position [m] (0: exact, no
+// draw), velocity [m/s], accelerometer and gyro biases.
+struct NoisyDriveSigmas {
+  double roll_pitch_rad = 0.003, yaw_rad = 0.01, position_m = 0.0, velocity_mps = 0.05;
+  double accel_bias_mps2 = 0.02, gyro_bias_radps = 2e-4;
+};
+
+inline NoisyDrive MakeNoisyDrive(const InsFilter::Options& o, double duration_s, uint32_t seed,
+                                 Timestamp t0, const GeodeticPoint& origin,
+                                 const NoisyDriveSigmas& sig = NoisyDriveSigmas()) {
+  const SyntheticDrive drive;
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> n01(0.0, 1.0);
+  auto randn3 = [&]() { return Eigen::Vector3d(n01(rng), n01(rng), n01(rng)); };
+  GnssPrior geo;
+  EXPECT_TRUE(geo.SetOrigin(origin).ok());
+  NoisyDrive d;
+  const TruthState s0 = drive.At(0.0);
+  d.initial.stamp = t0;
+  const Eigen::Vector3d dtheta(sig.roll_pitch_rad * n01(rng), sig.roll_pitch_rad * n01(rng),
+                               sig.yaw_rad * n01(rng));
+  const Eigen::Vector3d dp =
+      sig.position_m > 0.0 ? Eigen::Vector3d(sig.position_m * randn3()) : Eigen::Vector3d::Zero();
+  d.initial.T_world_body = MakeIsometry(so3::Exp(dtheta) * s0.R, s0.p + dp);
+  d.initial.v_world_mps = s0.v + sig.velocity_mps * randn3();
+  Eigen::Vector3d ba = sig.accel_bias_mps2 * randn3(), bg = sig.gyro_bias_radps * randn3();
+  const double dt = 0.01;
+  const int n = static_cast<int>(std::round(duration_s / dt));
+  for (int k = 1; k <= n; ++k) {
+    const double t = k * dt;
+    ImuSample s = drive.PerfectImu(t, t0);
+    ba += o.accel_bias_random_walk * std::sqrt(dt) * randn3();
+    bg += o.gyro_bias_random_walk * std::sqrt(dt) * randn3();
+    s.accel_mps2 += ba + o.accel_noise_density / std::sqrt(dt) * randn3();
+    s.gyro_radps += bg + o.gyro_noise_density / std::sqrt(dt) * randn3();
+    d.imu.push_back(s);
+    if (k % 10 == 0) {
+      const TruthState tr = drive.At(t);
+      const Eigen::Vector3d p_ant =
+          tr.p + tr.R * o.gnss.t_body_antenna +
+          Eigen::Vector3d(0.02 * n01(rng), 0.02 * n01(rng), 0.03 * n01(rng));
+      const GeodeticPoint g = geo.ToGeodetic(p_ant).value();
+      GnssFix fix;
+      fix.stamp = s.stamp;
+      fix.latitude_deg = g.latitude_deg;
+      fix.longitude_deg = g.longitude_deg;
+      fix.height_m = g.height_m;
+      fix.sigma_horizontal_m = 0.02;
+      fix.sigma_vertical_m = 0.03;
+      fix.type = GnssFixType::kRtkFixed;
+      d.gnss.push_back(fix);
+    }
+  }
+  return d;
+}
 
 }  // namespace slam_mms::testing

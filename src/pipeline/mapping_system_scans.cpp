@@ -141,10 +141,14 @@ void MappingSystem::Impl::MarkPosEpoch(const Scan& scan, const LocalizationResul
     return;
   }
   // The same scan ReportFinishedSubmaps will take the POS attitude at (checked there by stamp).
-  // The filter is at the newest IMU sample, a fraction of a scan past it: the correlation is
-  // read there (the attitudes themselves are read at the scan).
+  // The correlation is read at the filter's newest state (the attitudes themselves at the
+  // scan): a fraction of a scan past it where the host feeds the streams in time order. A host
+  // that feeds the POS far ahead of the scans gets no chain (the priors).
+  constexpr double kMaxPosEpochLagS = 0.5;
   const Timestamp t = scan.stamp_start;
-  if (ins.gnss_prior().AvailabilityAt(t) == GnssAvailability::kOutage || !ins.StateAt(t).ok()) {
+  const StatusOr<InsState> now = ins.CurrentState();
+  if (!now.ok() || now->stamp.SecondsSince(t) > kMaxPosEpochLagS ||
+      ins.gnss_prior().AvailabilityAt(t) == GnssAvailability::kOutage || !ins.StateAt(t).ok()) {
     return;
   }
   PosEpoch e;

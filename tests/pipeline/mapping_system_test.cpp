@@ -197,6 +197,62 @@ TEST_F(SimulatedDriveTest, SpilledSubmapCloudsGiveTheSameResultsAndAreRemoved) {
   }
 }
 
+// Level2Options::pos_attitude_cross_covariance: fed in time order, level 2 chains the submaps'
+// POS attitudes with the filter's cross-covariance; with the IMU and GNSS streams fed 2 s ahead of
+// the scans the filter's state is 2 s past each scan whose attitude level 2 takes, so there is no
+// chain (the priors), and the run still completes.
+TEST_F(SimulatedDriveTest, PosAttitudeChainOnlyWhereThePosIsAtTheScans) {
+  MappingSystem::Options o = OptionsFor(MappingMode::kFull);
+  o.level2.pos_attitude_cross_covariance = true;
+  auto count_chains = [](const MappingSystem& system, int* chains, int* priors) {
+    auto r = system.ExportDriveResult();
+    ASSERT_TRUE(r.ok()) << r.status().ToString();
+    for (const SubmapGraphFactor& f : r->factors) {
+      *chains += f.kind == SubmapFactorKind::kAttitudeChain;
+      *priors += f.kind == SubmapFactorKind::kPosePrior;
+    }
+  };
+  int chains = 0, priors = 0;
+  auto in_order = RunDrive(sim_->drive_dir, o, /*last_frame=*/-1,
+                           [&](const MappingSystem& s) { count_chains(s, &chains, &priors); });
+  ASSERT_TRUE(in_order.ok()) << in_order.status().ToString();
+  EXPECT_GE(chains, 1);
+  EXPECT_EQ(priors, 1);  // the first submap's
+
+  // The same drive with the IMU and GNSS streams fed 2 s ahead of the scans.
+  KittiRawReader::Options ropt;
+  auto reader = KittiRawReader::Open(sim_->drive_dir, ropt);
+  ASSERT_TRUE(reader.ok());
+  o.T_body_lidar = reader->T_body_lidar();
+  auto system = MappingSystem::Create(o);
+  ASSERT_TRUE(system.ok());
+  const auto& oxts = reader->OxtsRecords();
+  ASSERT_FALSE(oxts.empty());
+  InsState init;
+  init.T_world_body.linear() = OxtsAttitude(oxts.front().record);
+  init.v_world_mps = OxtsVelocityEnu(oxts.front().record);
+  ASSERT_TRUE((*system)->InitializePos(init).ok());
+  const std::vector<ImuSample> imu = reader->ImuSamples();
+  const std::vector<GnssFix> gnss = reader->GnssFixes();
+  size_t i_imu = 0, i_gnss = 0;
+  for (size_t k = 0; k < reader->NumScans(); ++k) {
+    ASSERT_TRUE(testing::FeedStreamsUpTo(system->get(), imu, gnss,
+                                         reader->ScanEnd(k).PlusSeconds(2.0), &i_imu, &i_gnss)
+                    .ok());
+    auto scan = reader->ReadScan(k);
+    ASSERT_TRUE(scan.ok());
+    ASSERT_TRUE((*system)->AddScan(*scan).ok());
+  }
+  ASSERT_TRUE(testing::FeedStreamsUpTo(system->get(), imu, gnss,
+                                       Timestamp::FromNanoseconds(INT64_MAX), &i_imu, &i_gnss)
+                  .ok());
+  ASSERT_TRUE((*system)->Finish().ok());
+  int ahead_chains = 0, ahead_priors = 0;
+  count_chains(**system, &ahead_chains, &ahead_priors);
+  EXPECT_EQ(ahead_chains, 0);
+  EXPECT_EQ(ahead_priors, chains + priors);
+}
+
 TEST(MappingSystemTest, SpillFolderThatCannotBeCreatedIsAnError) {
   MappingSystem::Options o;
   o.localizer.spill_dir = "/proc/slam_mms_cannot_create_this";

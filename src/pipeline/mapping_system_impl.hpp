@@ -54,9 +54,10 @@ struct MappingSystem::Impl {
     Timestamp stamp;
     std::optional<SubmapManager::PosAttitude::Link> link;
   };
-  std::map<int32_t, PosEpoch> pos_epochs;
-  int32_t pos_epoch_submap = -1;                     // the submap of the filter's current epoch
-  std::map<int32_t, Timestamp> pos_attitude_stamps;  // the stamp each reported attitude is at
+  std::map<int32_t, PosEpoch> pos_epochs;  // of the submaps not reported yet
+  int32_t pos_epoch_submap = -1;           // the submap of the filter's current epoch
+  /// The last submap given a POS attitude, where that was taken at its epoch's scan; else -1.
+  int32_t last_attitude_at_epoch = -1;
   /// Marks the POS's attitude epoch at the first scan of a submap where GNSS holds it.
   void MarkPosEpoch(const Scan& scan, const LocalizationResult& res);
 

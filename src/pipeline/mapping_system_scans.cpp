@@ -218,25 +218,16 @@ Status MappingSystem::Impl::ReportFinishedSubmaps() {
       attitude = SubmapManager::PosAttitude{
           s->T_world_body.linear() * R_sb.transpose(),
           R_sb * s->cov_T_world_body.topLeftCorner<3, 3>() * R_sb.transpose(), std::nullopt};
-      pos_attitude_stamps[id] = t;
-      // The POS's own chain from the previous submap's attitude, where both were taken at the
-      // scans the epochs were marked at (MarkPosEpoch).
+      // The POS's own chain from the previous submap's attitude, where both attitudes were taken
+      // at the scans their epochs were marked at (MarkPosEpoch).
       const auto e = pos_epochs.find(id);
-      if (e != pos_epochs.end() && e->second.stamp == t && e->second.link) {
-        const auto prev = pos_attitude_stamps.find(e->second.link->previous_submap);
-        const auto prev_epoch = pos_epochs.find(e->second.link->previous_submap);
-        if (prev != pos_attitude_stamps.end() && prev_epoch != pos_epochs.end() &&
-            prev->second == prev_epoch->second.stamp) {
-          attitude->link = e->second.link;
-        }
+      const bool at_epoch = e != pos_epochs.end() && e->second.stamp == t;
+      if (at_epoch && e->second.link && e->second.link->previous_submap == last_attitude_at_epoch) {
+        attitude->link = e->second.link;
       }
+      last_attitude_at_epoch = at_epoch ? id : -1;
     }
-    // A later link refers to the last submap with a POS attitude at most: forget older ones.
-    while (pos_attitude_stamps.size() > 1) pos_attitude_stamps.erase(pos_attitude_stamps.begin());
-    const int32_t keep = pos_attitude_stamps.empty() ? id : pos_attitude_stamps.begin()->first;
-    while (!pos_epochs.empty() && pos_epochs.begin()->first < keep) {
-      pos_epochs.erase(pos_epochs.begin());
-    }
+    pos_epochs.erase(pos_epochs.begin(), pos_epochs.upper_bound(id));
     SLAM_MMS_ASSIGN_OR_RETURN(const std::vector<SubmapPoseUpdate> updates,
                               level2->OnSubmapFinished(*loc, id, gnss_returned_pending, attitude));
     SLAM_MMS_RETURN_IF_ERROR(ApplyLevel2(updates));

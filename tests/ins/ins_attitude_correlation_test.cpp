@@ -18,8 +18,8 @@ namespace {
 using testing::SyntheticDrive;
 using testing::TruthState;
 
-const Timestamp kT0 = Timestamp::FromSeconds(1317000000.0);
-const GeodeticPoint kOrigin{49.011, 8.4165, 112.0};
+using testing::kOrigin;
+using testing::kT0;
 
 struct Sample {
   Eigen::Vector3d e_epoch, e_now;  // true attitude errors (right perturbation, body)

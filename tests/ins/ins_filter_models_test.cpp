@@ -21,8 +21,8 @@ namespace {
 using testing::SyntheticDrive;
 using testing::TruthState;
 
-const Timestamp kT0 = Timestamp::FromSeconds(1317000000.0);
-const GeodeticPoint kOrigin{49.011, 8.4165, 112.0};
+using testing::kOrigin;
+using testing::kT0;
 constexpr double kG = 9.80665;
 
 using Truth = std::function<TruthState(double t)>;

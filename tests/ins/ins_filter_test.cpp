@@ -15,8 +15,8 @@ namespace {
 using testing::SyntheticDrive;
 using testing::TruthState;
 
-const Timestamp kT0 = Timestamp::FromSeconds(1317000000.0);
-const GeodeticPoint kOrigin{49.011, 8.4165, 112.0};
+using testing::kOrigin;
+using testing::kT0;
 
 struct DriveConfig {
   double duration_s = 120.0;
@@ -37,14 +37,7 @@ struct DriveResult {
 
 // An RTK-fixed fix (2 cm) of the antenna at `p`.
 GnssFix RtkFixAt(Timestamp stamp, const GeodeticPoint& p) {
-  GnssFix fix;
-  fix.stamp = stamp;
-  fix.latitude_deg = p.latitude_deg;
-  fix.longitude_deg = p.longitude_deg;
-  fix.height_m = p.height_m;
-  fix.type = GnssFixType::kRtkFixed;
-  fix.sigma_horizontal_m = 0.02;
-  return fix;
+  return testing::RtkFix(stamp, p, 0.02, GnssFix().sigma_vertical_m);
 }
 
 InsFilter::Options FilterOptions() {
@@ -119,15 +112,7 @@ DriveResult RunDrive(const DriveConfig& cfg, InsFilter* filter) {
       if (cfg.noise) p_ant += Eigen::Vector3d(sh * n01(rng), sh * n01(rng), sv * n01(rng));
       const bool jump = t >= cfg.jump_start_s && t < cfg.jump_start_s + cfg.jump_duration_s;
       if (jump) p_ant.x() += cfg.jump_m;
-      const GeodeticPoint g = truth_geo.ToGeodetic(p_ant).value();
-      GnssFix fix;
-      fix.stamp = s.stamp;
-      fix.latitude_deg = g.latitude_deg;
-      fix.longitude_deg = g.longitude_deg;
-      fix.height_m = g.height_m;
-      fix.sigma_horizontal_m = sh;
-      fix.sigma_vertical_m = sv;
-      fix.type = GnssFixType::kRtkFixed;
+      const GnssFix fix = testing::RtkFix(s.stamp, truth_geo.ToGeodetic(p_ant).value(), sh, sv);
       auto r = filter->AddGnss(fix);
       EXPECT_TRUE(r.ok());
       if (jump) {

@@ -20,8 +20,8 @@ using VectorNd = InsErrorVector;
 using testing::SyntheticDrive;
 using testing::TruthState;
 
-const Timestamp kT0 = Timestamp::FromSeconds(1317000000.0);
-const GeodeticPoint kOrigin{49.011, 8.4165, 112.0};
+using testing::kOrigin;
+using testing::kT0;
 
 // The linear state x = [p, v, theta, ba, bg, bn, m] as a nominal InsState (bn, m: the step's GNSS
 // bias and IMU-to-vehicle misalignment).

@@ -74,6 +74,24 @@ class SyntheticDrive {
   double g_;
 };
 
+// The drives' start and world origin (the ins tests').
+inline const Timestamp kT0 = Timestamp::FromSeconds(1317000000.0);
+inline const GeodeticPoint kOrigin{49.011, 8.4165, 112.0};
+
+// An RTK-fixed fix of the antenna at `g` with the given sigmas [m].
+inline GnssFix RtkFix(Timestamp stamp, const GeodeticPoint& g, double sigma_horizontal_m,
+                      double sigma_vertical_m) {
+  GnssFix fix;
+  fix.stamp = stamp;
+  fix.latitude_deg = g.latitude_deg;
+  fix.longitude_deg = g.longitude_deg;
+  fix.height_m = g.height_m;
+  fix.sigma_horizontal_m = sigma_horizontal_m;
+  fix.sigma_vertical_m = sigma_vertical_m;
+  fix.type = GnssFixType::kRtkFixed;
+  return fix;
+}
+
 // A noisy drive along SyntheticDrive from `t0`, world origin `origin`: the IMU with the noise
 // and bias random walks of the filter options `o`, RTK fixes of 2 / 3 cm (horizontal / vertical)
 // at 10 Hz of the antenna at o.gnss.t_body_antenna, and an initial state drawn around the truth.
@@ -124,16 +142,7 @@ inline NoisyDrive MakeNoisyDrive(const InsFilter::Options& o, double duration_s,
       const Eigen::Vector3d p_ant =
           tr.p + tr.R * o.gnss.t_body_antenna +
           Eigen::Vector3d(0.02 * n01(rng), 0.02 * n01(rng), 0.03 * n01(rng));
-      const GeodeticPoint g = geo.ToGeodetic(p_ant).value();
-      GnssFix fix;
-      fix.stamp = s.stamp;
-      fix.latitude_deg = g.latitude_deg;
-      fix.longitude_deg = g.longitude_deg;
-      fix.height_m = g.height_m;
-      fix.sigma_horizontal_m = 0.02;
-      fix.sigma_vertical_m = 0.03;
-      fix.type = GnssFixType::kRtkFixed;
-      d.gnss.push_back(fix);
+      d.gnss.push_back(RtkFix(s.stamp, geo.ToGeodetic(p_ant).value(), 0.02, 0.03));
     }
   }
   return d;

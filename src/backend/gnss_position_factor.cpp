@@ -78,4 +78,20 @@ bool ZeroMeanPrior3Factor::Evaluate(double const* const* parameters, double* res
   return true;
 }
 
+bool GnssBiasLinkFactor::Evaluate(double const* const* parameters, double* residuals,
+                                  double** jacobians) const {
+  const Eigen::Map<const Eigen::Vector3d> b_from(parameters[0]), b(parameters[1]);
+  Eigen::Map<Eigen::Vector3d> res(residuals);
+  res = sqrt_info_ * (b - transition_ * b_from);
+  if (jacobians != nullptr && jacobians[0] != nullptr) {
+    Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>> J(jacobians[0]);
+    J = -transition_ * sqrt_info_;
+  }
+  if (jacobians != nullptr && jacobians[1] != nullptr) {
+    Eigen::Map<Eigen::Matrix<double, 3, 3, Eigen::RowMajor>> J(jacobians[1]);
+    J = sqrt_info_;
+  }
+  return true;
+}
+
 }  // namespace slam_mms

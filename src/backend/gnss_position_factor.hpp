@@ -67,4 +67,19 @@ class ZeroMeanPrior3Factor final : public ceres::SizedCostFunction<3, 3> {
   Eigen::Matrix3d sqrt_info_;
 };
 
+/// A Gauss-Markov step between two GNSS biases: r = sqrt_info * (b - transition * b_from), the
+/// bias b given the earlier one (b = phi b_from + w, w ~ N(0, Q), sqrt_info^T sqrt_info = Q^-1).
+/// Parameter blocks: b_from[3], b[3].
+class GnssBiasLinkFactor final : public ceres::SizedCostFunction<3, 3, 3> {
+ public:
+  GnssBiasLinkFactor(double transition, const Eigen::Matrix3d& sqrt_info)
+      : transition_(transition), sqrt_info_(sqrt_info) {}
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override;
+
+ private:
+  double transition_;
+  Eigen::Matrix3d sqrt_info_;
+};
+
 }  // namespace slam_mms

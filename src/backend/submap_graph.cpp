@@ -98,6 +98,18 @@ struct SubmapGraph::Impl {
     f.loss = loss;
     factors.push_back(f);
   }
+  void RecordGnssBias(SubmapFactorKind kind, int key, int from_key, double transition,
+                      const Eigen::Matrix3d& covariance) {
+    SubmapGraphFactor f;
+    f.kind = kind;
+    f.a = f.b = -1;
+    f.gnss_bias = key;
+    f.gnss_bias_from = from_key;
+    f.transition = transition * Eigen::Matrix3d::Identity();
+    f.covariance = Matrix6d::Zero();
+    f.covariance.topLeftCorner<3, 3>() = covariance;
+    factors.push_back(f);
+  }
 
   explicit Impl(const Options& o) : options(o) {
     ceres::Problem::Options po;
@@ -305,72 +317,6 @@ Status SubmapGraph::AddPosePrior(SubmapId id, const Eigen::Isometry3d& T_world_s
   return OkStatus();
 }
 
-namespace {
-
-/// Sigma^(power) of a symmetric positive definite matrix (power +-1/2), symmetric root.
-Eigen::Matrix3d SymmetricPower(const Eigen::Matrix3d& cov, double power) {
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(0.5 * (cov + cov.transpose()));
-  return es.eigenvectors() * es.eigenvalues().array().pow(power).matrix().asDiagonal() *
-         es.eigenvectors().transpose();
-}
-
-Status ValidateAttitude(const Eigen::Matrix3d& R, const Eigen::Matrix3d& cov,
-                        const std::string& what) {
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = R;
-  SLAM_MMS_RETURN_IF_ERROR(ValidatePose(T, what));
-  return ValidateCovariance<3>(cov, what);
-}
-
-}  // namespace
-
-StatusOr<AttitudeChain> AttitudeChainFromCrossCovariance(const Eigen::Matrix3d& R_world_a,
-                                                         const Eigen::Matrix3d& cov_a,
-                                                         const Eigen::Matrix3d& R_world_b,
-                                                         const Eigen::Matrix3d& cov_b,
-                                                         const Eigen::Matrix3d& cross_ba) {
-  const std::string what = "AttitudeChainFromCrossCovariance";
-  SLAM_MMS_RETURN_IF_ERROR(ValidateAttitude(R_world_a, cov_a, what + " (a)"));
-  SLAM_MMS_RETURN_IF_ERROR(ValidateAttitude(R_world_b, cov_b, what + " (b)"));
-  if (!cross_ba.allFinite()) return InvalidArgumentError(what + ": cross-covariance not finite");
-  // World axes: eps = R e.
-  const Eigen::Matrix3d Saa = R_world_a * cov_a * R_world_a.transpose();
-  const Eigen::Matrix3d Sbb = R_world_b * cov_b * R_world_b.transpose();
-  const Eigen::Matrix3d Sba = R_world_b * cross_ba * R_world_a.transpose();
-  Eigen::Matrix<double, 6, 6> joint;
-  joint << Saa, Sba.transpose(), Sba, Sbb;
-  joint = 0.5 * (joint + joint.transpose());
-  if (Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>>(joint).eigenvalues().minCoeff() <=
-      0.0) {
-    return InvalidArgumentError(what +
-                                ": the joint covariance of a and b is not positive definite");
-  }
-  AttitudeChain c;
-  c.transition = Saa.ldlt().solve(Sba.transpose()).transpose();
-  const Eigen::Matrix3d Q = Sbb - c.transition * Sba.transpose();
-  c.covariance = 0.5 * (Q + Q.transpose()) + kAttitudeChainMinInnovationShare * Sbb;
-  return c;
-}
-
-StatusOr<AttitudeChain> GaussMarkovAttitudeChain(const Eigen::Matrix3d& R_world_a,
-                                                 const Eigen::Matrix3d& cov_a,
-                                                 const Eigen::Matrix3d& R_world_b,
-                                                 const Eigen::Matrix3d& cov_b, double rho) {
-  const std::string what = "GaussMarkovAttitudeChain";
-  SLAM_MMS_RETURN_IF_ERROR(ValidateAttitude(R_world_a, cov_a, what + " (a)"));
-  SLAM_MMS_RETURN_IF_ERROR(ValidateAttitude(R_world_b, cov_b, what + " (b)"));
-  if (!(rho >= 0.0 && rho <= 1.0)) {
-    return InvalidArgumentError(what + ": rho = " + std::to_string(rho) + "; must be in [0, 1]");
-  }
-  const Eigen::Matrix3d Saa = R_world_a * cov_a * R_world_a.transpose();
-  const Eigen::Matrix3d Sbb = R_world_b * cov_b * R_world_b.transpose();
-  AttitudeChain c;
-  c.transition = rho * SymmetricPower(Sbb, 0.5) * SymmetricPower(Saa, -0.5);
-  c.covariance = std::max(1.0 - rho * rho, kAttitudeChainMinInnovationShare) * Sbb;
-  c.covariance = 0.5 * (c.covariance + c.covariance.transpose());
-  return c;
-}
-
 Status SubmapGraph::AddAttitudeChainFactor(SubmapId a, SubmapId b, const Eigen::Matrix3d& R_world_a,
                                            const Eigen::Matrix3d& R_world_b,
                                            const AttitudeChain& chain) {
@@ -463,6 +409,35 @@ Status SubmapGraph::AddGnssBias(int key, const Eigen::Matrix3d& prior_covariance
   m.problem->AddParameterBlock(block->data(), 3);
   m.problem->AddResidualBlock(new ZeroMeanPrior3Factor(sqrt_info), nullptr, block->data());
   m.gnss_biases.emplace(key, std::move(block));
+  m.RecordGnssBias(SubmapFactorKind::kGnssBias, key, -1, 0.0, prior_covariance);
+  return OkStatus();
+}
+
+Status SubmapGraph::AddGnssBiasLink(int from_key, int key, double transition,
+                                    const Eigen::Matrix3d& covariance) {
+  Impl& m = *impl_;
+  const std::string what = "SubmapGraph::AddGnssBiasLink";
+  auto from = m.gnss_biases.find(from_key);
+  if (from == m.gnss_biases.end()) {
+    return NotFoundError(what + ": unknown GNSS bias " + std::to_string(from_key));
+  }
+  if (key < 0 || m.gnss_biases.count(key) != 0) {
+    return InvalidArgumentError(what + ": key " + std::to_string(key) +
+                                (key < 0 ? " must be >= 0" : " exists"));
+  }
+  if (!(transition >= 0.0 && transition <= 1.0)) {
+    return InvalidArgumentError(what + ": transition " + std::to_string(transition) +
+                                " must be in [0, 1]");
+  }
+  SLAM_MMS_RETURN_IF_ERROR(ValidateCovariance<3>(covariance, what));
+  const Eigen::Matrix3d sqrt_info = covariance.llt().matrixL().solve(Eigen::Matrix3d::Identity());
+  auto block = std::make_unique<std::array<double, 3>>();
+  for (int k = 0; k < 3; ++k) (*block)[k] = transition * (*from->second)[k];
+  m.problem->AddParameterBlock(block->data(), 3);
+  m.problem->AddResidualBlock(new GnssBiasLinkFactor(transition, sqrt_info), nullptr,
+                              from->second->data(), block->data());
+  m.gnss_biases.emplace(key, std::move(block));
+  m.RecordGnssBias(SubmapFactorKind::kGnssBiasLink, key, from_key, transition, covariance);
   return OkStatus();
 }
 
@@ -484,6 +459,8 @@ const char* SubmapFactorKindName(SubmapFactorKind kind) {
     case SubmapFactorKind::kPosePrior: return "pose_prior";
     case SubmapFactorKind::kGnss: return "gnss";
     case SubmapFactorKind::kAttitudeChain: return "attitude_chain";
+    case SubmapFactorKind::kGnssBias: return "gnss_bias";
+    case SubmapFactorKind::kGnssBiasLink: return "gnss_bias_link";
   }
   return "unknown";
 }
@@ -491,7 +468,8 @@ const char* SubmapFactorKindName(SubmapFactorKind kind) {
 bool SubmapFactorKindFromName(const char* name, SubmapFactorKind* kind) {
   for (SubmapFactorKind k :
        {SubmapFactorKind::kRegistration, SubmapFactorKind::kReckon, SubmapFactorKind::kLoop,
-        SubmapFactorKind::kPosePrior, SubmapFactorKind::kGnss, SubmapFactorKind::kAttitudeChain}) {
+        SubmapFactorKind::kPosePrior, SubmapFactorKind::kGnss, SubmapFactorKind::kAttitudeChain,
+        SubmapFactorKind::kGnssBias, SubmapFactorKind::kGnssBiasLink}) {
     if (std::string(SubmapFactorKindName(k)) == name) {
       *kind = k;
       return true;

@@ -125,9 +125,7 @@ struct InsFilter::Impl {
   bool misalignment_logged = false;   // the first settled misalignment estimate is logged
   bool lateral_model_logged = false;  // likewise the lateral model's
 
-  static int ModelIndex(GnssFixType t) {
-    return t >= GnssFixType::kRtkFixed ? 0 : t == GnssFixType::kRtkFloat ? 1 : 2;
-  }
+  static int ModelIndex(GnssFixType t) { return GnssSolutionClass(t); }
   const Options::GnssErrorModel& ErrorModel(int index) const {
     return index == 0   ? options.gnss_error_rtk_fixed
            : index == 1 ? options.gnss_error_rtk_float

@@ -1,6 +1,7 @@
 // SubmapGraph (level 2): GNSS priors pull a drifting chain onto the truth, a loop removes the drift
 // of a LiDAR-only square, a bad loop is down-weighted by the robust loss, bounded solves, scan
-// poses, loop candidates against a brute-force oracle, invalid inputs.
+// poses, loop candidates against a brute-force oracle, Gauss-Markov GNSS biases against the
+// generalised least-squares closed form, invalid inputs.
 #include "slam_mms/backend/submap_graph.hpp"
 
 #include <gtest/gtest.h>
@@ -298,6 +299,77 @@ TEST(SubmapGraphTest, LoopCandidatesMatchBruteForce) {
       EXPECT_EQ(cand[k].submap, oracle[k].second);
       EXPECT_NEAR(cand[k].distance_m, oracle[k].first, 1e-9);
     }
+  }
+}
+
+// N fixes of one point whose errors are a Gauss-Markov bias (stationary S, transition phi from
+// one fix to the next) plus white noise W: the generalised least-squares variance of the point,
+// (1^T Sigma^-1 1)^-1 with Sigma_ij = S phi^|i-j| + W delta_ij, per axis.
+double GlsVariance(int n, double s, double w, double phi) {
+  Eigen::MatrixXd Sigma(n, n);
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) Sigma(i, j) = s * std::pow(phi, std::abs(i - j)) + (i == j) * w;
+  }
+  const Eigen::VectorXd one = Eigen::VectorXd::Ones(n);
+  return 1.0 / one.dot(Sigma.ldlt().solve(one));
+}
+
+// The same fixes in the graph: a bias node per fix, the first with the stationary prior, each
+// later one linked to the previous (AddGnssBiasLink); the point's marginal variance.
+double GraphVariance(int n, double s, double w, double phi) {
+  auto g = SubmapGraph::Create();
+  EXPECT_TRUE(g.ok());
+  const Eigen::Isometry3d I = Eigen::Isometry3d::Identity();
+  EXPECT_TRUE(g->AddSubmap(0, I).ok());  // with GNSS no node is the gauge
+  EXPECT_TRUE(g->AddPosePrior(0, I, DiagonalCovariance(1e-3, 10.0)).ok());  // the rotation
+  const Eigen::Matrix3d S = s * Eigen::Matrix3d::Identity(), W = w * Eigen::Matrix3d::Identity();
+  for (int k = 0; k < n; ++k) {
+    const Status st =
+        k == 0 ? g->AddGnssBias(0, S) : g->AddGnssBiasLink(k - 1, k, phi, (1.0 - phi * phi) * S);
+    EXPECT_TRUE(st.ok()) << st.ToString();
+    EXPECT_TRUE(g->AddGnssPrior(0, Eigen::Vector3d::Zero(), W, I, Eigen::Vector3d::Zero(), k).ok());
+  }
+  auto cov = g->SubmapCovariance(0);
+  EXPECT_TRUE(cov.ok()) << cov.status().ToString();
+  return cov.ok() ? (*cov)(3, 3) : -1.0;
+}
+
+TEST(SubmapGraphTest, GaussMarkovGnssBiasesWeighFixesAsTheirCorrelationSays) {
+  // From independent fixes (phi 0: (S + W) / N) towards one shared bias (phi 1: S + W / N).
+  for (double phi : {0.0, 0.5, 0.9, 0.99, 0.999}) {
+    const double gls = GlsVariance(20, 0.04, 0.004, phi);
+    const double graph = GraphVariance(20, 0.04, 0.004, phi);
+    EXPECT_NEAR(graph, gls, 0.01 * gls) << "phi " << phi;
+  }
+  EXPECT_NEAR(GlsVariance(20, 0.04, 0.004, 0.0), 0.044 / 20, 1e-12);
+  EXPECT_NEAR(GlsVariance(20, 0.04, 0.004, 1.0), 0.04 + 0.004 / 20, 1e-9);
+}
+
+TEST(SubmapGraphTest, GnssBiasNodesAreRecordedAndBadOnesRefused) {
+  auto g = SubmapGraph::Create();
+  ASSERT_TRUE(g.ok());
+  const Eigen::Matrix3d S = 0.04 * Eigen::Matrix3d::Identity();
+  EXPECT_EQ(g->AddGnssBiasLink(0, 1, 0.5, S).code(), StatusCode::kNotFound);  // no bias 0 yet
+  ASSERT_TRUE(g->AddGnssBias(0, S).ok());
+  EXPECT_FALSE(g->AddGnssBiasLink(0, 0, 0.5, S).ok());   // key exists
+  EXPECT_FALSE(g->AddGnssBiasLink(0, -1, 0.5, S).ok());  // negative key
+  EXPECT_FALSE(g->AddGnssBiasLink(0, 1, 1.5, S).ok());   // transition > 1
+  EXPECT_FALSE(g->AddGnssBiasLink(0, 1, 0.5, -S).ok());  // not a covariance
+  ASSERT_TRUE(g->AddGnssBiasLink(0, 1, 0.5, 0.75 * S).ok());
+  EXPECT_TRUE(g->GnssBias(1).ok());
+  const auto& f = g->Factors();
+  ASSERT_EQ(f.size(), 2u);
+  EXPECT_EQ(f[0].kind, SubmapFactorKind::kGnssBias);
+  EXPECT_EQ(f[0].gnss_bias, 0);
+  EXPECT_EQ(f[1].kind, SubmapFactorKind::kGnssBiasLink);
+  EXPECT_EQ(f[1].gnss_bias, 1);
+  EXPECT_EQ(f[1].gnss_bias_from, 0);
+  EXPECT_DOUBLE_EQ(f[1].transition(1, 1), 0.5);
+  EXPECT_DOUBLE_EQ(f[1].covariance(2, 2), 0.03);
+  for (SubmapFactorKind k : {SubmapFactorKind::kGnssBias, SubmapFactorKind::kGnssBiasLink}) {
+    SubmapFactorKind back = SubmapFactorKind::kReckon;
+    EXPECT_TRUE(SubmapFactorKindFromName(SubmapFactorKindName(k), &back));
+    EXPECT_EQ(back, k);
   }
 }
 

@@ -190,6 +190,12 @@ class SubmapGraph {
   /// A GNSS bias `key` (>= 0, new): an unknown constant world offset b [m] of the fixes added
   /// with it, with a zero-mean prior of `prior_covariance` [m^2]. Free in every solve.
   Status AddGnssBias(int key, const Eigen::Matrix3d& prior_covariance);
+  /// A GNSS bias `key` (>= 0, new) that follows bias `from_key` as a Gauss-Markov process: b =
+  /// transition * b_from + w, w ~ N(0, covariance) [m^2], transition in [0, 1] (exp(-dt / tau)
+  /// for the time dt between the two; the stationary covariance S then gives covariance =
+  /// (1 - transition^2) S). Free in every solve; starts at transition * b_from.
+  Status AddGnssBiasLink(int from_key, int key, double transition,
+                         const Eigen::Matrix3d& covariance);
   /// The current estimate of bias `key` (NotFound where never added).
   StatusOr<Eigen::Vector3d> GnssBias(int key) const;
   /// Every factor in the order it was added (a loop's covariance as given, before loop_loss).

@@ -26,9 +26,17 @@ enum class SubmapFactorKind {
   /// AddAttitudeChainFactor): R_world_b in T, R_world_a in T_a, the chain's covariance Q in the
   /// top-left 3x3 block (the rest zero), its transition A in `transition`.
   kAttitudeChain,
+  /// A GNSS bias `gnss_bias` with a zero-mean prior (SubmapGraph::AddGnssBias), its covariance in
+  /// the top-left 3x3 block [m^2]; no submap (a = b = -1).
+  kGnssBias,
+  /// A GNSS bias `gnss_bias` that follows bias `gnss_bias_from` (SubmapGraph::AddGnssBiasLink):
+  /// b = phi b_from + w, phi on the diagonal of `transition`, Cov(w) in the top-left 3x3 block
+  /// [m^2]; no submap (a = b = -1).
+  kGnssBiasLink,
 };
 
-/// "registration", "reckon", "loop", "pose_prior", "gnss", "attitude_chain".
+/// "registration", "reckon", "loop", "pose_prior", "gnss", "attitude_chain", "gnss_bias",
+/// "gnss_bias_link".
 const char* SubmapFactorKindName(SubmapFactorKind kind);
 /// The kind of a name of SubmapFactorKindName; false where unknown.
 bool SubmapFactorKindFromName(const char* name, SubmapFactorKind* kind);
@@ -47,10 +55,14 @@ struct SubmapGraphFactor {
   Eigen::Vector3d p_world_antenna = Eigen::Vector3d::Zero();
   Eigen::Isometry3d T_submap_body = Eigen::Isometry3d::Identity();
   Eigen::Vector3d t_body_antenna = Eigen::Vector3d::Zero();
-  int gnss_bias = -1;  ///< The GNSS bias (SubmapGraph::AddGnssBias) the fix shares; -1: none.
+  /// kGnss: the GNSS bias (SubmapGraph::AddGnssBias) the fix shares, -1: none; kGnssBias,
+  /// kGnssBiasLink: the bias added.
+  int gnss_bias = -1;
+  int gnss_bias_from = -1;  ///< kGnssBiasLink: the bias it follows.
   // kAttitudeChain only:
   Eigen::Isometry3d T_a = Eigen::Isometry3d::Identity();  ///< Its rotation: R_world_a measured.
-  Eigen::Matrix3d transition = Eigen::Matrix3d::Zero();   ///< A of eps_b = A eps_a + w.
+  /// kAttitudeChain: A of eps_b = A eps_a + w; kGnssBiasLink: phi I.
+  Eigen::Matrix3d transition = Eigen::Matrix3d::Zero();
 };
 
 }  // namespace slam_mms

@@ -35,6 +35,20 @@
 
 namespace slam_mms {
 
+/// Time-correlated GNSS error of one solution type: the share of a fix's variance that is a
+/// Gauss-Markov bias and its correlation time (the POS filter's b_gnss, InsFilter::Options; level
+/// 2's GNSS bias nodes, Level2Options).
+struct GnssErrorModel {
+  double correlated_fraction = 0.0;  ///< In [0, 1); 0: white noise.
+  double correlation_time_s = 30.0;  ///< > 0 [s].
+};
+
+/// The solution class whose error model a fix of this type follows: 0 RTK fixed, 1 RTK float,
+/// 2 code (single-point and differential).
+inline int GnssSolutionClass(GnssFixType type) {
+  return type >= GnssFixType::kRtkFixed ? 0 : type == GnssFixType::kRtkFloat ? 1 : 2;
+}
+
 /// A GNSS fix converted to the world frame: position of the antenna with its covariance.
 struct GnssMeasurement {
   Timestamp stamp;

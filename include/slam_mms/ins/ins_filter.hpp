@@ -128,12 +128,8 @@ class InsFilter {
     double max_extrapolation_s = 0.25;  ///< StateAt beyond the last state by at most this [s].
     double history_s = 600.0;           ///< States kept for StateAt [s].
     GnssPrior::Options gnss;            ///< Lever arm, floors, gates, outage timeout.
-    /// Time-correlated GNSS error of one solution type: the share of a fix's variance that is a
-    /// Gauss-Markov bias and its correlation time.
-    struct GnssErrorModel {
-      double correlated_fraction = 0.0;  ///< In [0, 1); 0: white noise.
-      double correlation_time_s = 30.0;  ///< > 0 [s].
-    };
+    /// Time-correlated GNSS error of one solution type (gnss_prior.hpp).
+    using GnssErrorModel = ::slam_mms::GnssErrorModel;
     GnssErrorModel gnss_error_rtk_fixed{0.0, 30.0};  ///< Fixed ambiguities: cm-level, ~white.
     GnssErrorModel gnss_error_rtk_float{0.9, 30.0};  ///< Float ambiguities converge over ~30 s.
     /// Single-point and differential (code) solutions: orbit, clock, atmosphere, multipath.

@@ -416,7 +416,7 @@ class GnssAvailability:
     def value(self) -> int: ...
 
 class GnssErrorModel:
-    """Time-correlated GNSS error of one solution type (InsFilter)."""
+    """Time-correlated GNSS error of one solution type (InsFilter, Level2Options)."""
     _fields: typing.ClassVar[tuple]
     def to_dict(self) -> dict: ...
     def __init__(self: GnssErrorModel) -> None:
@@ -1158,6 +1158,31 @@ class Level2Options:
         ...
     @pos_attitude_cross_covariance.setter
     def pos_attitude_cross_covariance(self, value: bool) -> None: ...
+    @property
+    def gnss_bias_states(self) -> bool:
+        """GNSS errors as Gauss-Markov bias nodes instead of gnss_correlation_s"""
+    @gnss_bias_states.setter
+    def gnss_bias_states(self, value: bool) -> None: ...
+    @property
+    def gnss_bias_rtk_fixed(self) -> GnssErrorModel:
+        """GnssErrorModel"""
+    @gnss_bias_rtk_fixed.setter
+    def gnss_bias_rtk_fixed(self, value: GnssErrorModel) -> None: ...
+    @property
+    def gnss_bias_rtk_float(self) -> GnssErrorModel:
+        """GnssErrorModel"""
+    @gnss_bias_rtk_float.setter
+    def gnss_bias_rtk_float(self, value: GnssErrorModel) -> None: ...
+    @property
+    def gnss_bias_code(self) -> GnssErrorModel:
+        """GnssErrorModel"""
+    @gnss_bias_code.setter
+    def gnss_bias_code(self, value: GnssErrorModel) -> None: ...
+    @property
+    def gnss_bias_node_interval_s(self) -> float:
+        """[s]"""
+    @gnss_bias_node_interval_s.setter
+    def gnss_bias_node_interval_s(self, value: float) -> None: ...
     @property
     def attitude_prior_sigma_rad(self) -> float:
         """[rad]"""

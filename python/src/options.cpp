@@ -125,7 +125,7 @@ void RegisterOptions(py::module_& m) {
 
   using GEM = InsFilter::Options::GnssErrorModel;
   OptionsClass<GEM>(m, "GnssErrorModel",
-                    "Time-correlated GNSS error of one solution type (InsFilter).")
+                    "Time-correlated GNSS error of one solution type (InsFilter, Level2Options).")
       .Field("correlated_fraction", &GEM::correlated_fraction,
              "Share of the fix variance that is a Gauss-Markov bias, [0, 1)")
       .Field("correlation_time_s", &GEM::correlation_time_s, "[s]")
@@ -358,6 +358,12 @@ void RegisterOptions(py::module_& m) {
       .Field("gnss_correlation_s", &SO::gnss_correlation_s, "[s]")
       .Field("pos_attitude_correlation_s", &SO::pos_attitude_correlation_s, "[s]")
       .Field("pos_attitude_cross_covariance", &SO::pos_attitude_cross_covariance, "")
+      .Field("gnss_bias_states", &SO::gnss_bias_states,
+             "GNSS errors as Gauss-Markov bias nodes instead of gnss_correlation_s")
+      .Field("gnss_bias_rtk_fixed", &SO::gnss_bias_rtk_fixed, "GnssErrorModel")
+      .Field("gnss_bias_rtk_float", &SO::gnss_bias_rtk_float, "GnssErrorModel")
+      .Field("gnss_bias_code", &SO::gnss_bias_code, "GnssErrorModel")
+      .Field("gnss_bias_node_interval_s", &SO::gnss_bias_node_interval_s, "[s]")
       .Field("attitude_prior_sigma_rad", &SO::attitude_prior_sigma_rad, "[rad]")
       .Field("max_iterations", &SO::max_iterations, "")
       .Field("icp", &SO::icp, "PointIcpOptions")

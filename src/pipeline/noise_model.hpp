@@ -72,6 +72,9 @@ inline constexpr double kMapToMapMaxCorrectionTransM = 1.0;
 /// GNSS fixes stamped up to this long before a submap's first scan still belong to it (a fix at
 /// 10 Hz may precede the first scan start by up to one period plus clock jitter) [s].
 inline constexpr double kGnssBeforeSubmapS = 0.15;
+/// Level2Options::gnss_bias_states: a gap between fixes longer than this starts a new run of
+/// GNSS bias nodes (GnssPrior::Options::outage_timeout_s's default: the POS's new solution).
+inline constexpr double kGnssBiasRunGapS = 1.5;
 /// Without a next submap, fixes up to this long after the submap's end belong to it (two 10 Hz
 /// periods) [s].
 inline constexpr double kGnssAfterLastScanS = 0.2;

@@ -7,6 +7,7 @@
 #include <optional>
 #include <sstream>
 #include <string>
+#include <utility>
 
 #include "core/option_error.hpp"
 #include "pipeline/noise_model.hpp"
@@ -92,6 +93,22 @@ Status Level2Options::Validate() const {
   if (!(attitude_prior_sigma_rad >= 0.0)) {
     return bad("attitude_prior_sigma_rad", attitude_prior_sigma_rad, "must be >= 0");
   }
+  for (auto [name, em] :
+       {std::pair<const char*, const GnssErrorModel*>{"gnss_bias_rtk_fixed", &gnss_bias_rtk_fixed},
+        {"gnss_bias_rtk_float", &gnss_bias_rtk_float},
+        {"gnss_bias_code", &gnss_bias_code}}) {
+    const std::string f = name;
+    if (!(em->correlated_fraction >= 0.0 && em->correlated_fraction < 1.0)) {
+      return bad((f + ".correlated_fraction").c_str(), em->correlated_fraction,
+                 "must be in [0, 1)");
+    }
+    if (!(em->correlation_time_s > 0.0) || !std::isfinite(em->correlation_time_s)) {
+      return bad((f + ".correlation_time_s").c_str(), em->correlation_time_s, "must be > 0");
+    }
+  }
+  if (!(gnss_bias_node_interval_s > 0.0) || !std::isfinite(gnss_bias_node_interval_s)) {
+    return bad("gnss_bias_node_interval_s", gnss_bias_node_interval_s, "must be > 0");
+  }
   if (max_iterations < 1) return bad("max_iterations", max_iterations, "must be >= 1");
   return icp.Validate();
 }
@@ -107,6 +124,15 @@ struct SubmapManager::Impl {
   };
   std::deque<PendingGnss> pending_gnss;
   std::optional<Timestamp> last_gnss_stamp;  // of the last fix attached
+  /// Options::gnss_bias_states: the newest GNSS bias node (its graph key, solution class, the
+  /// stamp of its first fix and of the last fix on it) and the next free key.
+  struct GnssBiasNode {
+    int key = -1;
+    int solution_class = -1;
+    Timestamp start, last_fix;
+  };
+  std::optional<GnssBiasNode> gnss_bias_node;
+  int next_gnss_bias_key = 0;
   /// The start of the submap that got the last POS attitude prior.
   std::optional<Timestamp> last_attitude_prior_stamp;
   /// The last submap that got the POS attitude, and that attitude
@@ -152,17 +178,53 @@ struct SubmapManager::Impl {
     return 0.5 * (cov + cov.transpose());
   }
 
+  /// Options::gnss_bias_states: the bias node a fix of `type` at `stamp` with covariance `*cov`
+  /// measures (a new run's first node with the stationary prior, a node following the previous
+  /// one, or the current one), -1 for a white class; `*cov` becomes the fix's white part.
+  StatusOr<int> GnssBiasNodeFor(Timestamp stamp, GnssFixType type, Eigen::Matrix3d* cov) {
+    const int cls = GnssSolutionClass(type);
+    const GnssErrorModel& em = cls == 0   ? opt.gnss_bias_rtk_fixed
+                               : cls == 1 ? opt.gnss_bias_rtk_float
+                                          : opt.gnss_bias_code;
+    if (!(em.correlated_fraction > 0.0)) {
+      gnss_bias_node.reset();
+      return -1;
+    }
+    const Eigen::Matrix3d stationary = em.correlated_fraction * *cov;
+    GnssBiasNode& node = gnss_bias_node.emplace(gnss_bias_node.value_or(GnssBiasNode{}));
+    if (node.key < 0 || node.solution_class != cls ||
+        stamp.SecondsSince(node.last_fix) > noise::kGnssBiasRunGapS) {
+      node.key = next_gnss_bias_key++;
+      SLAM_MMS_RETURN_IF_ERROR(graph->AddGnssBias(node.key, stationary));
+      node.solution_class = cls;
+      node.start = stamp;
+    } else if (stamp.SecondsSince(node.start) >= opt.gnss_bias_node_interval_s) {
+      const double phi = std::exp(-stamp.SecondsSince(node.start) / em.correlation_time_s);
+      const int key = next_gnss_bias_key++;
+      SLAM_MMS_RETURN_IF_ERROR(
+          graph->AddGnssBiasLink(node.key, key, phi, (1.0 - phi * phi) * stationary));
+      node.key = key;
+      node.start = stamp;
+    }
+    node.last_fix = stamp;
+    *cov -= stationary;
+    return node.key;
+  }
+
   Status AttachGnss(const SubmapRecord& rec, Timestamp next_start) {
     while (!pending_gnss.empty() && pending_gnss.front().m.stamp < next_start) {
       const PendingGnss g = pending_gnss.front();
       pending_gnss.pop_front();
       if (g.m.stamp.SecondsSince(rec.start) < -noise::kGnssBeforeSubmapS) continue;
-      const double correlated =
-          CorrelatedCount(opt.gnss_correlation_s, &last_gnss_stamp, g.m.stamp);
-      const Eigen::Matrix3d cov =
-          correlated * opt.gnss_sigma_scale * opt.gnss_sigma_scale * g.m.cov_world_antenna;
-      SLAM_MMS_RETURN_IF_ERROR(graph->AddGnssPrior(rec.id, g.m.p_world_antenna, cov,
-                                                   BodyPoseAt(rec, g.m.stamp), g.t_body_antenna));
+      Eigen::Matrix3d cov = opt.gnss_sigma_scale * opt.gnss_sigma_scale * g.m.cov_world_antenna;
+      int bias = -1;
+      if (opt.gnss_bias_states) {
+        SLAM_MMS_ASSIGN_OR_RETURN(bias, GnssBiasNodeFor(g.m.stamp, g.m.type, &cov));
+      } else {
+        cov *= CorrelatedCount(opt.gnss_correlation_s, &last_gnss_stamp, g.m.stamp);
+      }
+      SLAM_MMS_RETURN_IF_ERROR(graph->AddGnssPrior(
+          rec.id, g.m.p_world_antenna, cov, BodyPoseAt(rec, g.m.stamp), g.t_body_antenna, bias));
       ++stats.gnss_factors;
     }
     return OkStatus();

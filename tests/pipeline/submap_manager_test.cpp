@@ -330,6 +330,68 @@ TEST(SubmapManagerTest, PosCrossCovarianceChainsTheAttitudes) {
   EXPECT_NEAR(mislinked, independent, 1e-9);
 }
 
+// Options::gnss_bias_states: the fixes of a run of one solution class share Gauss-Markov bias
+// nodes (a new node every gnss_bias_node_interval_s, each following the previous one), a new
+// run starts at another class or after a gap; each fix keeps the white part of its covariance.
+TEST(SubmapManagerTest, GnssBiasStatesFollowTheRunsOfEachSolutionClass) {
+  for (bool float_white : {false, true}) {
+    SubmapManager::Options o = ChainOptions();
+    o.gnss_bias_states = true;
+    if (float_white) o.gnss_bias_rtk_float.correlated_fraction = 0.0;
+    auto mgr = SubmapManager::Create(o, 1);
+    ASSERT_TRUE(mgr.ok()) << mgr.status().ToString();
+    FakeSource source;
+    source.records.push_back(MakeRecord(0));
+    const double var = 0.03 * 0.03;
+    for (int i = 0; i < 3; ++i) {
+      source.records.push_back(MakeRecord(i + 1));
+      // Fixes every 0.5 s over [5 i, 5 i + 4]: submaps 0 and 1 RTK fixed (one run: 1 s between
+      // them), submap 2 float (a new run), its last fix after a 2 s gap (another).
+      for (int k = 0; k <= 2 * (kScans - 1); ++k) {
+        if (i == 2 && k >= 5 && k <= 7) continue;
+        GnssMeasurement m;
+        m.stamp = At(5.0 * i + 0.5 * k);
+        m.p_world_antenna = (TrueSubmap(i) * Eigen::Translation3d(1.0 * k, 0, 0)) * kLever;
+        m.cov_world_antenna = var * Eigen::Matrix3d::Identity();
+        m.type = i < 2 ? GnssFixType::kRtkFixed : GnssFixType::kRtkFloat;
+        (*mgr)->AddGnssMeasurement(m, kLever);
+      }
+      ASSERT_TRUE((*mgr)->OnSubmapFinished(source, i, false).ok());
+    }
+    int runs = 0, links = 0, biased = 0, white = 0;
+    for (const SubmapGraphFactor& f : (*mgr)->graph().Factors()) {
+      if (f.kind == SubmapFactorKind::kGnssBias) {
+        ++runs;
+        EXPECT_NEAR(f.covariance(0, 0), 0.9 * var, 1e-12);
+      } else if (f.kind == SubmapFactorKind::kGnssBiasLink) {
+        ++links;
+        EXPECT_EQ(f.gnss_bias_from, f.gnss_bias - 1);
+        const double phi = std::exp(-1.0 / 30.0);  // nodes 1 s apart, tau 30 s
+        EXPECT_NEAR(f.transition(0, 0), phi, 1e-12);
+        EXPECT_NEAR(f.covariance(1, 1), (1.0 - phi * phi) * 0.9 * var, 1e-12);
+      } else if (f.kind == SubmapFactorKind::kGnss) {
+        (f.gnss_bias >= 0 ? biased : white)++;
+        EXPECT_NEAR(f.covariance(2, 2), f.gnss_bias >= 0 ? 0.1 * var : var, 1e-12);
+      }
+    }
+    // Fixed: t = 0..9 s, a node each second: 1 + 9. Float: t = 10..12 (1 + 2), then 14 (1).
+    EXPECT_EQ(runs, float_white ? 1 : 3);
+    EXPECT_EQ(links, float_white ? 9 : 9 + 2);
+    EXPECT_EQ(biased, float_white ? 18 : 18 + 6);
+    EXPECT_EQ(white, float_white ? 6 : 0);
+    auto fin = (*mgr)->Finish(source);
+    ASSERT_TRUE(fin.ok()) << fin.status().ToString();
+    EXPECT_LT(TransError((*fin)[1].T_world_submap, TrueSubmap(1)), 0.05);
+  }
+  SubmapManager::Options bad;
+  bad.gnss_bias_rtk_fixed.correlated_fraction = 1.0;
+  auto mgr = SubmapManager::Create(bad);
+  ASSERT_FALSE(mgr.ok());
+  EXPECT_NE(mgr.status().message().find("gnss_bias_rtk_fixed.correlated_fraction"),
+            std::string::npos)
+      << mgr.status().ToString();
+}
+
 TEST(SubmapManagerTest, CreateRejectsBadOptionByName) {
   SubmapManager::Options o;
   o.loop_distance_m = 0.0;

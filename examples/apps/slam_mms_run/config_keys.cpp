@@ -419,6 +419,20 @@ const std::vector<std::pair<std::string, KeyHandler>>& Handlers() {
                    o->system.level2.pos_attitude_correlation_s);
     SLAM_MMS_KEY_B("level2.pos_attitude_cross_covariance",
                    o->system.level2.pos_attitude_cross_covariance);
+    SLAM_MMS_KEY_B("level2.gnss_bias_states", o->system.level2.gnss_bias_states);
+    SLAM_MMS_KEY_D("level2.gnss_bias_rtk_fixed.correlated_fraction",
+                   o->system.level2.gnss_bias_rtk_fixed.correlated_fraction);
+    SLAM_MMS_KEY_D("level2.gnss_bias_rtk_fixed.correlation_time_s",
+                   o->system.level2.gnss_bias_rtk_fixed.correlation_time_s);
+    SLAM_MMS_KEY_D("level2.gnss_bias_rtk_float.correlated_fraction",
+                   o->system.level2.gnss_bias_rtk_float.correlated_fraction);
+    SLAM_MMS_KEY_D("level2.gnss_bias_rtk_float.correlation_time_s",
+                   o->system.level2.gnss_bias_rtk_float.correlation_time_s);
+    SLAM_MMS_KEY_D("level2.gnss_bias_code.correlated_fraction",
+                   o->system.level2.gnss_bias_code.correlated_fraction);
+    SLAM_MMS_KEY_D("level2.gnss_bias_code.correlation_time_s",
+                   o->system.level2.gnss_bias_code.correlation_time_s);
+    SLAM_MMS_KEY_D("level2.gnss_bias_node_interval_s", o->system.level2.gnss_bias_node_interval_s);
     SLAM_MMS_KEY_D("level2.attitude_prior_sigma_rad", o->system.level2.attitude_prior_sigma_rad);
     SLAM_MMS_KEY_I("level2.max_iterations", o->system.level2.max_iterations);
     // The drive runner (RunDrive's passes over the whole drive; DriveRunOptions).

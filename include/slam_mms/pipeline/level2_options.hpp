@@ -7,6 +7,7 @@
 // Thread safety: plain values.
 
 #include "slam_mms/core/status.hpp"
+#include "slam_mms/ins/gnss_prior.hpp"
 #include "slam_mms/registration/registration_options.hpp"
 
 namespace slam_mms {
@@ -58,6 +59,18 @@ struct Level2Options {
   /// (SubmapGraph::AddAttitudeChainFactor). Where the POS gives no cross-covariance (an external
   /// POS, the first submap after an initialisation or an outage) a prior as above.
   bool pos_attitude_cross_covariance = false;
+  /// GNSS errors as level 2's own Gauss-Markov biases (the POS filter's model, InsFilter::
+  /// Options::gnss_error_*) instead of the gnss_correlation_s window: the fixes of one run of a
+  /// solution class (RTK fixed, float, code; a new run after another class or a gap of more than
+  /// 1.5 s) share a world offset b with the stationary covariance correlated_fraction x the fix's
+  /// covariance, a bias node every gnss_bias_node_interval_s, each node following the previous
+  /// one with exp(-dt / correlation_time_s) (SubmapGraph::AddGnssBiasLink); the rest of each
+  /// fix's covariance is white. A class with correlated_fraction 0 is white (no bias).
+  bool gnss_bias_states = false;
+  GnssErrorModel gnss_bias_rtk_fixed{0.9, 30.0};
+  GnssErrorModel gnss_bias_rtk_float{0.9, 30.0};
+  GnssErrorModel gnss_bias_code{0.9, 60.0};
+  double gnss_bias_node_interval_s = 1.0;  ///< A new bias node at most this often [s], > 0.
   int max_iterations = 100;  ///< Levenberg-Marquardt iterations of a level-2 solve, > 0.
   /// Map-to-map registration and loop verification.
   PointIcpOptions icp;

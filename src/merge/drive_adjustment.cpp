@@ -28,6 +28,17 @@ SubmapId GraphId(size_t drive, SubmapId id) {
   return static_cast<SubmapId>(drive) * kDriveIdStride + id;
 }
 
+// A drive's own GNSS bias key in the merged graph (the keys below kBiasKeyStride are the
+// drives' datum biases, Options::gnss_bias_sigma_m).
+constexpr int kBiasKeyStride = 1 << 20;
+StatusOr<int> GraphBiasKey(size_t drive, int key) {
+  if (key < 0 || key >= kBiasKeyStride || drive + 1 >= size_t{1} << 10) {
+    return InvalidArgumentError("GNSS bias key " + std::to_string(key) + " of drive " +
+                                std::to_string(drive) + " out of range");
+  }
+  return static_cast<int>(drive + 1) * kBiasKeyStride + key;
+}
+
 // T_world0_worldi: the exact rigid transform between two local ENU frames (through ECEF).
 Eigen::Isometry3d EnuToEnu(const GeodeticPoint& from, const GeodeticPoint& to) {
   const GeographicLib::Geocentric& earth = GeographicLib::Geocentric::WGS84();
@@ -63,6 +74,10 @@ void MoveDrive(const Eigen::Isometry3d& T_new_old, DriveResult* d) {
       f.covariance.topLeftCorner<3, 3>() = R * q * R.transpose();
     } else if (f.kind == SubmapFactorKind::kGnss) {
       f.p_world_antenna = T_new_old * f.p_world_antenna;
+      const Eigen::Matrix3d c = f.covariance.topLeftCorner<3, 3>();
+      f.covariance.topLeftCorner<3, 3>() = R * c * R.transpose();
+    } else if (f.kind == SubmapFactorKind::kGnssBias || f.kind == SubmapFactorKind::kGnssBiasLink) {
+      // A world offset: b' = R b (the transition is a multiple of I).
       const Eigen::Matrix3d c = f.covariance.topLeftCorner<3, 3>();
       f.covariance.topLeftCorner<3, 3>() = R * c * R.transpose();
     }
@@ -256,11 +271,34 @@ StatusOr<SubmapGraph> BuildGraph(const std::vector<DriveAdjustment::Drive>& driv
             st = graph.AddAttitudeChainFactor(a, b, f.T_a.linear(), f.T.linear(), chain);
           }
           break;
-        case SubmapFactorKind::kGnss:
-          st = graph.AddGnssPrior(a, f.p_world_antenna, f.covariance.topLeftCorner<3, 3>(),
-                                  f.T_submap_body, f.t_body_antenna,
-                                  bias ? static_cast<int>(d) : -1);
+        case SubmapFactorKind::kGnss: {
+          // The drive's own bias (level 2's Gauss-Markov nodes), else the datum bias if any.
+          StatusOr<int> key = f.gnss_bias >= 0 ? GraphBiasKey(d, f.gnss_bias)
+                                               : StatusOr<int>(bias ? static_cast<int>(d) : -1);
+          st = key.ok()
+                   ? graph.AddGnssPrior(a, f.p_world_antenna, f.covariance.topLeftCorner<3, 3>(),
+                                        f.T_submap_body, f.t_body_antenna, *key)
+                   : key.status();
           break;
+        }
+        case SubmapFactorKind::kGnssBias: {
+          // A run's first node; with a datum bias it is the datum's offset plus the run's own.
+          StatusOr<int> key = GraphBiasKey(d, f.gnss_bias);
+          const Eigen::Matrix3d c = f.covariance.topLeftCorner<3, 3>();
+          st = !key.ok() ? key.status()
+               : bias    ? graph.AddGnssBiasLink(static_cast<int>(d), *key, 1.0, c)
+                         : graph.AddGnssBias(*key, c);
+          break;
+        }
+        case SubmapFactorKind::kGnssBiasLink: {
+          StatusOr<int> key = GraphBiasKey(d, f.gnss_bias);
+          StatusOr<int> from = GraphBiasKey(d, f.gnss_bias_from);
+          st = !key.ok()    ? key.status()
+               : !from.ok() ? from.status()
+                            : graph.AddGnssBiasLink(*from, *key, f.transition(0, 0),
+                                                    f.covariance.topLeftCorner<3, 3>());
+          break;
+        }
       }
       if (!st.ok()) {
         return InvalidArgumentError(ctx + ": " + SubmapFactorKindName(f.kind) + " factor " +

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <system_error>
@@ -21,6 +22,10 @@ Json PoseJson(const Eigen::Isometry3d& T) {
   const Eigen::Quaterniond q(T.linear());
   const Eigen::Vector3d t = T.translation();
   return Json::array({t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w()});
+}
+
+bool IsGnssBiasKind(SubmapFactorKind k) {
+  return k == SubmapFactorKind::kGnssBias || k == SubmapFactorKind::kGnssBiasLink;
 }
 
 Json VectorJson(const Eigen::Vector3d& v) { return Json::array({v.x(), v.y(), v.z()}); }
@@ -190,6 +195,12 @@ Status WriteDriveResult(const DriveResult& result, const fs::path& dir) {
       jf["T_submap_body"] = PoseJson(f.T_submap_body);
       jf["t_body_antenna"] = VectorJson(f.t_body_antenna);
       jf["gnss_bias"] = f.gnss_bias;
+    } else if (IsGnssBiasKind(f.kind)) {
+      jf["gnss_bias"] = f.gnss_bias;
+      if (f.kind == SubmapFactorKind::kGnssBiasLink) {
+        jf["gnss_bias_from"] = f.gnss_bias_from;
+        jf["transition"] = f.transition(0, 0);
+      }
     } else {
       jf["T"] = PoseJson(f.T);
     }
@@ -358,6 +369,25 @@ StatusOr<DriveResult> ReadDriveResult(const fs::path& dir, const DriveResultRead
           f.t_body_antenna, r.Get<Eigen::Vector3d>(jf, w, "t_body_antenna", &Reader::Numbers<3>));
       SLAM_MMS_ASSIGN_OR_RETURN(int64_t bias, r.Get<int64_t>(jf, w, "gnss_bias", &Reader::Integer));
       f.gnss_bias = static_cast<int>(bias);
+    } else if (IsGnssBiasKind(f.kind)) {
+      SLAM_MMS_ASSIGN_OR_RETURN(int64_t bias, r.Get<int64_t>(jf, w, "gnss_bias", &Reader::Integer));
+      if (bias < 0 || bias > std::numeric_limits<int>::max()) {
+        return r.Bad(w + ".gnss_bias", "must be a bias key >= 0");
+      }
+      f.gnss_bias = static_cast<int>(bias);
+      if (f.kind == SubmapFactorKind::kGnssBiasLink) {
+        SLAM_MMS_ASSIGN_OR_RETURN(int64_t from,
+                                  r.Get<int64_t>(jf, w, "gnss_bias_from", &Reader::Integer));
+        if (from < 0 || from > std::numeric_limits<int>::max()) {
+          return r.Bad(w + ".gnss_bias_from", "must be a bias key >= 0");
+        }
+        f.gnss_bias_from = static_cast<int>(from);
+        SLAM_MMS_ASSIGN_OR_RETURN(const Json* phi, r.Field(jf, w, "transition"));
+        if (!phi->is_number() || !(phi->get<double>() >= 0.0 && phi->get<double>() <= 1.0)) {
+          return r.Bad(w + ".transition", "must be a number in [0, 1]");
+        }
+        f.transition = phi->get<double>() * Eigen::Matrix3d::Identity();
+      }
     } else {
       SLAM_MMS_ASSIGN_OR_RETURN(f.T, r.Get<Eigen::Isometry3d>(jf, w, "T", &Reader::Pose));
     }

@@ -201,6 +201,69 @@ TEST(DriveAdjustmentTest, TwoDrivesWithA5mGnssOffsetArePulledTogether) {
   EXPECT_LT(MaxPositionError(r->drives[1].result, b.true_poses, shift_a), 0.05);
 }
 
+// Level 2's Gauss-Markov GNSS bias nodes (Level2Options::gnss_bias_states) in drive b's result:
+// one run over all its fixes, a node per submap. Replayed into the merged graph under drive b's
+// own keys (with a datum bias as well, each run's first node follows the datum), they let b's
+// offset GNSS go: b is pulled onto a.
+TEST(DriveAdjustmentTest, ADrivesOwnGnssBiasNodesAreReplayed) {
+  const Street street(1, 0.0, 8.0);
+  SyntheticDrive a = MakeDrive(street, -3.0, 0.0, 100.0, Eigen::Vector3d::Zero(), 11);
+  const Eigen::Vector3d offset(3.0, 4.0, 0.0);  // 5 m
+  SyntheticDrive b = MakeDrive(street, 3.0, 120.0, 20.0, offset, 12);
+  std::vector<SubmapGraphFactor> factors;
+  int key = 0;
+  const Eigen::Matrix3d S = 100.0 * Eigen::Matrix3d::Identity();
+  for (SubmapGraphFactor f : b.result.factors) {
+    if (f.kind == SubmapFactorKind::kGnss) {
+      SubmapGraphFactor node;
+      node.kind = key == 0 ? SubmapFactorKind::kGnssBias : SubmapFactorKind::kGnssBiasLink;
+      node.a = node.b = -1;
+      node.gnss_bias = key;
+      node.gnss_bias_from = key - 1;
+      node.transition = (key == 0 ? 0.0 : 0.999) * Eigen::Matrix3d::Identity();
+      node.covariance = Matrix6d::Zero();
+      node.covariance.topLeftCorner<3, 3>() = key == 0 ? S : (1.0 - 0.999 * 0.999) * S;
+      factors.push_back(node);
+      f.gnss_bias = key++;
+    }
+    factors.push_back(f);
+  }
+  b.result.factors = factors;
+  for (double datum_sigma : {0.0, 10.0}) {
+    DriveAdjustment::Options opt;
+    opt.gnss_bias_sigma_m = datum_sigma;
+    auto r = DriveAdjustment::Run({{"a", a.result}, {"b", b.result}}, opt);
+    ASSERT_TRUE(r.ok()) << r.status().ToString();
+    EXPECT_TRUE(r->summary.usable());
+    double after = 0.0;
+    int accepted = 0;
+    for (const auto& ov : r->overlaps) {
+      if (!ov.accepted) continue;
+      ++accepted;
+      after = std::max(after, ov.offset_after_m);
+    }
+    EXPECT_GE(accepted, 5) << datum_sigma;
+    EXPECT_LT(after, 0.03) << datum_sigma;
+    // b is on a, wherever a went (with datum biases a may move as a whole; without, its GNSS
+    // holds it).
+    Eigen::Vector3d shift_a = Eigen::Vector3d::Zero();
+    for (size_t k = 0; k < a.true_poses.size(); ++k) {
+      shift_a += r->drives[0].result.submaps[k].T_world_submap.translation() -
+                 a.true_poses[k].translation();
+    }
+    shift_a /= static_cast<double>(a.true_poses.size());
+    if (datum_sigma == 0.0) EXPECT_LT(shift_a.norm(), 0.02);
+    EXPECT_LT(MaxPositionError(r->drives[0].result, a.true_poses, shift_a), 0.05) << datum_sigma;
+    EXPECT_LT(MaxPositionError(r->drives[1].result, b.true_poses, shift_a), 0.05) << datum_sigma;
+  }
+  // A link to a bias the drive never added is named.
+  b.result.factors[0].gnss_bias_from = 7;
+  b.result.factors[0].kind = SubmapFactorKind::kGnssBiasLink;
+  auto bad = DriveAdjustment::Run({{"a", a.result}, {"b", b.result}}, DriveAdjustment::Options());
+  ASSERT_FALSE(bad.ok());
+  EXPECT_NE(bad.status().message().find("drive 'b'"), std::string::npos) << bad.status().ToString();
+}
+
 TEST(DriveAdjustmentTest, ASimilarLookingOtherStreetIsRejected) {
   const Street street(1, 0.0, 8.0);
   const Street other(2, 0.0, 8.0);  // same kind of street, other facades and poles

@@ -76,7 +76,19 @@ DriveResult Sample() {
   chain.covariance = Matrix6d::Zero();
   chain.covariance.topLeftCorner<3, 3>() = Eigen::Matrix3d::Identity() * 3e-6;
   chain.transition << 0.9200444146293233, 0.01, 0.0, -0.01, 0.92, 0.0, 0.0, 0.0, 0.25;
-  r.factors = {reg, gnss, prior, chain};
+  SubmapGraphFactor bias;  // level 2's Gauss-Markov GNSS bias nodes
+  bias.kind = SubmapFactorKind::kGnssBias;
+  bias.a = bias.b = -1;
+  bias.gnss_bias = 0;
+  bias.covariance = Matrix6d::Zero();
+  bias.covariance.topLeftCorner<3, 3>() = 0.09 * Eigen::Matrix3d::Identity();
+  SubmapGraphFactor link = bias;
+  link.kind = SubmapFactorKind::kGnssBiasLink;
+  link.gnss_bias = 1;
+  link.gnss_bias_from = 0;
+  link.transition = 0.9672161004820059 * Eigen::Matrix3d::Identity();
+  link.covariance.topLeftCorner<3, 3>() = 0.0058 * Eigen::Matrix3d::Identity();
+  r.factors = {reg, gnss, prior, chain, bias, link};
   return r;
 }
 
@@ -103,7 +115,15 @@ TEST(DriveResultIoTest, RoundTripsLosslessly) {
   EXPECT_EQ(b->submaps[1].map_cloud.size(), 50u);
   EXPECT_EQ(b->submaps[1].registration_cloud.size(), 25u);
   EXPECT_EQ(b->submaps[1].map_cloud.intensities()[3], 0.75f);
-  ASSERT_EQ(b->factors.size(), 4u);
+  ASSERT_EQ(b->factors.size(), 6u);
+  EXPECT_EQ(b->factors[4].kind, SubmapFactorKind::kGnssBias);
+  EXPECT_EQ(b->factors[4].gnss_bias, 0);
+  EXPECT_EQ(b->factors[4].covariance, a.factors[4].covariance);
+  EXPECT_EQ(b->factors[5].kind, SubmapFactorKind::kGnssBiasLink);
+  EXPECT_EQ(b->factors[5].gnss_bias, 1);
+  EXPECT_EQ(b->factors[5].gnss_bias_from, 0);
+  EXPECT_EQ(b->factors[5].transition, a.factors[5].transition);
+  EXPECT_EQ(b->factors[5].covariance, a.factors[5].covariance);
   EXPECT_EQ(b->factors[0].kind, SubmapFactorKind::kRegistration);
   EXPECT_EQ(b->factors[0].loss.type, RobustLossType::kHuber);
   EXPECT_EQ(b->factors[1].p_world_antenna, a.factors[1].p_world_antenna);
@@ -155,6 +175,10 @@ TEST(DriveResultIoTest, BadFilesAreNamed) {
   expect("factors[3].transition[0]: not a number");
   rewrite("\"transition\"", "\"transition_x\"");
   expect("factors[3]: missing transition");
+  rewrite("\"gnss_bias_from\": 0", "\"gnss_bias_from\": -3");
+  expect("factors[5].gnss_bias_from: must be a bias key >= 0");
+  rewrite("0.9672161004820059", "1.5");
+  expect("factors[5].transition: must be a number in [0, 1]");
   rewrite("\"scan_id\": 201", "\"scan_id\": \"x\"");
   expect("submaps[2].scans[1].scan_id");
   std::ofstream(file, std::ios::binary | std::ios::trunc) << good.substr(0, good.size() / 2);

@@ -253,6 +253,10 @@ const std::vector<std::pair<std::string, KeyHandler>>& Handlers() {
 #define SLAM_MMS_KEY_F(key, expr) h.emplace_back(key, Float([](Options* o) { return &(expr); }))
 #define SLAM_MMS_KEY_I(key, expr) h.emplace_back(key, Int([](Options* o) { return &(expr); }))
 #define SLAM_MMS_KEY_B(key, expr) h.emplace_back(key, Bool([](Options* o) { return &(expr); }))
+// A GnssErrorModel's two keys under `prefix` (the POS filter's and level 2's).
+#define SLAM_MMS_KEYS_GNSS_ERROR(prefix, expr)                               \
+  SLAM_MMS_KEY_D(prefix ".correlated_fraction", (expr).correlated_fraction); \
+  SLAM_MMS_KEY_D(prefix ".correlation_time_s", (expr).correlation_time_s)
     // MappingSystem.
     h.emplace_back("origin_latitude_deg", OriginField(&GeodeticPoint::latitude_deg));
     h.emplace_back("origin_longitude_deg", OriginField(&GeodeticPoint::longitude_deg));
@@ -281,18 +285,9 @@ const std::vector<std::pair<std::string, KeyHandler>>& Handlers() {
     SLAM_MMS_KEY_D("ins.max_fix_latency_s", o->system.ins.max_fix_latency_s);
     SLAM_MMS_KEY_D("ins.max_extrapolation_s", o->system.ins.max_extrapolation_s);
     SLAM_MMS_KEY_D("ins.history_s", o->system.ins.history_s);
-    SLAM_MMS_KEY_D("ins.gnss_error_rtk_fixed.correlated_fraction",
-                   o->system.ins.gnss_error_rtk_fixed.correlated_fraction);
-    SLAM_MMS_KEY_D("ins.gnss_error_rtk_fixed.correlation_time_s",
-                   o->system.ins.gnss_error_rtk_fixed.correlation_time_s);
-    SLAM_MMS_KEY_D("ins.gnss_error_rtk_float.correlated_fraction",
-                   o->system.ins.gnss_error_rtk_float.correlated_fraction);
-    SLAM_MMS_KEY_D("ins.gnss_error_rtk_float.correlation_time_s",
-                   o->system.ins.gnss_error_rtk_float.correlation_time_s);
-    SLAM_MMS_KEY_D("ins.gnss_error_code.correlated_fraction",
-                   o->system.ins.gnss_error_code.correlated_fraction);
-    SLAM_MMS_KEY_D("ins.gnss_error_code.correlation_time_s",
-                   o->system.ins.gnss_error_code.correlation_time_s);
+    SLAM_MMS_KEYS_GNSS_ERROR("ins.gnss_error_rtk_fixed", o->system.ins.gnss_error_rtk_fixed);
+    SLAM_MMS_KEYS_GNSS_ERROR("ins.gnss_error_rtk_float", o->system.ins.gnss_error_rtk_float);
+    SLAM_MMS_KEYS_GNSS_ERROR("ins.gnss_error_code", o->system.ins.gnss_error_code);
     SLAM_MMS_KEY_B("ins.zupt", o->system.ins.zupt);
     SLAM_MMS_KEY_D("ins.zupt_window_s", o->system.ins.zupt_window_s);
     SLAM_MMS_KEY_D("ins.zupt_max_gyro_radps", o->system.ins.zupt_max_gyro_radps);
@@ -420,18 +415,9 @@ const std::vector<std::pair<std::string, KeyHandler>>& Handlers() {
     SLAM_MMS_KEY_B("level2.pos_attitude_cross_covariance",
                    o->system.level2.pos_attitude_cross_covariance);
     SLAM_MMS_KEY_B("level2.gnss_bias_states", o->system.level2.gnss_bias_states);
-    SLAM_MMS_KEY_D("level2.gnss_bias_rtk_fixed.correlated_fraction",
-                   o->system.level2.gnss_bias_rtk_fixed.correlated_fraction);
-    SLAM_MMS_KEY_D("level2.gnss_bias_rtk_fixed.correlation_time_s",
-                   o->system.level2.gnss_bias_rtk_fixed.correlation_time_s);
-    SLAM_MMS_KEY_D("level2.gnss_bias_rtk_float.correlated_fraction",
-                   o->system.level2.gnss_bias_rtk_float.correlated_fraction);
-    SLAM_MMS_KEY_D("level2.gnss_bias_rtk_float.correlation_time_s",
-                   o->system.level2.gnss_bias_rtk_float.correlation_time_s);
-    SLAM_MMS_KEY_D("level2.gnss_bias_code.correlated_fraction",
-                   o->system.level2.gnss_bias_code.correlated_fraction);
-    SLAM_MMS_KEY_D("level2.gnss_bias_code.correlation_time_s",
-                   o->system.level2.gnss_bias_code.correlation_time_s);
+    SLAM_MMS_KEYS_GNSS_ERROR("level2.gnss_bias_rtk_fixed", o->system.level2.gnss_bias_rtk_fixed);
+    SLAM_MMS_KEYS_GNSS_ERROR("level2.gnss_bias_rtk_float", o->system.level2.gnss_bias_rtk_float);
+    SLAM_MMS_KEYS_GNSS_ERROR("level2.gnss_bias_code", o->system.level2.gnss_bias_code);
     SLAM_MMS_KEY_D("level2.gnss_bias_node_interval_s", o->system.level2.gnss_bias_node_interval_s);
     SLAM_MMS_KEY_D("level2.attitude_prior_sigma_rad", o->system.level2.attitude_prior_sigma_rad);
     SLAM_MMS_KEY_I("level2.max_iterations", o->system.level2.max_iterations);
@@ -450,6 +436,7 @@ const std::vector<std::pair<std::string, KeyHandler>>& Handlers() {
 #undef SLAM_MMS_KEY_F
 #undef SLAM_MMS_KEY_I
 #undef SLAM_MMS_KEY_B
+#undef SLAM_MMS_KEYS_GNSS_ERROR
     return h;
   }();
   return kHandlers;

@@ -457,7 +457,9 @@ TEST(InsFilterModelsTest, NonHolonomicConstraintEstimatesTheImuMisalignment) {
         EXPECT_NEAR(m.y(), 0.4, 3.0 * sigma.y());
         EXPECT_LT(sigma.maxCoeff(), 0.1);
       }
-      if (c == 3) EXPECT_EQ(m, Eigen::Vector2d(-0.3, 0.4));
+      if (c == 3) {
+        EXPECT_EQ(m, Eigen::Vector2d(-0.3, 0.4));
+      }
     }
   }
   SetLogSink(previous_sink);
@@ -548,7 +550,9 @@ TEST(InsFilterModelsTest, NonHolonomicConstraintEstimatesTheLeverArmToTheRearAxl
         EXPECT_NEAR(l.y(), kSlip, 3.0 * sigma.y());
         EXPECT_LT(sigma.x(), 0.25);  // from the prior's 1 m
       }
-      if (c == 3) EXPECT_EQ(l, Eigen::Vector2d(kLever, kSlip));
+      if (c == 3) {
+        EXPECT_EQ(l, Eigen::Vector2d(kLever, kSlip));
+      }
     }
   }
   std::printf(

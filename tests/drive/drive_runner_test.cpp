@@ -57,9 +57,12 @@ class DriveRunnerTest : public ::testing::Test {
   }
   static void TearDownTestSuite() {
     std::error_code ec;
-    std::filesystem::remove_all(sim_->dir, ec);
+    if (sim_ != nullptr) std::filesystem::remove_all(sim_->dir, ec);
     delete sim_;
+    sim_ = nullptr;
   }
+  // Where the drive could not be simulated (a full disk) every test fails here, not in a crash.
+  void SetUp() override { ASSERT_NE(sim_, nullptr) << "the simulated drive was not written"; }
   static std::unique_ptr<KittiDriveReader> Open(const std::filesystem::path& dir) {
     auto r = KittiDriveReader::Open(dir, KittiRawReader::Options());
     EXPECT_TRUE(r.ok()) << r.status().ToString();

@@ -78,9 +78,12 @@ class SimulatedDriveTest : public ::testing::Test {
   }
   static void TearDownTestSuite() {
     std::error_code ec;
-    std::filesystem::remove_all(sim_->dir, ec);
+    if (sim_ != nullptr) std::filesystem::remove_all(sim_->dir, ec);
     delete sim_;
+    sim_ = nullptr;
   }
+  // Where the drive could not be simulated (a full disk) every test fails here, not in a crash.
+  void SetUp() override { ASSERT_NE(sim_, nullptr) << "the simulated drive was not written"; }
 
   static MappingSystem::Options OptionsFor(MappingMode mode) {
     MappingSystem::Options o;

@@ -73,9 +73,17 @@ class SensorFaultTest : public ::testing::Test {
   }
   static void TearDownTestSuite() {
     std::error_code ec;
-    std::filesystem::remove_all(sim_->dir, ec);
+    if (sim_ != nullptr) std::filesystem::remove_all(sim_->dir, ec);
     delete sim_;
     delete drive_;
+    sim_ = nullptr;
+    drive_ = nullptr;
+  }
+  // Where the drive could not be simulated or read (a full disk) every test fails here, not in a
+  // crash.
+  void SetUp() override {
+    ASSERT_NE(sim_, nullptr) << "the simulated drive was not written";
+    ASSERT_NE(drive_, nullptr) << "the simulated drive was not read";
   }
 
   static MappingSystem::Options DefaultOptions() {

@@ -272,7 +272,7 @@ StatusOr<SubmapGraph> BuildGraph(const std::vector<DriveAdjustment::Drive>& driv
           }
           break;
         case SubmapFactorKind::kGnss: {
-          // The drive's own bias (level 2's Gauss-Markov nodes), else the datum bias if any.
+          // The drive's own bias node (level 2's Gauss-Markov nodes), else the datum bias if any.
           StatusOr<int> key = f.gnss_bias >= 0 ? GraphBiasKey(d, f.gnss_bias)
                                                : StatusOr<int>(bias ? static_cast<int>(d) : -1);
           st = key.ok()
@@ -282,12 +282,18 @@ StatusOr<SubmapGraph> BuildGraph(const std::vector<DriveAdjustment::Drive>& driv
           break;
         }
         case SubmapFactorKind::kGnssBias: {
-          // A run's first node; with a datum bias it is the datum's offset plus the run's own.
+          // A run's first node. A datum bias would have to be added to every node of the run
+          // (a Gauss-Markov link decays whatever its first node starts from), which one GNSS
+          // factor's single bias cannot express: the two are not combined.
+          if (bias) {
+            st = InvalidArgumentError(
+                "the drive carries its own GNSS bias nodes (level2.gnss_bias_states), which "
+                "gnss_bias_sigma_m cannot be combined with");
+            break;
+          }
           StatusOr<int> key = GraphBiasKey(d, f.gnss_bias);
-          const Eigen::Matrix3d c = f.covariance.topLeftCorner<3, 3>();
-          st = !key.ok() ? key.status()
-               : bias    ? graph.AddGnssBiasLink(static_cast<int>(d), *key, 1.0, c)
-                         : graph.AddGnssBias(*key, c);
+          st =
+              key.ok() ? graph.AddGnssBias(*key, f.covariance.topLeftCorner<3, 3>()) : key.status();
           break;
         }
         case SubmapFactorKind::kGnssBiasLink: {

@@ -203,8 +203,8 @@ TEST(DriveAdjustmentTest, TwoDrivesWithA5mGnssOffsetArePulledTogether) {
 
 // Level 2's Gauss-Markov GNSS bias nodes (Level2Options::gnss_bias_states) in drive b's result:
 // one run over all its fixes, a node per submap. Replayed into the merged graph under drive b's
-// own keys (with a datum bias as well, each run's first node follows the datum), they let b's
-// offset GNSS go: b is pulled onto a.
+// own keys, they let b's offset GNSS go: b is pulled onto a. A datum bias per drive
+// (gnss_bias_sigma_m) is refused beside them, naming the drive.
 TEST(DriveAdjustmentTest, ADrivesOwnGnssBiasNodesAreReplayed) {
   const Street street(1, 0.0, 8.0);
   SyntheticDrive a = MakeDrive(street, -3.0, 0.0, 100.0, Eigen::Vector3d::Zero(), 11);
@@ -229,10 +229,16 @@ TEST(DriveAdjustmentTest, ADrivesOwnGnssBiasNodesAreReplayed) {
     factors.push_back(f);
   }
   b.result.factors = factors;
-  for (double datum_sigma : {0.0, 10.0}) {
+  {
     DriveAdjustment::Options opt;
-    opt.gnss_bias_sigma_m = datum_sigma;
+    opt.gnss_bias_sigma_m = 10.0;
     auto r = DriveAdjustment::Run({{"a", a.result}, {"b", b.result}}, opt);
+    ASSERT_FALSE(r.ok());
+    EXPECT_NE(r.status().message().find("drive 'b'"), std::string::npos) << r.status().ToString();
+    EXPECT_NE(r.status().message().find("gnss_bias_sigma_m"), std::string::npos);
+  }
+  {
+    auto r = DriveAdjustment::Run({{"a", a.result}, {"b", b.result}}, DriveAdjustment::Options());
     ASSERT_TRUE(r.ok()) << r.status().ToString();
     EXPECT_TRUE(r->summary.usable());
     double after = 0.0;
@@ -242,19 +248,18 @@ TEST(DriveAdjustmentTest, ADrivesOwnGnssBiasNodesAreReplayed) {
       ++accepted;
       after = std::max(after, ov.offset_after_m);
     }
-    EXPECT_GE(accepted, 5) << datum_sigma;
-    EXPECT_LT(after, 0.03) << datum_sigma;
-    // b is on a, wherever a went (with datum biases a may move as a whole; without, its GNSS
-    // holds it).
+    EXPECT_GE(accepted, 5);
+    EXPECT_LT(after, 0.03);
+    // b is on a, and a's GNSS holds a where it is.
     Eigen::Vector3d shift_a = Eigen::Vector3d::Zero();
     for (size_t k = 0; k < a.true_poses.size(); ++k) {
       shift_a += r->drives[0].result.submaps[k].T_world_submap.translation() -
                  a.true_poses[k].translation();
     }
     shift_a /= static_cast<double>(a.true_poses.size());
-    if (datum_sigma == 0.0) EXPECT_LT(shift_a.norm(), 0.02);
-    EXPECT_LT(MaxPositionError(r->drives[0].result, a.true_poses, shift_a), 0.05) << datum_sigma;
-    EXPECT_LT(MaxPositionError(r->drives[1].result, b.true_poses, shift_a), 0.05) << datum_sigma;
+    EXPECT_LT(shift_a.norm(), 0.02);
+    EXPECT_LT(MaxPositionError(r->drives[0].result, a.true_poses, shift_a), 0.05);
+    EXPECT_LT(MaxPositionError(r->drives[1].result, b.true_poses, shift_a), 0.05);
   }
   // A link to a bias the drive never added is named.
   b.result.factors[0].gnss_bias_from = 7;

@@ -78,7 +78,8 @@ class DriveAdjustment {
     /// datums (other base stations or network realisations), each drive then moving rigidly
     /// by its estimated offset. 0 (default): one datum. On three simulated drives of one city
     /// with one datum, a free bias (1 or 10 m) let each drive's GNSS be discounted and made every
-    /// drive's ATE worse than with none (docs/merge.md).
+    /// drive's ATE worse than with none (docs/merge.md). Refused (InvalidArgument, naming the
+    /// drive) where a drive carries its own GNSS bias nodes (Level2Options::gnss_bias_states).
     double gnss_bias_sigma_m = 0.0;
     /// Keep the drives' own attitude priors (level 2's pose priors from each drive's POS).
     bool use_pose_priors = true;

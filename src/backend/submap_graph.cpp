@@ -98,6 +98,23 @@ struct SubmapGraph::Impl {
     f.loss = loss;
     factors.push_back(f);
   }
+  /// A new GNSS bias block `key` (>= 0, not yet added), zero, in the problem; `*sqrt_info` the
+  /// square-root information of `covariance` (validated), for the factor that states it.
+  StatusOr<std::array<double, 3>*> NewGnssBias(int key, const Eigen::Matrix3d& covariance,
+                                               const std::string& what,
+                                               Eigen::Matrix3d* sqrt_info) {
+    if (key < 0)
+      return InvalidArgumentError(what + ": key " + std::to_string(key) + " must be >= 0");
+    if (gnss_biases.count(key) != 0) {
+      return InvalidArgumentError(what + ": bias " + std::to_string(key) + " exists");
+    }
+    SLAM_MMS_RETURN_IF_ERROR(ValidateCovariance<3>(covariance, what));
+    *sqrt_info = covariance.llt().matrixL().solve(Eigen::Matrix3d::Identity());
+    auto block = std::make_unique<std::array<double, 3>>();
+    block->fill(0.0);
+    problem->AddParameterBlock(block->data(), 3);
+    return gnss_biases.emplace(key, std::move(block)).first->second.get();
+  }
   void RecordGnssBias(SubmapFactorKind kind, int key, int from_key, double transition,
                       const Eigen::Matrix3d& covariance) {
     SubmapGraphFactor f;
@@ -393,22 +410,10 @@ Status SubmapGraph::AddGnssPrior(SubmapId id, const Eigen::Vector3d& p_world_ant
 
 Status SubmapGraph::AddGnssBias(int key, const Eigen::Matrix3d& prior_covariance) {
   Impl& m = *impl_;
-  if (key < 0) {
-    return InvalidArgumentError("SubmapGraph::AddGnssBias: key " + std::to_string(key) +
-                                " must be >= 0");
-  }
-  if (m.gnss_biases.count(key) != 0) {
-    return InvalidArgumentError("SubmapGraph::AddGnssBias: bias " + std::to_string(key) +
-                                " exists");
-  }
-  SLAM_MMS_RETURN_IF_ERROR(ValidateCovariance<3>(prior_covariance, "SubmapGraph::AddGnssBias"));
-  const Eigen::Matrix3d sqrt_info =
-      prior_covariance.llt().matrixL().solve(Eigen::Matrix3d::Identity());
-  auto block = std::make_unique<std::array<double, 3>>();
-  block->fill(0.0);
-  m.problem->AddParameterBlock(block->data(), 3);
+  Eigen::Matrix3d sqrt_info;
+  SLAM_MMS_ASSIGN_OR_RETURN(
+      auto* block, m.NewGnssBias(key, prior_covariance, "SubmapGraph::AddGnssBias", &sqrt_info));
   m.problem->AddResidualBlock(new ZeroMeanPrior3Factor(sqrt_info), nullptr, block->data());
-  m.gnss_biases.emplace(key, std::move(block));
   m.RecordGnssBias(SubmapFactorKind::kGnssBias, key, -1, 0.0, prior_covariance);
   return OkStatus();
 }
@@ -421,22 +426,15 @@ Status SubmapGraph::AddGnssBiasLink(int from_key, int key, double transition,
   if (from == m.gnss_biases.end()) {
     return NotFoundError(what + ": unknown GNSS bias " + std::to_string(from_key));
   }
-  if (key < 0 || m.gnss_biases.count(key) != 0) {
-    return InvalidArgumentError(what + ": key " + std::to_string(key) +
-                                (key < 0 ? " must be >= 0" : " exists"));
-  }
   if (!(transition >= 0.0 && transition <= 1.0)) {
     return InvalidArgumentError(what + ": transition " + std::to_string(transition) +
                                 " must be in [0, 1]");
   }
-  SLAM_MMS_RETURN_IF_ERROR(ValidateCovariance<3>(covariance, what));
-  const Eigen::Matrix3d sqrt_info = covariance.llt().matrixL().solve(Eigen::Matrix3d::Identity());
-  auto block = std::make_unique<std::array<double, 3>>();
+  Eigen::Matrix3d sqrt_info;
+  SLAM_MMS_ASSIGN_OR_RETURN(auto* block, m.NewGnssBias(key, covariance, what, &sqrt_info));
   for (int k = 0; k < 3; ++k) (*block)[k] = transition * (*from->second)[k];
-  m.problem->AddParameterBlock(block->data(), 3);
   m.problem->AddResidualBlock(new GnssBiasLinkFactor(transition, sqrt_info), nullptr,
                               from->second->data(), block->data());
-  m.gnss_biases.emplace(key, std::move(block));
   m.RecordGnssBias(SubmapFactorKind::kGnssBiasLink, key, from_key, transition, covariance);
   return OkStatus();
 }

@@ -370,18 +370,16 @@ StatusOr<DriveResult> ReadDriveResult(const fs::path& dir, const DriveResultRead
       SLAM_MMS_ASSIGN_OR_RETURN(int64_t bias, r.Get<int64_t>(jf, w, "gnss_bias", &Reader::Integer));
       f.gnss_bias = static_cast<int>(bias);
     } else if (IsGnssBiasKind(f.kind)) {
-      SLAM_MMS_ASSIGN_OR_RETURN(int64_t bias, r.Get<int64_t>(jf, w, "gnss_bias", &Reader::Integer));
-      if (bias < 0 || bias > std::numeric_limits<int>::max()) {
-        return r.Bad(w + ".gnss_bias", "must be a bias key >= 0");
-      }
-      f.gnss_bias = static_cast<int>(bias);
-      if (f.kind == SubmapFactorKind::kGnssBiasLink) {
-        SLAM_MMS_ASSIGN_OR_RETURN(int64_t from,
-                                  r.Get<int64_t>(jf, w, "gnss_bias_from", &Reader::Integer));
-        if (from < 0 || from > std::numeric_limits<int>::max()) {
-          return r.Bad(w + ".gnss_bias_from", "must be a bias key >= 0");
+      auto bias_key = [&](const char* key) -> StatusOr<int> {
+        SLAM_MMS_ASSIGN_OR_RETURN(int64_t v, r.Get<int64_t>(jf, w, key, &Reader::Integer));
+        if (v < 0 || v > std::numeric_limits<int>::max()) {
+          return r.Bad(w + "." + key, "must be a bias key >= 0");
         }
-        f.gnss_bias_from = static_cast<int>(from);
+        return static_cast<int>(v);
+      };
+      SLAM_MMS_ASSIGN_OR_RETURN(f.gnss_bias, bias_key("gnss_bias"));
+      if (f.kind == SubmapFactorKind::kGnssBiasLink) {
+        SLAM_MMS_ASSIGN_OR_RETURN(f.gnss_bias_from, bias_key("gnss_bias_from"));
         SLAM_MMS_ASSIGN_OR_RETURN(const Json* phi, r.Field(jf, w, "transition"));
         if (!phi->is_number() || !(phi->get<double>() >= 0.0 && phi->get<double>() <= 1.0)) {
           return r.Bad(w + ".transition", "must be a number in [0, 1]");

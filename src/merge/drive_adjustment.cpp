@@ -281,16 +281,7 @@ StatusOr<SubmapGraph> BuildGraph(const std::vector<DriveAdjustment::Drive>& driv
                    : key.status();
           break;
         }
-        case SubmapFactorKind::kGnssBias: {
-          // A run's first node. A datum bias would have to be added to every node of the run
-          // (a Gauss-Markov link decays whatever its first node starts from), which one GNSS
-          // factor's single bias cannot express: the two are not combined.
-          if (bias) {
-            st = InvalidArgumentError(
-                "the drive carries its own GNSS bias nodes (level2.gnss_bias_states), which "
-                "gnss_bias_sigma_m cannot be combined with");
-            break;
-          }
+        case SubmapFactorKind::kGnssBias: {  // a run's first node (no datum bias: Run)
           StatusOr<int> key = GraphBiasKey(d, f.gnss_bias);
           st =
               key.ok() ? graph.AddGnssBias(*key, f.covariance.topLeftCorner<3, 3>()) : key.status();
@@ -381,6 +372,17 @@ StatusOr<DriveAdjustment::Result> DriveAdjustment::Run(std::vector<Drive> drives
   for (const Drive& d : drives) {
     if (d.result.submaps.empty()) {
       return InvalidArgumentError("DriveAdjustment::Run: drive '" + d.name + "' has no submaps");
+    }
+    // A datum bias would have to be added to every node of a run of the drive's own GNSS bias
+    // nodes (a Gauss-Markov link decays whatever its first node starts from), which one GNSS
+    // factor's single bias cannot express: the two are not combined.
+    if (options.gnss_bias_sigma_m > 0.0 &&
+        std::any_of(
+            d.result.factors.begin(), d.result.factors.end(),
+            [](const SubmapGraphFactor& f) { return f.kind == SubmapFactorKind::kGnssBias; })) {
+      return InvalidArgumentError("DriveAdjustment::Run: drive '" + d.name +
+                                  "' carries its own GNSS bias nodes (level2.gnss_bias_states), "
+                                  "which gnss_bias_sigma_m cannot be combined with");
     }
   }
   Result out;

@@ -9,55 +9,9 @@
 #include <vector>
 
 #include "core/voxel_grid.hpp"
+#include "core/voxel_sort.hpp"
 
 namespace slam_mms {
-namespace {
-
-using internal::VoxelCell;
-
-struct VoxelKey {
-  VoxelCell cell;
-  uint32_t index;  // input point
-};
-
-// Sorts by (cell, index): the voxels in cell order, each voxel's points in input order (a
-// deterministic summation order). Where the cells span < 2^21 per axis (200 km at 0.1 m) they
-// are packed relative to the lowest cell (PackVoxelCell: the same order) and (key, index) pairs
-// are sorted: a third of the time of the three-way comparison.
-void SortVoxelKeys(std::vector<VoxelKey>* keys) {
-  if (keys->empty()) return;
-  // A cloud already in cell order (one that VoxelDownsample wrote, downsampled again at the same
-  // size: the map entropy of a final map) needs no sort; the check is one pass.
-  if (std::is_sorted(keys->begin(), keys->end(), [](const VoxelKey& x, const VoxelKey& y) {
-        return x.cell < y.cell;
-      })) {
-    return;
-  }
-  VoxelCell lo = keys->front().cell;
-  for (const VoxelKey& k : *keys) {
-    lo.x = std::min(lo.x, k.cell.x);
-    lo.y = std::min(lo.y, k.cell.y);
-    lo.z = std::min(lo.z, k.cell.z);
-  }
-  std::vector<std::pair<uint64_t, uint32_t>> packed(keys->size());
-  for (size_t i = 0; i < keys->size(); ++i) {
-    const VoxelKey& k = (*keys)[i];
-    if (!internal::PackVoxelCell(k.cell, lo, &packed[i].first)) {
-      std::sort(keys->begin(), keys->end(), [](const VoxelKey& x, const VoxelKey& y) {
-        if (x.cell != y.cell) return x.cell < y.cell;
-        return x.index < y.index;
-      });
-      return;
-    }
-    packed[i].second = k.index;
-  }
-  std::sort(packed.begin(), packed.end());
-  for (size_t i = 0; i < packed.size(); ++i) {
-    (*keys)[i] = {internal::UnpackVoxelCell(packed[i].first, lo), packed[i].second};
-  }
-}
-
-}  // namespace
 
 StatusOr<PointCloud> VoxelDownsample(const PointCloudView& cloud, double voxel_size_m) {
   if (!(voxel_size_m > 0.0) || !std::isfinite(voxel_size_m)) {
@@ -69,12 +23,12 @@ StatusOr<PointCloud> VoxelDownsample(const PointCloudView& cloud, double voxel_s
                                 " points; at most 2^32 - 1 are supported");
   }
   const internal::VoxelGrid grid(voxel_size_m);
-  std::vector<VoxelKey> keys;
+  std::vector<internal::CellIndex> keys;
   keys.reserve(cloud.size);
   for (size_t i = 0; i < cloud.size; ++i) {
     const Eigen::Vector3f p = cloud.Point(i);
     if (!p.allFinite()) continue;
-    VoxelKey k;
+    internal::CellIndex k;
     if (!grid.CellOf(p, &k.cell)) {
       return InvalidArgumentError(
           "VoxelDownsample: point " + std::to_string(i) +
@@ -84,7 +38,7 @@ StatusOr<PointCloud> VoxelDownsample(const PointCloudView& cloud, double voxel_s
     k.index = static_cast<uint32_t>(i);
     keys.push_back(k);
   }
-  SortVoxelKeys(&keys);
+  internal::SortByCellThenIndex(&keys);
   PointCloud out;
   size_t begin = 0;
   while (begin < keys.size()) {

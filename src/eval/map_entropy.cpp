@@ -8,8 +8,10 @@
 #include <limits>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
+#include "core/radix_sort.hpp"
 #include "core/voxel_grid.hpp"
 #include "eval/points_kdtree.hpp"
 #include "slam_mms/core/voxel_downsample.hpp"
@@ -66,7 +68,10 @@ class NeighbourGrid {
       }
       keyed[i].second = static_cast<uint32_t>(i);
     }
-    std::sort(keyed.begin(), keyed.end());  // by cell, then by input index: deterministic
+    {  // by cell, then by input index (stable, from index order): deterministic
+      std::vector<std::pair<uint64_t, uint32_t>> scratch;
+      slam_mms::internal::RadixSortByKey(&keyed, &scratch);
+    }
     points_.resize(points.size());
     for (int a = 0; a < 3; ++a) axis_[a].resize(points.size());
     for (size_t i = 0; i < keyed.size(); ++i) {

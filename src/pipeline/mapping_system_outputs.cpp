@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "core/voxel_grid.hpp"
+#include "core/voxel_sort.hpp"
 #include "pipeline/mapping_system_impl.hpp"
 #include "slam_mms/core/logging.hpp"
 #include "slam_mms/core/voxel_downsample.hpp"
@@ -46,26 +47,19 @@ namespace {
 MapPointStamps EarliestPerVoxel(const PointCloud& cloud, const MapPointStamps& in, double voxel_m) {
   MapPointStamps out;
   if (in.size() != cloud.size() || in.scan_index.size() != cloud.size()) return out;
-  struct Key {
-    internal::VoxelCell cell;
-    uint32_t index;
-  };
   const internal::VoxelGrid grid(voxel_m);
-  std::vector<Key> keys;
+  std::vector<internal::CellIndex> keys;
   keys.reserve(cloud.size());
   for (size_t i = 0; i < cloud.size(); ++i) {
     const Eigen::Vector3f& p = cloud.points()[i];
-    Key k;
+    internal::CellIndex k;
     // VoxelDownsample drops non-finite points and fails on out-of-range ones (then the caller
     // has no downsampled cloud to match).
     if (!grid.CellOf(p, &k.cell)) continue;
     k.index = static_cast<uint32_t>(i);
     keys.push_back(k);
   }
-  std::sort(keys.begin(), keys.end(), [](const Key& a, const Key& b) {
-    if (a.cell != b.cell) return a.cell < b.cell;
-    return a.index < b.index;
-  });
+  internal::SortByCellThenIndex(&keys);  // VoxelDownsample's order
   for (size_t begin = 0; begin < keys.size();) {
     size_t end = begin + 1;
     size_t best = keys[begin].index;

@@ -3,7 +3,11 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
+#include <utility>
 #include <vector>
+
+#include "core/radix_sort.hpp"
 
 namespace slam_mms::internal {
 namespace {
@@ -125,25 +129,85 @@ PointCloud VoxelAccumulator::Cloud(std::vector<int64_t>* first_time_ns,
   const bool stamps = track_ && first_time_ns_.size() == size_;
   if (first_time_ns != nullptr) first_time_ns->clear();
   if (first_scan != nullptr) first_scan->clear();
-  // (cell, slot) pairs sorted by cell (cells are unique): the sort compares contiguous cells
-  // instead of chasing a pointer into the table per comparison.
-  std::vector<std::pair<VoxelCell, size_t>> sorted;
-  sorted.reserve(size_);
-  for (size_t slot = 0; slot < table_.size(); ++slot) {
-    if (table_[slot].count != 0) sorted.emplace_back(table_[slot].cell, slot);
+  // The occupied slots in cell order (cells are unique): each cell's offsets from the lowest
+  // cell, packed into one key with as many bits per axis as the cloud spans ((x, y, z) order),
+  // the slot in the low bits, radix-sorted (8 bytes a voxel, and as many for the sort's scratch).
+  // A submap's key takes about 55 bits (a 1.6 km x 1.6 km x 51 m box at 0.1 m, 14 + 14 + 9 bits,
+  // and 18-23 bits of slot); a cloud too wide for 64 has its cells compared instead.
+  VoxelCell lo{std::numeric_limits<int32_t>::max(), std::numeric_limits<int32_t>::max(),
+               std::numeric_limits<int32_t>::max()};
+  VoxelCell hi{std::numeric_limits<int32_t>::min(), std::numeric_limits<int32_t>::min(),
+               std::numeric_limits<int32_t>::min()};
+  for (const Entry& e : table_) {
+    if (e.count == 0) continue;
+    lo = {std::min(lo.x, e.cell.x), std::min(lo.y, e.cell.y), std::min(lo.z, e.cell.z)};
+    hi = {std::max(hi.x, e.cell.x), std::max(hi.y, e.cell.y), std::max(hi.z, e.cell.z)};
   }
-  std::sort(sorted.begin(), sorted.end(),
-            [](const auto& a, const auto& b) { return a.first < b.first; });
+  auto bits = [](int64_t span) {  // bits of the largest offset
+    return span <= 0 ? 0 : 64 - __builtin_clzll(static_cast<uint64_t>(span));
+  };
+  const int bx = bits(static_cast<int64_t>(hi.x) - lo.x);
+  const int by = bits(static_cast<int64_t>(hi.y) - lo.y);
+  const int bz = bits(static_cast<int64_t>(hi.z) - lo.z);
+  const int bs = bits(static_cast<int64_t>(table_.size()) - 1);
   PointCloud out;
-  out.reserve(sorted.size());
-  for (const auto& [cell, slot] : sorted) {
-    const Entry* e = &table_[slot];
-    const double n = e->count;
-    const Eigen::Vector3d corner = grid_.Corner(cell);
-    const Eigen::Vector3d mean = corner + Eigen::Vector3d(e->dx, e->dy, e->dz) / n;
-    out.Add(mean.cast<float>(), e->intensity / static_cast<float>(n));
-    if (stamps && first_time_ns != nullptr) first_time_ns->push_back(first_time_ns_[order_[slot]]);
-    if (stamps && first_scan != nullptr) first_scan->push_back(first_scan_[order_[slot]]);
+  out.reserve(size_);
+  if (stamps && first_time_ns != nullptr) first_time_ns->reserve(size_);
+  if (stamps && first_scan != nullptr) first_scan->reserve(size_);
+  // The voxels in the order given by slot_at(0 .. n-1): each is up to four cache misses (its
+  // entry, its creation index, its two stamps) in tables far larger than the cache, so the
+  // entries kAhead voxels on are prefetched, and their stamps once the index is likely in.
+  auto emit_all = [&](size_t n, auto slot_at) {
+    constexpr size_t kAhead = 16;
+    for (size_t k = 0; k < n; ++k) {
+      if (k + kAhead < n) {
+        const size_t ahead = slot_at(k + kAhead);
+        __builtin_prefetch(&table_[ahead]);
+        if (stamps) __builtin_prefetch(&order_[ahead]);
+      }
+      if (stamps && k + kAhead / 2 < n) {
+        const uint32_t created = order_[slot_at(k + kAhead / 2)];
+        __builtin_prefetch(&first_time_ns_[created]);
+        __builtin_prefetch(&first_scan_[created]);
+      }
+      const size_t slot = slot_at(k);
+      const Entry* e = &table_[slot];
+      const double count = e->count;
+      const Eigen::Vector3d corner = grid_.Corner(e->cell);
+      const Eigen::Vector3d mean = corner + Eigen::Vector3d(e->dx, e->dy, e->dz) / count;
+      out.Add(mean.cast<float>(), e->intensity / static_cast<float>(count));
+      if (stamps && first_time_ns != nullptr) {
+        first_time_ns->push_back(first_time_ns_[order_[slot]]);
+      }
+      if (stamps && first_scan != nullptr) first_scan->push_back(first_scan_[order_[slot]]);
+    }
+  };
+  if (size_ > 0 && bx + by + bz + bs <= 64) {
+    std::vector<uint64_t> keys;
+    keys.reserve(size_);
+    for (size_t slot = 0; slot < table_.size(); ++slot) {
+      const VoxelCell& c = table_[slot].cell;
+      if (table_[slot].count == 0) continue;
+      uint64_t key = static_cast<uint64_t>(static_cast<int64_t>(c.x) - lo.x);
+      key = (key << by) | static_cast<uint64_t>(static_cast<int64_t>(c.y) - lo.y);
+      key = (key << bz) | static_cast<uint64_t>(static_cast<int64_t>(c.z) - lo.z);
+      keys.push_back(bs == 0 ? key : (key << bs) | slot);
+    }
+    {
+      std::vector<uint64_t> scratch;
+      RadixSort(&keys, &scratch);
+    }
+    const uint64_t slot_mask = bs == 0 ? 0 : (~uint64_t{0} >> (64 - bs));
+    emit_all(keys.size(), [&](size_t k) { return static_cast<size_t>(keys[k] & slot_mask); });
+  } else {
+    std::vector<std::pair<VoxelCell, size_t>> order;  // contiguous cells, not a pointer each
+    order.reserve(size_);
+    for (size_t slot = 0; slot < table_.size(); ++slot) {
+      if (table_[slot].count != 0) order.emplace_back(table_[slot].cell, slot);
+    }
+    std::sort(order.begin(), order.end(),
+              [](const auto& a, const auto& b) { return a.first < b.first; });
+    emit_all(order.size(), [&](size_t k) { return order[k].second; });
   }
   return out;
 }

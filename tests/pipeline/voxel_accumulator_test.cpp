@@ -196,6 +196,48 @@ TEST(VoxelAccumulatorTest, KeepsVoxelsFarFromTheOrigin) {
   EXPECT_EQ(tiny.num_out_of_range(), 2u);
 }
 
+// Cloud() lists the voxels in cell order ((x, y, z), as VoxelDownsample does), both where the
+// cells fit one 64-bit sort key (a submap: radix-sorted keys) and where they do not (clusters
+// hundreds of km apart: the cells compared).
+TEST(VoxelAccumulatorTest, CloudIsInCellOrder) {
+  // Points on cell centres of 0.125 m cells (exact in float and double, far away too), so that
+  // each output centroid names its cell exactly.
+  constexpr double kVoxel = 0.125;
+  std::mt19937 rng(9);
+  std::uniform_int_distribution<int> horizontal(-320, 320);
+  std::uniform_int_distribution<int> vertical(-64, 64);
+  PointCloud cloud;
+  for (int i = 0; i < 100000; ++i) {
+    cloud.Add(Eigen::Vector3f((horizontal(rng) + 0.5f) * kVoxel, (horizontal(rng) + 0.5f) * kVoxel,
+                              (vertical(rng) + 0.5f) * kVoxel),
+              1.0f);
+  }
+  // 2^18 m apart on every axis: 2^21 cells, so 3 x 22 bits, more than one 64-bit key holds.
+  for (const double far_m : {0.0, 262144.0}) {
+    SCOPED_TRACE(far_m);
+    VoxelAccumulator acc(kVoxel);
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.translation() = Eigen::Vector3d(1000.0, -2000.0, 30.0);
+    acc.Add(cloud, T, 100.0);
+    T.translation() = Eigen::Vector3d(1000.0 + far_m, -2000.0 - far_m, 30.0 + far_m);
+    acc.Add(cloud, T, 100.0);
+    const PointCloud out = acc.Cloud();
+    ASSERT_EQ(out.size(), acc.size());
+    ASSERT_GT(out.size(), 50000u);
+    const VoxelGrid grid(kVoxel);
+    VoxelCell prev;
+    for (size_t k = 0; k < out.size(); ++k) {
+      VoxelCell c;
+      const Eigen::Vector3d p = out.points()[k].cast<double>();
+      ASSERT_TRUE(grid.CellOf(p, &c));
+      if (k > 0) {
+        ASSERT_TRUE(prev < c) << k;
+      }
+      prev = c;
+    }
+  }
+}
+
 // Points on and next to voxel faces (decimal faces such as 0.3 and 3.0, where p * (1 / voxel) and
 // p / voxel disagree, and negative ones): the accumulator and VoxelDownsample put them in the same
 // voxels, the one cell arithmetic of core/voxel_grid.hpp.

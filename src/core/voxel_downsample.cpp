@@ -1,11 +1,9 @@
 #include "slam_mms/core/voxel_downsample.hpp"
 
-#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 #include <string>
-#include <utility>
 #include <vector>
 
 #include "core/voxel_grid.hpp"

@@ -23,9 +23,11 @@
 //
 // Keys. A VoxelCell (three int32) is the exact key of a cell; HashVoxelCell mixes all 96 bits into
 // 64 for hash tables (tables compare the full cell, so hash collisions cost time, never merge
-// cells). PackVoxelCell is the one compact key: 21 bits per axis of (cell - base), exact and
-// ordered like (x, y, z) within a span of 2^21 cells per axis, and it fails outside that span
-// (no silent wrap).
+// cells). PackVoxelCell is the one compact key of a fixed layout: 21 bits per axis of
+// (cell - base), exact and ordered like (x, y, z) within a span of 2^21 cells per axis, and it
+// fails outside that span (no silent wrap). FittedCellKey is the one key fitted to a known set of
+// cells (as many bits per axis as the set spans, low bits left for a payload such as an index),
+// for the voxel sorts that radix-sort one 64-bit word per point.
 //
 // Thread safety: value types and pure functions; safe to use concurrently.
 
@@ -104,6 +106,50 @@ inline VoxelCell UnpackVoxelCell(uint64_t key, const VoxelCell& base) {
       static_cast<int32_t>(static_cast<int64_t>((key >> kVoxelPackBits) & kMask) + base.y),
       static_cast<int32_t>(static_cast<int64_t>(key & kMask) + base.z)};
 }
+
+/// Bits needed to write v (0 for 0).
+inline int BitWidth(uint64_t v) { return v == 0 ? 0 : 64 - __builtin_clzll(v); }
+
+/// A 64-bit key fitted to the cells in [lo, hi] (per axis): (cell - lo) with as many bits per
+/// axis as hi - lo needs, x highest, then the payload in the low `payload_bits`. Exact, and keys
+/// order like (cell, payload). Usable where fits(): the widths total <= 64.
+class FittedCellKey {
+ public:
+  /// lo <= hi per axis (the bounds of the cells that will be packed).
+  FittedCellKey(const VoxelCell& lo, const VoxelCell& hi, int payload_bits)
+      : lo_(lo),
+        bx_(Width(lo.x, hi.x)),
+        by_(Width(lo.y, hi.y)),
+        bz_(Width(lo.z, hi.z)),
+        bp_(payload_bits) {}
+  bool fits() const { return bx_ + by_ + bz_ + bp_ <= 64; }
+  /// `cell` in [lo, hi], `payload` < 2^payload_bits.
+  uint64_t Pack(const VoxelCell& cell, uint64_t payload) const {
+    uint64_t key = Offset(cell.x, lo_.x);
+    key = (key << by_) | Offset(cell.y, lo_.y);
+    key = (key << bz_) | Offset(cell.z, lo_.z);
+    return bp_ == 0 ? key : (key << bp_) | payload;
+  }
+  uint64_t Payload(uint64_t key) const { return Field(key, 0, bp_); }
+  VoxelCell Cell(uint64_t key) const {
+    return {static_cast<int32_t>(static_cast<int64_t>(Field(key, bp_ + bz_ + by_, bx_)) + lo_.x),
+            static_cast<int32_t>(static_cast<int64_t>(Field(key, bp_ + bz_, by_)) + lo_.y),
+            static_cast<int32_t>(static_cast<int64_t>(Field(key, bp_, bz_)) + lo_.z)};
+  }
+
+ private:
+  static int Width(int32_t lo, int32_t hi) {
+    return hi <= lo ? 0 : BitWidth(static_cast<uint64_t>(static_cast<int64_t>(hi) - lo));
+  }
+  static uint64_t Offset(int32_t v, int32_t lo) {
+    return static_cast<uint64_t>(static_cast<int64_t>(v) - lo);
+  }
+  static uint64_t Field(uint64_t key, int shift, int width) {
+    return width == 0 ? uint64_t{0} : (key >> shift) & (~uint64_t{0} >> (64 - width));
+  }
+  VoxelCell lo_;
+  int bx_, by_, bz_, bp_;
+};
 
 /// Cubic cells of edge size() with a corner at origin() (see the top of this file).
 class VoxelGrid {

@@ -57,28 +57,19 @@ void SortByCellThenIndex(std::vector<CellIndex>* keys) {
     hi = {std::max(hi.x, k.cell.x), std::max(hi.y, k.cell.y), std::max(hi.z, k.cell.z)};
     max_index = std::max(max_index, k.index);
   }
-  auto bits = [](uint64_t v) { return v == 0 ? 0 : 64 - __builtin_clzll(v); };
-  const int bx = bits(static_cast<uint64_t>(static_cast<int64_t>(hi.x) - lo.x));
-  const int by = bits(static_cast<uint64_t>(static_cast<int64_t>(hi.y) - lo.y));
-  const int bz = bits(static_cast<uint64_t>(static_cast<int64_t>(hi.z) - lo.z));
-  const int bi = bits(max_index);
-  if (bx + by + bz + bi > 64) {
+  const FittedCellKey layout(lo, hi, BitWidth(max_index));
+  if (!layout.fits()) {
     SortWideCloud(keys, lo);
     return;
   }
-  // One 64-bit key per point: the cell's offsets from the lowest cell with as many bits per axis
-  // as the cloud spans ((x, y, z) order), then the index. The keys are unique, so their order is
-  // (cell, index). The points' records are freed during the sort and rebuilt from the keys: with
-  // them the peak is 24 bytes a point (std::sort needed the 16 of the records alone; the final
-  // map runs this sort for VoxelDownsample and for its stamps at once, and together they need
-  // what they needed before, 48 bytes a point).
+  // One 64-bit key per point (the cell, then the index: FittedCellKey). The keys are unique, so
+  // their order is (cell, index). The points' records are freed during the sort and rebuilt from
+  // the keys: with them the peak is 24 bytes a point (std::sort needed the 16 of the records
+  // alone; the final map runs this sort for VoxelDownsample and for its stamps at once, and
+  // together they need what they needed before, 48 bytes a point).
   std::vector<uint64_t> sorted(keys->size());
   for (size_t i = 0; i < keys->size(); ++i) {
-    const CellIndex& k = (*keys)[i];
-    uint64_t key = static_cast<uint64_t>(static_cast<int64_t>(k.cell.x) - lo.x);
-    key = (key << by) | static_cast<uint64_t>(static_cast<int64_t>(k.cell.y) - lo.y);
-    key = (key << bz) | static_cast<uint64_t>(static_cast<int64_t>(k.cell.z) - lo.z);
-    sorted[i] = bi == 0 ? key : (key << bi) | k.index;
+    sorted[i] = layout.Pack((*keys)[i].cell, (*keys)[i].index);
   }
   const size_t n = keys->size();
   std::vector<CellIndex>().swap(*keys);
@@ -87,16 +78,8 @@ void SortByCellThenIndex(std::vector<CellIndex>* keys) {
     RadixSort(&sorted, &scratch);
   }
   keys->resize(n);
-  auto field = [](uint64_t key, int shift, int width) {
-    return width == 0 ? uint64_t{0} : (key >> shift) & (~uint64_t{0} >> (64 - width));
-  };
   for (size_t i = 0; i < n; ++i) {
-    const uint64_t key = sorted[i];
-    CellIndex& k = (*keys)[i];
-    k.index = static_cast<uint32_t>(field(key, 0, bi));
-    k.cell.z = static_cast<int32_t>(static_cast<int64_t>(field(key, bi, bz)) + lo.z);
-    k.cell.y = static_cast<int32_t>(static_cast<int64_t>(field(key, bi + bz, by)) + lo.y);
-    k.cell.x = static_cast<int32_t>(static_cast<int64_t>(field(key, bi + bz + by, bx)) + lo.x);
+    (*keys)[i] = {layout.Cell(sorted[i]), static_cast<uint32_t>(layout.Payload(sorted[i]))};
   }
 }
 

@@ -130,8 +130,8 @@ PointCloud VoxelAccumulator::Cloud(std::vector<int64_t>* first_time_ns,
   if (first_time_ns != nullptr) first_time_ns->clear();
   if (first_scan != nullptr) first_scan->clear();
   // The occupied slots in cell order (cells are unique): each cell's offsets from the lowest
-  // cell, packed into one key with as many bits per axis as the cloud spans ((x, y, z) order),
-  // the slot in the low bits, radix-sorted (8 bytes a voxel, and as many for the sort's scratch).
+  // cell with as many bits per axis as the cloud spans and the slot below them (FittedCellKey),
+  // radix-sorted (8 bytes a voxel, and as many for the sort's scratch).
   // A submap's key takes about 55 bits (a 1.6 km x 1.6 km x 51 m box at 0.1 m, 14 + 14 + 9 bits,
   // and 18-23 bits of slot); a cloud too wide for 64 has its cells compared instead.
   VoxelCell lo{std::numeric_limits<int32_t>::max(), std::numeric_limits<int32_t>::max(),
@@ -143,13 +143,7 @@ PointCloud VoxelAccumulator::Cloud(std::vector<int64_t>* first_time_ns,
     lo = {std::min(lo.x, e.cell.x), std::min(lo.y, e.cell.y), std::min(lo.z, e.cell.z)};
     hi = {std::max(hi.x, e.cell.x), std::max(hi.y, e.cell.y), std::max(hi.z, e.cell.z)};
   }
-  auto bits = [](int64_t span) {  // bits of the largest offset
-    return span <= 0 ? 0 : 64 - __builtin_clzll(static_cast<uint64_t>(span));
-  };
-  const int bx = bits(static_cast<int64_t>(hi.x) - lo.x);
-  const int by = bits(static_cast<int64_t>(hi.y) - lo.y);
-  const int bz = bits(static_cast<int64_t>(hi.z) - lo.z);
-  const int bs = bits(static_cast<int64_t>(table_.size()) - 1);
+  const FittedCellKey layout(lo, hi, BitWidth(table_.size() == 0 ? 0 : table_.size() - 1));
   PointCloud out;
   out.reserve(size_);
   if (stamps && first_time_ns != nullptr) first_time_ns->reserve(size_);
@@ -182,23 +176,17 @@ PointCloud VoxelAccumulator::Cloud(std::vector<int64_t>* first_time_ns,
       if (stamps && first_scan != nullptr) first_scan->push_back(first_scan_[order_[slot]]);
     }
   };
-  if (size_ > 0 && bx + by + bz + bs <= 64) {
+  if (size_ > 0 && layout.fits()) {
     std::vector<uint64_t> keys;
     keys.reserve(size_);
     for (size_t slot = 0; slot < table_.size(); ++slot) {
-      const VoxelCell& c = table_[slot].cell;
-      if (table_[slot].count == 0) continue;
-      uint64_t key = static_cast<uint64_t>(static_cast<int64_t>(c.x) - lo.x);
-      key = (key << by) | static_cast<uint64_t>(static_cast<int64_t>(c.y) - lo.y);
-      key = (key << bz) | static_cast<uint64_t>(static_cast<int64_t>(c.z) - lo.z);
-      keys.push_back(bs == 0 ? key : (key << bs) | slot);
+      if (table_[slot].count != 0) keys.push_back(layout.Pack(table_[slot].cell, slot));
     }
     {
       std::vector<uint64_t> scratch;
       RadixSort(&keys, &scratch);
     }
-    const uint64_t slot_mask = bs == 0 ? 0 : (~uint64_t{0} >> (64 - bs));
-    emit_all(keys.size(), [&](size_t k) { return static_cast<size_t>(keys[k] & slot_mask); });
+    emit_all(keys.size(), [&](size_t k) { return static_cast<size_t>(layout.Payload(keys[k])); });
   } else {
     std::vector<std::pair<VoxelCell, size_t>> order;  // contiguous cells, not a pointer each
     order.reserve(size_);

@@ -10,6 +10,7 @@
 #include <random>
 #include <set>
 #include <unordered_set>
+#include <utility>
 #include <vector>
 
 namespace slam_mms::internal {
@@ -257,6 +258,42 @@ TEST(VoxelGridTest, PackedKeysAreExactOrderedAndNeverWrap) {
   ASSERT_TRUE(PackVoxelCell({1001, (1 << 21) - 6, (1 << 25) + 7}, base, &key));
   EXPECT_EQ(UnpackVoxelCell(key, base), (VoxelCell{1001, (1 << 21) - 6, (1 << 25) + 7}));
   EXPECT_FALSE(PackVoxelCell({999, 0, 1 << 25}, base, &key));
+}
+
+// FittedCellKey: exact round trip of cell and payload, keys ordered like (cell, payload), widths
+// from the bounds (a set that needs more than 64 bits does not fit).
+TEST(FittedCellKeyTest, RoundTripAndOrder) {
+  const VoxelCell lo{-1000, 5000, -3};
+  const VoxelCell hi{2000, 5300, 60};
+  const FittedCellKey layout(lo, hi, BitWidth(99999));
+  ASSERT_TRUE(layout.fits());
+  std::mt19937 rng(2);
+  std::uniform_int_distribution<int32_t> x(lo.x, hi.x), y(lo.y, hi.y), z(lo.z, hi.z);
+  std::uniform_int_distribution<uint32_t> payload(0, 99999);
+  std::vector<std::pair<VoxelCell, uint32_t>> items(5000);
+  for (auto& item : items) item = {{x(rng), y(rng), z(rng)}, payload(rng)};
+  items.push_back({lo, 0});
+  items.push_back({hi, 99999});
+  for (const auto& [cell, p] : items) {
+    const uint64_t key = layout.Pack(cell, p);
+    ASSERT_TRUE(layout.Cell(key) == cell);
+    ASSERT_EQ(layout.Payload(key), p);
+  }
+  for (size_t i = 1; i < items.size(); ++i) {
+    const auto& a = items[i - 1];
+    const auto& b = items[i];
+    const bool less = a.first != b.first ? a.first < b.first : a.second < b.second;
+    EXPECT_EQ(layout.Pack(a.first, a.second) < layout.Pack(b.first, b.second), less) << i;
+  }
+  // One cell, no payload: a zero-width key.
+  const FittedCellKey one(lo, lo, 0);
+  EXPECT_EQ(one.Pack(lo, 0), 0u);
+  EXPECT_TRUE(one.Cell(0) == lo);
+  // 3 x 22 bits of span: more than one 64-bit word.
+  EXPECT_FALSE(FittedCellKey({0, 0, 0}, {1 << 21, 1 << 21, 1 << 21}, 0).fits());
+  EXPECT_EQ(BitWidth(0), 0);
+  EXPECT_EQ(BitWidth(1), 1);
+  EXPECT_EQ(BitWidth(~uint64_t{0}), 64);
 }
 
 }  // namespace

@@ -31,6 +31,10 @@
 #include <string>
 #include <vector>
 
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
+
 #include "app_common/huge_page_malloc.hpp"
 #include "slam_mms/core/logging.hpp"
 #include "slam_mms/drive/drive_runner.hpp"
@@ -216,6 +220,18 @@ double ProcStatusMb(const char* field) {
   return -1.0;
 }
 
+// The bytes the program holds from malloc, in MiB (glibc's mallinfo2 over all arenas: in use in
+// the heaps plus the blocks mapped on their own); -1 without glibc. Beside the RSS it tells live
+// data from memory the allocator keeps after a free.
+double HeapInUseMb() {
+#if defined(__GLIBC__)
+  const struct mallinfo2 mi = mallinfo2();
+  return static_cast<double>(mi.uordblks + mi.hblkhd) / (1024.0 * 1024.0);
+#else
+  return -1.0;
+#endif
+}
+
 struct Percentiles {
   double median = 0, p90 = 0, max = 0, mean = 0;
 };
@@ -277,7 +293,8 @@ struct RssSample {
   size_t scans = 0;
   double seconds = 0.0;
   double rss_mb = 0.0;
-  double hwm_mb = 0.0;  // VmHWM so far: the peak of a drive cut at this point
+  double hwm_mb = 0.0;   // VmHWM so far: the peak of a drive cut at this point
+  double heap_mb = 0.0;  // HeapInUseMb()
 };
 
 struct Report {
@@ -323,13 +340,16 @@ void PrintTable(const Report& r) {
   std::printf("memory: peak RSS (VmHWM%s) %.1f MiB, %.1f MiB before Finish(); final surfels %zu\n",
               r.peak_reset ? " since the drive started" : ", including the simulation",
               r.peak_rss_mb, r.peak_rss_before_finish_mb, r.final_surfels);
-  std::printf("| scans done | wall [s] | RSS [MiB] | peak so far [MiB] |\n|---:|---:|---:|---:|\n");
+  std::printf(
+      "| scans done | wall [s] | RSS [MiB] | peak so far [MiB] | heap in use [MiB] "
+      "|\n|---:|---:|---:|---:|---:|\n");
   // At most ~12 rows here (the JSON has every sample).
   const size_t step = std::max<size_t>(1, (r.rss.size() + 11) / 12);
   for (size_t i = 0; i < r.rss.size(); ++i) {
     if (i % step != 0 && i + 1 != r.rss.size()) continue;
     const RssSample& s = r.rss[i];
-    std::printf("| %zu | %.1f | %.1f | %.1f |\n", s.scans, s.seconds, s.rss_mb, s.hwm_mb);
+    std::printf("| %zu | %.1f | %.1f | %.1f | %.1f |\n", s.scans, s.seconds, s.rss_mb, s.hwm_mb,
+                s.heap_mb);
   }
 }
 
@@ -369,8 +389,11 @@ bool WriteJson(const Report& r, const fs::path& path) {
   j["final_surfels"] = r.final_surfels;
   Json samples = Json::array();
   for (const RssSample& s : r.rss) {
-    samples.push_back(Json{
-        {"scans", s.scans}, {"wall_s", s.seconds}, {"rss_mb", s.rss_mb}, {"hwm_mb", s.hwm_mb}});
+    samples.push_back(Json{{"scans", s.scans},
+                           {"wall_s", s.seconds},
+                           {"rss_mb", s.rss_mb},
+                           {"hwm_mb", s.hwm_mb},
+                           {"heap_mb", s.heap_mb}});
   }
   j["rss_samples"] = std::move(samples);
   std::ofstream f(path, std::ios::binary | std::ios::trunc);
@@ -408,10 +431,10 @@ Status FeedDrive(const slam_mms::DriveReader& reader, MappingMode mode, const Ar
     results.push_back(res);
     if (results.size() % every == 0 || results.size() == n_scans) {
       r->rss.push_back({results.size(), MsSince(t_start) / 1000.0, ProcStatusMb("VmRSS"),
-                        ProcStatusMb("VmHWM")});
+                        ProcStatusMb("VmHWM"), HeapInUseMb()});
     }
   });
-  r->rss.push_back({0, 0.0, ProcStatusMb("VmRSS"), ProcStatusMb("VmHWM")});
+  r->rss.push_back({0, 0.0, ProcStatusMb("VmRSS"), ProcStatusMb("VmHWM"), HeapInUseMb()});
 
   // Initial POS attitude and velocity from the reader (as slam_mms_run does).
   if (pos.empty() && in.initial_state) {
@@ -457,7 +480,8 @@ Status FeedDrive(const slam_mms::DriveReader& reader, MappingMode mode, const Ar
   SLAM_MMS_RETURN_IF_ERROR(system->Finish());
   const double finish_ms = MsSince(t0);
   r->wall_s = MsSince(t_start) / 1000.0;
-  r->rss.push_back({results.size(), r->wall_s, ProcStatusMb("VmRSS"), ProcStatusMb("VmHWM")});
+  r->rss.push_back(
+      {results.size(), r->wall_s, ProcStatusMb("VmRSS"), ProcStatusMb("VmHWM"), HeapInUseMb()});
   r->peak_rss_mb = ProcStatusMb("VmHWM");
 
   r->scans_processed = results.size();

@@ -463,6 +463,11 @@ StatusOr<InsFilter::AttitudeCorrelation> InsFilter::AttitudeSinceEpoch() const {
   return c;
 }
 
+void InsFilter::ForgetStatesBefore(Timestamp t) {
+  auto& h = impl_->history;
+  while (h.size() > 2 && h[1].x.stamp <= t) h.pop_front();
+}
+
 StatusOr<InsState> InsFilter::StateAt(Timestamp t) const {
   const auto& h = impl_->history;
   if (h.empty()) return FailedPreconditionError("InsFilter::StateAt: not initialised");

@@ -76,6 +76,12 @@ struct MappingSystem::Impl {
 
   // ---- per scan and level 2 (mapping_system_scans.cpp) -----------------------------------------
   Status ProcessQueued();
+  /// POS states kept before the oldest time still to be asked for [s].
+  static constexpr double kPosStatesKeptS = 30.0;
+  /// Lets the POS forget the states no query needs any more (ForgetStatesBefore): its history
+  /// then follows the submaps, not InsFilter::Options::history_s (600 s by default: 29 MB at
+  /// 100 Hz, growing over a drive's first ten minutes).
+  void ForgetOldPosStates();
   /// One scan, once the POS covers it: POS-only mapping (gnss_ins) or level 1 and 2.
   Status ProcessScan(const Scan& scan);
   /// The POS at the scan's start and end (the start taken back from the end where the POS starts

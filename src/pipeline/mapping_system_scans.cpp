@@ -20,7 +20,23 @@ Status MappingSystem::Impl::ProcessQueued() {
     SLAM_MMS_RETURN_IF_ERROR(ProcessScan(scan));
   }
   input.TrimImuHistory(last_scan_start);
+  ForgetOldPosStates();
   return OkStatus();
+}
+
+void MappingSystem::Impl::ForgetOldPosStates() {
+  if (!have_scan) return;
+  // The POS is asked for the queued scans (after the last processed one), for the scans of the
+  // submaps not yet reported to level 2 (their POS attitudes), and, with an external POS, for
+  // GNSS fixes as they come (a late one may be older than the scans: kPosStatesKeptS).
+  Timestamp oldest = last_scan_start;
+  if (loc) {
+    const auto& submaps = loc->submaps();
+    if (submaps_reported < submaps.size() && submaps[submaps_reported].start < oldest) {
+      oldest = submaps[submaps_reported].start;
+    }
+  }
+  ins.ForgetStatesBefore(oldest.PlusSeconds(-kPosStatesKeptS));
 }
 
 Status MappingSystem::Impl::ProcessScan(const Scan& scan) {

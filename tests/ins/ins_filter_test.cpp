@@ -286,6 +286,38 @@ TEST(InsFilterTest, ExternalPoseIsInterpolated) {
   EXPECT_EQ(filter.States().size(), 101u);
 }
 
+TEST(InsFilterTest, ForgettingOldStatesKeepsEveryLaterAnswer) {
+  const SyntheticDrive drive;
+  InsFilter full;
+  InsFilter trimmed;
+  for (int k = 0; k <= 100; ++k) {
+    const TruthState s = drive.At(0.1 * k);
+    InsState st;
+    st.stamp = kT0.PlusSeconds(0.1 * k);
+    st.T_world_body = MakeIsometry(s.R, s.p);
+    st.v_world_mps = s.v;
+    st.cov_T_world_body = Matrix6d::Identity() * (1e-4 + 1e-6 * k);
+    ASSERT_TRUE(full.AddExternalPose(st).ok());
+    ASSERT_TRUE(trimmed.AddExternalPose(st).ok());
+  }
+  // 4.25 s lies between the states at 4.2 and 4.3 s: 4.2 s is kept, 4.1 s is not.
+  const Timestamp t_keep = kT0.PlusSeconds(4.25);
+  trimmed.ForgetStatesBefore(t_keep);
+  EXPECT_EQ(trimmed.States().size(), 59u);  // 4.2 .. 10.0 s
+  EXPECT_EQ(trimmed.States().front().stamp, kT0.PlusSeconds(0.1 * 42));
+  for (double t = 4.25; t <= 10.1; t += 0.13) {
+    const InsState a = full.StateAt(kT0.PlusSeconds(t)).value();
+    const InsState b = trimmed.StateAt(kT0.PlusSeconds(t)).value();
+    EXPECT_TRUE(a.T_world_body.isApprox(b.T_world_body, 0.0)) << t;
+    EXPECT_EQ(a.cov_T_world_body, b.cov_T_world_body) << t;
+  }
+  EXPECT_EQ(trimmed.StateAt(kT0.PlusSeconds(4.1)).status().code(), StatusCode::kOutOfRange);
+  // Never fewer than two states; a time after the last keeps the last two.
+  trimmed.ForgetStatesBefore(kT0.PlusSeconds(60.0));
+  EXPECT_EQ(trimmed.States().size(), 2u);
+  EXPECT_TRUE(trimmed.StateAt(kT0.PlusSeconds(10.0)).ok());
+}
+
 TEST(InsFilterTest, StaticAlignmentAndGnssPositionInit) {
   InsFilter::Options o = FilterOptions();
   InsFilter filter = InsFilter::Create(o).value();

@@ -242,6 +242,11 @@ class InsFilter {
   /// The state at `t`, interpolated between stored states (pose by slerp, velocity and covariance
   /// linearly), or extrapolated with the last IMU sample up to max_extrapolation_s past the last.
   StatusOr<InsState> StateAt(Timestamp t) const;
+  /// Forgets the stored states that StateAt no longer needs for times >= `t`: it keeps the last
+  /// state at or before `t` and every later one (and at least two). For a host that knows the
+  /// oldest time it will still ask for (MappingSystem: its unreported submaps and queued scans);
+  /// otherwise Options::history_s bounds the history. Estimates are unchanged.
+  void ForgetStatesBefore(Timestamp t);
   /// 22x22 error-state covariance [dp, dv, dtheta, dba, dbg, db_gnss, dm, dl] of the latest state.
   const InsErrorMatrix& covariance() const;
   /// The GNSS error model's bias (antenna position error of the current solution type) [m].

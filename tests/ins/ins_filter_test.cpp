@@ -257,17 +257,22 @@ TEST(InsFilterTest, CovarianceGrowsDuringTheOutage) {
   }
 }
 
+// The drive's true state at t as an external POS record with covariance cov * I.
+InsState TruePose(const SyntheticDrive& drive, double t, double cov) {
+  const TruthState s = drive.At(t);
+  InsState st;
+  st.stamp = kT0.PlusSeconds(t);
+  st.T_world_body = MakeIsometry(s.R, s.p);
+  st.v_world_mps = s.v;
+  st.cov_T_world_body = Matrix6d::Identity() * cov;
+  return st;
+}
+
 TEST(InsFilterTest, ExternalPoseIsInterpolated) {
   InsFilter filter;
   const SyntheticDrive drive;
   for (int k = 0; k <= 100; ++k) {
-    const TruthState s = drive.At(0.1 * k);
-    InsState st;
-    st.stamp = kT0.PlusSeconds(0.1 * k);
-    st.T_world_body = MakeIsometry(s.R, s.p);
-    st.v_world_mps = s.v;
-    st.cov_T_world_body = Matrix6d::Identity() * (k % 2 == 0 ? 1e-4 : 3e-4);
-    ASSERT_TRUE(filter.AddExternalPose(st).ok());
+    ASSERT_TRUE(filter.AddExternalPose(TruePose(drive, 0.1 * k, k % 2 == 0 ? 1e-4 : 3e-4)).ok());
   }
   EXPECT_FALSE(filter.AddImu(drive.PerfectImu(10.5, kT0)).ok());
   InsState dup;
@@ -291,12 +296,7 @@ TEST(InsFilterTest, ForgettingOldStatesKeepsEveryLaterAnswer) {
   InsFilter full;
   InsFilter trimmed;
   for (int k = 0; k <= 100; ++k) {
-    const TruthState s = drive.At(0.1 * k);
-    InsState st;
-    st.stamp = kT0.PlusSeconds(0.1 * k);
-    st.T_world_body = MakeIsometry(s.R, s.p);
-    st.v_world_mps = s.v;
-    st.cov_T_world_body = Matrix6d::Identity() * (1e-4 + 1e-6 * k);
+    const InsState st = TruePose(drive, 0.1 * k, 1e-4 + 1e-6 * k);
     ASSERT_TRUE(full.AddExternalPose(st).ok());
     ASSERT_TRUE(trimmed.AddExternalPose(st).ok());
   }

@@ -86,6 +86,29 @@ TEST(CpuSurfelRendererTest, MatchesBruteForceOracle) {
 // The full-size HDL-64 image of a street of surfels drawn through a shuffled id subset: the same
 // bits for any number of threads (column bins are disjoint, records are rastered in draw order),
 // and on sampled pixels the nearest disc of the image definition, ties to the earlier draw.
+// A renderer keeps its splat records' memory between renders: a render after a larger one (more
+// records per column bin, other bins) gives the image a fresh renderer gives.
+TEST(CpuSurfelRendererTest, ReusedRendererGivesAFreshRenderersImage) {
+  const std::vector<Surfel> surfels = internal::MakeStreetSurfels(60000, 5, 50.0f);
+  std::vector<uint32_t> few;
+  for (uint32_t i = 0; i < surfels.size(); i += 7) few.push_back(i);
+  Eigen::Isometry3d T_a = Eigen::Isometry3d::Identity();
+  T_a.translation() = Eigen::Vector3d(3.1, -0.4, 0.15);
+  Eigen::Isometry3d T_b = T_a;
+  T_b.linear() = Eigen::AngleAxisd(1.3, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  auto reused = CpuSurfelRenderer::Create(SurfelRendererOptions(), 2);
+  auto fresh = CpuSurfelRenderer::Create(SurfelRendererOptions(), 2);
+  ASSERT_TRUE(reused.ok() && fresh.ok());
+  VertexNormalMap first, again, expected;
+  ASSERT_TRUE((*reused)->Render(SurfelRenderInput::All(surfels), T_a, &first).ok());
+  ASSERT_TRUE((*reused)->Render(SurfelRenderInput::Subset(surfels, few), T_b, &again).ok());
+  ASSERT_TRUE((*fresh)->Render(SurfelRenderInput::Subset(surfels, few), T_b, &expected).ok());
+  ASSERT_GT(expected.CountVertices(), expected.size() / 20);
+  EXPECT_TRUE(again.range == expected.range);
+  EXPECT_TRUE(again.index == expected.index);
+  EXPECT_TRUE(again.normal == expected.normal);
+}
+
 TEST(CpuSurfelRendererTest, FullSizeImageIsIndependentOfThreadsAndMatchesOracle) {
   const std::vector<Surfel> surfels = internal::MakeStreetSurfels(60000, 5, 50.0f);
   std::vector<uint32_t> ids;

@@ -14,6 +14,7 @@
 #include "backend/attitude_chain_factor.hpp"
 #include "backend/backend_math.hpp"
 #include "backend/ceres_solve.hpp"
+#include "backend/factor_fit.hpp"
 #include "backend/gnss_position_factor.hpp"
 #include "backend/pose_block.hpp"
 #include "backend/pose_prior_factor.hpp"
@@ -86,6 +87,13 @@ struct SubmapGraph::Impl {
   std::map<size_t, Sequential> sequential;  // Keyed by the index of the older node.
   std::map<int, std::unique_ptr<std::array<double, 3>>> gnss_biases;
   std::vector<SubmapGraphFactor> factors;  // As added (Factors()).
+  /// The residual block of each factor (same order); last_block: the one added last.
+  std::vector<ceres::ResidualBlockId> factor_blocks;
+  ceres::ResidualBlockId last_block = nullptr;
+  void PushFactor(const SubmapGraphFactor& f) {
+    factors.push_back(f);
+    factor_blocks.push_back(last_block);
+  }
 
   void Record(SubmapFactorKind kind, SubmapId a, SubmapId b, const Eigen::Isometry3d& T,
               const Matrix6d& covariance, const RobustLoss& loss = RobustLoss::None()) {
@@ -96,7 +104,7 @@ struct SubmapGraph::Impl {
     f.T = T;
     f.covariance = covariance;
     f.loss = loss;
-    factors.push_back(f);
+    PushFactor(f);
   }
   /// A new GNSS bias block `key` (>= 0, not yet added), zero, in the problem; `*sqrt_info` the
   /// square-root information of `covariance` (validated), for the factor that states it.
@@ -125,7 +133,7 @@ struct SubmapGraph::Impl {
     f.transition = transition * Eigen::Matrix3d::Identity();
     f.covariance = Matrix6d::Zero();
     f.covariance.topLeftCorner<3, 3>() = covariance;
-    factors.push_back(f);
+    PushFactor(f);
   }
 
   explicit Impl(const Options& o) : options(o) {
@@ -155,8 +163,9 @@ struct SubmapGraph::Impl {
     SLAM_MMS_RETURN_IF_ERROR(loss.Validate());
     SLAM_MMS_ASSIGN_OR_RETURN(auto nodes_ab, Pair(a, b, what));
     SLAM_MMS_ASSIGN_OR_RETURN(auto cost, RelativePoseFactor::Create(T_a_b, covariance));
-    problem->AddResidualBlock(cost.release(), loss.NewLossFunction(), nodes_ab.first->pose.data(),
-                              nodes_ab.second->pose.data());
+    last_block =
+        problem->AddResidualBlock(cost.release(), loss.NewLossFunction(),
+                                  nodes_ab.first->pose.data(), nodes_ab.second->pose.data());
     return OkStatus();
   }
 
@@ -329,7 +338,7 @@ Status SubmapGraph::AddPosePrior(SubmapId id, const Eigen::Isometry3d& T_world_s
   SLAM_MMS_RETURN_IF_ERROR(ValidatePose(T_world_submap, "SubmapGraph::AddPosePrior"));
   SLAM_MMS_RETURN_IF_ERROR(ValidateCovariance<6>(covariance, "SubmapGraph::AddPosePrior"));
   SLAM_MMS_ASSIGN_OR_RETURN(auto cost, PosePriorFactor::Create(T_world_submap, covariance));
-  m.problem->AddResidualBlock(cost.release(), nullptr, node->pose.data());
+  m.last_block = m.problem->AddResidualBlock(cost.release(), nullptr, node->pose.data());
   m.Record(SubmapFactorKind::kPosePrior, id, id, T_world_submap, covariance);
   return OkStatus();
 }
@@ -345,8 +354,8 @@ Status SubmapGraph::AddAttitudeChainFactor(SubmapId a, SubmapId b, const Eigen::
   }
   auto cost = AttitudeChainFactor::Create(R_world_a, R_world_b, chain.transition, chain.covariance);
   if (!cost.ok()) return cost.status().WithContext("SubmapGraph::AddAttitudeChainFactor");
-  m.problem->AddResidualBlock(cost->release(), nullptr, nodes.first->pose.data(),
-                              nodes.second->pose.data());
+  m.last_block = m.problem->AddResidualBlock(cost->release(), nullptr, nodes.first->pose.data(),
+                                             nodes.second->pose.data());
   SubmapGraphFactor f;
   f.kind = SubmapFactorKind::kAttitudeChain;
   f.a = a;
@@ -356,7 +365,7 @@ Status SubmapGraph::AddAttitudeChainFactor(SubmapId a, SubmapId b, const Eigen::
   f.covariance = Matrix6d::Zero();
   f.covariance.topLeftCorner<3, 3>() = chain.covariance;
   f.transition = chain.transition;
-  m.factors.push_back(f);
+  m.PushFactor(f);
   return OkStatus();
 }
 
@@ -386,12 +395,12 @@ Status SubmapGraph::AddGnssPrior(SubmapId id, const Eigen::Vector3d& p_world_ant
   SLAM_MMS_ASSIGN_OR_RETURN(
       auto cost, GnssPositionFactor::Create(p_world_antenna, covariance, t_submap_antenna));
   if (bias != nullptr) {
-    m.problem->AddResidualBlock(new BiasedGnssPositionFactor(std::move(cost)),
-                                m.options.gnss_loss.NewLossFunction(), node->pose.data(),
-                                bias->data());
+    m.last_block = m.problem->AddResidualBlock(new BiasedGnssPositionFactor(std::move(cost)),
+                                               m.options.gnss_loss.NewLossFunction(),
+                                               node->pose.data(), bias->data());
   } else {
-    m.problem->AddResidualBlock(cost.release(), m.options.gnss_loss.NewLossFunction(),
-                                node->pose.data());
+    m.last_block = m.problem->AddResidualBlock(
+        cost.release(), m.options.gnss_loss.NewLossFunction(), node->pose.data());
   }
   ++node->num_gnss;
   ++m.num_gnss;
@@ -404,7 +413,7 @@ Status SubmapGraph::AddGnssPrior(SubmapId id, const Eigen::Vector3d& p_world_ant
   f.T_submap_body = T_submap_body;
   f.t_body_antenna = t_body_antenna;
   f.gnss_bias = gnss_bias;
-  m.factors.push_back(f);
+  m.PushFactor(f);
   return OkStatus();
 }
 
@@ -413,7 +422,8 @@ Status SubmapGraph::AddGnssBias(int key, const Eigen::Matrix3d& prior_covariance
   Eigen::Matrix3d sqrt_info;
   SLAM_MMS_ASSIGN_OR_RETURN(
       auto* block, m.NewGnssBias(key, prior_covariance, "SubmapGraph::AddGnssBias", &sqrt_info));
-  m.problem->AddResidualBlock(new ZeroMeanPrior3Factor(sqrt_info), nullptr, block->data());
+  m.last_block =
+      m.problem->AddResidualBlock(new ZeroMeanPrior3Factor(sqrt_info), nullptr, block->data());
   m.RecordGnssBias(SubmapFactorKind::kGnssBias, key, -1, 0.0, prior_covariance);
   return OkStatus();
 }
@@ -433,8 +443,8 @@ Status SubmapGraph::AddGnssBiasLink(int from_key, int key, double transition,
   Eigen::Matrix3d sqrt_info;
   SLAM_MMS_ASSIGN_OR_RETURN(auto* block, m.NewGnssBias(key, covariance, what, &sqrt_info));
   for (int k = 0; k < 3; ++k) (*block)[k] = transition * (*from->second)[k];
-  m.problem->AddResidualBlock(new GnssBiasLinkFactor(transition, sqrt_info), nullptr,
-                              from->second->data(), block->data());
+  m.last_block = m.problem->AddResidualBlock(new GnssBiasLinkFactor(transition, sqrt_info), nullptr,
+                                             from->second->data(), block->data());
   m.RecordGnssBias(SubmapFactorKind::kGnssBiasLink, key, from_key, transition, covariance);
   return OkStatus();
 }
@@ -448,6 +458,11 @@ StatusOr<Eigen::Vector3d> SubmapGraph::GnssBias(int key) const {
 }
 
 const std::vector<SubmapGraphFactor>& SubmapGraph::Factors() const { return impl_->factors; }
+
+StatusOr<std::vector<SubmapGraph::FactorFit>> SubmapGraph::FitFactors() const {
+  return internal::FitResidualBlocks(impl_->problem.get(), impl_->factor_blocks,
+                                     impl_->options.num_threads);
+}
 
 const char* SubmapFactorKindName(SubmapFactorKind kind) {
   switch (kind) {

@@ -7,7 +7,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <map>
 #include <random>
 #include <vector>
 
@@ -371,6 +373,95 @@ TEST(SubmapGraphTest, GnssBiasNodesAreRecordedAndBadOnesRefused) {
     EXPECT_TRUE(SubmapFactorKindFromName(SubmapFactorKindName(k), &back));
     EXPECT_EQ(back, k);
   }
+}
+
+// FitFactors: the redundancies sum to the graph's redundancy, a factor alone on its node has none,
+// and iterated variance component estimation (each group's covariance scaled by sum chi2 / sum
+// redundancy, solved again) recovers how far each group's stated covariance is off: GNSS fixes
+// drawn with 3x their stated sigma (9), the reckon chain and the pose priors drawn as stated (1).
+// A first fit alone blames the reckon chain too (about 2): the misweighted fixes bend it.
+TEST(SubmapGraphTest, FactorFitsRecoverEachGroupsVarianceFactor) {
+  const auto truth = CurveTruth(120);
+  std::mt19937 rng(11);
+  std::normal_distribution<double> n(0.0, 1.0);
+  std::vector<Eigen::Isometry3d> init, reckon, prior;
+  std::vector<Eigen::Vector3d> fixes;
+  for (size_t i = 0; i < truth.size(); ++i) {
+    init.push_back(Perturb(truth[i], rng, 0.01, 0.5));
+    if (i > 0) reckon.push_back(Perturb(truth[i - 1].inverse() * truth[i], rng, 0.002, 0.02));
+    prior.push_back(Perturb(truth[i], rng, 0.002, 0.3));
+    fixes.push_back(truth[i].translation() + 0.15 * Eigen::Vector3d(n(rng), n(rng), n(rng)));
+  }
+  const SubmapId lonely = static_cast<SubmapId>(truth.size());
+  // scale: the variance factor applied to each kind's stated covariance.
+  auto build = [&](std::map<SubmapFactorKind, double> scale) {
+    SubmapGraph::Options o;
+    o.gnss_loss = RobustLoss::None();
+    auto g = SubmapGraph::Create(o);
+    EXPECT_TRUE(g.ok());
+    for (size_t i = 0; i < truth.size(); ++i) {
+      const SubmapId id = static_cast<SubmapId>(i);
+      EXPECT_TRUE(g->AddSubmap(id, init[i]).ok());
+      if (i > 0) {
+        EXPECT_TRUE(
+            g->AddReckonFactor(id - 1, id, reckon[i - 1],
+                               scale[SubmapFactorKind::kReckon] * DiagonalCovariance(0.002, 0.02))
+                .ok());
+      }
+      EXPECT_TRUE(
+          g->AddPosePrior(id, prior[i],
+                          scale[SubmapFactorKind::kPosePrior] * DiagonalCovariance(0.002, 0.3))
+              .ok());
+      EXPECT_TRUE(
+          g->AddGnssPrior(id, fixes[i],
+                          scale[SubmapFactorKind::kGnss] * 0.0025 * Eigen::Matrix3d::Identity())
+              .ok());
+    }
+    // A node with one prior and nothing else: the estimate takes it exactly.
+    EXPECT_TRUE(g->AddSubmap(lonely, Eigen::Isometry3d::Identity()).ok());
+    EXPECT_TRUE(g->AddPosePrior(lonely, Eigen::Isometry3d(Eigen::Translation3d(3, 4, 5)),
+                                DiagonalCovariance(0.01, 0.1))
+                    .ok());
+    auto s = g->Solve(SolveTrigger::kFinish);
+    EXPECT_TRUE(s.ok() && s->usable());
+    return std::move(*g);
+  };
+  std::map<SubmapFactorKind, double> scale = {{SubmapFactorKind::kReckon, 1.0},
+                                              {SubmapFactorKind::kPosePrior, 1.0},
+                                              {SubmapFactorKind::kGnss, 1.0}};
+  for (int iteration = 0; iteration < 8; ++iteration) {
+    const SubmapGraph g = build(scale);
+    auto fits = g.FitFactors();
+    ASSERT_TRUE(fits.ok()) << fits.status().ToString();
+    const auto& factors = g.Factors();
+    ASSERT_EQ(fits->size(), factors.size());
+    std::map<SubmapFactorKind, std::pair<double, double>> groups;  // chi2, redundancy
+    double total_redundancy = 0.0;
+    int total_dims = 0;
+    for (size_t i = 0; i < factors.size(); ++i) {
+      const SubmapGraph::FactorFit& f = (*fits)[i];
+      EXPECT_GE(f.redundancy, -1e-9);
+      EXPECT_LE(f.redundancy, f.dim + 1e-9);
+      total_redundancy += f.redundancy;
+      total_dims += f.dim;
+      if (factors[i].a == lonely) {
+        EXPECT_NEAR(f.redundancy, 0.0, 1e-6);
+        EXPECT_NEAR(f.chi2, 0.0, 1e-8);
+        continue;
+      }
+      groups[factors[i].kind].first += f.chi2;
+      groups[factors[i].kind].second += f.redundancy;
+    }
+    EXPECT_NEAR(total_redundancy, total_dims - 6.0 * (truth.size() + 1), 1e-6);
+    if (iteration == 0) {  // the fixes' misweighting shows in the chain's residuals as well
+      EXPECT_GT(groups[SubmapFactorKind::kReckon].first / groups[SubmapFactorKind::kReckon].second,
+                1.5);
+    }
+    for (auto& [kind, v] : scale) v *= groups[kind].first / groups[kind].second;
+  }
+  EXPECT_NEAR(scale[SubmapFactorKind::kGnss], 9.0, 1.5);
+  EXPECT_NEAR(scale[SubmapFactorKind::kReckon], 1.0, 0.25);
+  EXPECT_NEAR(scale[SubmapFactorKind::kPosePrior], 1.0, 0.25);
 }
 
 TEST(SubmapGraphTest, InvalidInputsReturnStatusWithoutAborting) {

@@ -201,6 +201,22 @@ class SubmapGraph {
   /// Every factor in the order it was added (a loop's covariance as given, before loop_loss).
   const std::vector<SubmapGraphFactor>& Factors() const;
 
+  /// How a factor fits the current estimate (FitFactors).
+  struct FactorFit {
+    double chi2 = 0.0;  ///< Squared whitened residual, the robust loss not applied.
+    int dim = 0;        ///< Residual dimension.
+    /// Redundancy number: the share of its dim residual directions the estimate does not absorb,
+    /// in [0, dim] (tr(I - J_f (J^T J)^-1 J_f^T), whitened; E[chi2] = redundancy where its
+    /// covariance is right). A factor alone on its parameters has 0, one of many agreeing
+    /// measurements of them close to dim.
+    double redundancy = 0.0;
+  };
+  /// Per factor of Factors() (same order), at the current estimate (after Solve), with the nodes
+  /// the last solve left free; for variance component estimation (sum chi2 / sum redundancy of a
+  /// group of factors is its variance factor). FailedPrecondition where the free nodes are not
+  /// all observed (singular normal matrix).
+  StatusOr<std::vector<FactorFit>> FitFactors() const;
+
   /// Batch LM (eq 25), then every scan pose follows its submap.
   StatusOr<SolveSummary> Solve(SolveTrigger trigger);
 

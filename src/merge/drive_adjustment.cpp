@@ -229,10 +229,31 @@ struct Verifier {
   }
 };
 
-// The graph of every drive plus the accepted overlaps.
+// A group of the variance component estimation: a drive's factors of one kind, or (drive -1) the
+// cross-drive overlaps.
+using VarianceGroup = std::pair<int64_t, SubmapFactorKind>;
+using VarianceScales = std::map<VarianceGroup, double>;
+
+double Scale(const VarianceScales& scales, int64_t drive, SubmapFactorKind kind) {
+  const auto it = scales.find({drive, kind});
+  return it == scales.end() ? 1.0 : it->second;
+}
+
+// The group of a factor of the merged graph (by the drives of its submaps).
+VarianceGroup GroupOf(const SubmapGraphFactor& f) {
+  const int64_t da = f.a / kDriveIdStride, db = f.b / kDriveIdStride;
+  if (f.kind == SubmapFactorKind::kGnssBias || f.kind == SubmapFactorKind::kGnssBiasLink) {
+    return {f.gnss_bias / kBiasKeyStride - 1, f.kind};
+  }
+  return {da == db ? da : -1, f.kind};
+}
+
+// The graph of every drive plus the accepted overlaps; each group's covariances scaled by its
+// variance factor in `scales` (absent: 1).
 StatusOr<SubmapGraph> BuildGraph(const std::vector<DriveAdjustment::Drive>& drives,
                                  const std::vector<DriveAdjustment::Overlap>& overlaps,
-                                 const DriveAdjustment::Options& o) {
+                                 const DriveAdjustment::Options& o,
+                                 const VarianceScales& scales = {}) {
   SLAM_MMS_ASSIGN_OR_RETURN(SubmapGraph graph, SubmapGraph::Create(o.graph));
   for (size_t d = 0; d < drives.size(); ++d) {
     const DriveResult& r = drives[d].result;
@@ -249,8 +270,10 @@ StatusOr<SubmapGraph> BuildGraph(const std::vector<DriveAdjustment::Drive>& driv
       std::vector<SubmapScanPose> scans = s.scans;
       SLAM_MMS_RETURN_IF_ERROR(graph.SetScans(GraphId(d, s.id), scans).WithContext(ctx));
     }
-    for (const SubmapGraphFactor& f : r.factors) {
-      const SubmapId a = GraphId(d, f.a), b = GraphId(d, f.b);
+    for (const SubmapGraphFactor& given : r.factors) {
+      const SubmapId a = GraphId(d, given.a), b = GraphId(d, given.b);
+      SubmapGraphFactor f = given;
+      f.covariance *= Scale(scales, static_cast<int64_t>(d), f.kind);
       Status st;
       switch (f.kind) {
         case SubmapFactorKind::kRegistration:
@@ -306,11 +329,64 @@ StatusOr<SubmapGraph> BuildGraph(const std::vector<DriveAdjustment::Drive>& driv
   }
   for (const DriveAdjustment::Overlap& ov : overlaps) {
     if (!ov.accepted) continue;
-    SLAM_MMS_RETURN_IF_ERROR(graph.AddRegistrationFactor(GraphId(ov.drive_a, ov.submap_a),
-                                                         GraphId(ov.drive_b, ov.submap_b), ov.T_a_b,
-                                                         ov.covariance, o.overlap_loss));
+    SLAM_MMS_RETURN_IF_ERROR(graph.AddRegistrationFactor(
+        GraphId(ov.drive_a, ov.submap_a), GraphId(ov.drive_b, ov.submap_b), ov.T_a_b,
+        Scale(scales, -1, SubmapFactorKind::kRegistration) * ov.covariance, o.overlap_loss));
   }
   return graph;
+}
+
+// Step 6: rounds of scaling each group by sum chi2 / sum redundancy and solving again, until
+// every factor of a round is within 5 % of 1; `graph` is replaced by the last solve.
+Status EstimateVarianceComponents(const std::vector<DriveAdjustment::Drive>& drives,
+                                  const std::vector<DriveAdjustment::Overlap>& overlaps,
+                                  const DriveAdjustment::Options& o, SubmapGraph* graph,
+                                  DriveAdjustment::Result* out) {
+  VarianceScales scales;
+  std::map<VarianceGroup, DriveAdjustment::VarianceComponent> groups;
+  for (int round = 1; round <= o.variance_component_rounds; ++round) {
+    SLAM_MMS_ASSIGN_OR_RETURN(const std::vector<SubmapGraph::FactorFit> fits, graph->FitFactors());
+    const std::vector<SubmapGraphFactor>& factors = graph->Factors();
+    std::map<VarianceGroup, std::pair<double, double>> sums;  // chi2, redundancy
+    for (auto& [key, g] : groups) g.factors = 0;
+    for (size_t i = 0; i < factors.size(); ++i) {
+      const VarianceGroup key = GroupOf(factors[i]);
+      sums[key].first += fits[i].chi2;
+      sums[key].second += fits[i].redundancy;
+      DriveAdjustment::VarianceComponent& g = groups[key];
+      g.drive = key.first >= 0 ? drives[static_cast<size_t>(key.first)].name : std::string();
+      g.kind = key.second;
+      ++g.factors;
+    }
+    bool settled = true;
+    for (const auto& [key, sum] : sums) {
+      DriveAdjustment::VarianceComponent& g = groups[key];
+      g.redundancy = sum.second;
+      g.estimated = sum.second >= o.variance_component_min_redundancy;
+      if (!g.estimated) continue;
+      const double factor = sum.first / sum.second;
+      double& scale = scales[key];
+      if (scale == 0.0) scale = 1.0;
+      const double next = std::clamp(scale * factor, o.variance_factor_min, o.variance_factor_max);
+      if (std::abs(std::log(next / scale)) > std::log(1.05)) settled = false;
+      scale = next;
+    }
+    out->variance_component_rounds = round;
+    if (settled) break;
+    SLAM_MMS_ASSIGN_OR_RETURN(SubmapGraph g, BuildGraph(drives, overlaps, o, scales));
+    SLAM_MMS_ASSIGN_OR_RETURN(out->summary, g.Solve(SolveTrigger::kFinish));
+    *graph = std::move(g);
+  }
+  out->variance_components.clear();
+  for (auto& [key, g] : groups) {
+    g.variance_factor = Scale(scales, key.first, key.second);
+    out->variance_components.push_back(g);
+    SLAM_MMS_LOG(kInfo) << "DriveAdjustment: variance factor "
+                        << (g.drive.empty() ? std::string("overlaps") : g.drive) << " "
+                        << SubmapFactorKindName(g.kind) << ": " << g.variance_factor << " ("
+                        << g.factors << " factors, redundancy " << g.redundancy << ")";
+  }
+  return OkStatus();
 }
 
 Status Positive(const char* field, double v) {
@@ -349,6 +425,20 @@ Status DriveAdjustment::Options::Validate() const {
   if (!(gnss_bias_sigma_m >= 0.0)) {
     return internal::OptionError("DriveAdjustment::Options", "gnss_bias_sigma_m", gnss_bias_sigma_m,
                                  "must be >= 0");
+  }
+  if (variance_component_rounds < 0) {
+    return internal::OptionError("DriveAdjustment::Options", "variance_component_rounds",
+                                 variance_component_rounds, "must be >= 0");
+  }
+  SLAM_MMS_RETURN_IF_ERROR(
+      Positive("variance_component_min_redundancy", variance_component_min_redundancy));
+  if (!(variance_factor_min > 0.0 && variance_factor_min <= 1.0)) {
+    return internal::OptionError("DriveAdjustment::Options", "variance_factor_min",
+                                 variance_factor_min, "must be in (0, 1]");
+  }
+  if (!(variance_factor_max >= 1.0)) {
+    return internal::OptionError("DriveAdjustment::Options", "variance_factor_max",
+                                 variance_factor_max, "must be >= 1");
   }
   if (num_threads < 1 || num_threads > 64) {
     return internal::OptionError("DriveAdjustment::Options", "num_threads", num_threads,
@@ -530,6 +620,12 @@ StatusOr<DriveAdjustment::Result> DriveAdjustment::Run(std::vector<Drive> drives
       }
     }
     if (!rejected) break;
+  }
+
+  // Variance component estimation.
+  if (options.variance_component_rounds > 0) {
+    SLAM_MMS_RETURN_IF_ERROR(
+        EstimateVarianceComponents(drives, out.overlaps, options, &*graph, &out));
   }
 
   // The adjusted drives.

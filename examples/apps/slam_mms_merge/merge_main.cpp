@@ -187,6 +187,10 @@ int MergeMainImpl(int argc, const char* const* argv) {
   app.add_option("--overlap-distance", options.overlap_distance_m,
                  "submaps of two drives whose scans come this close are tested [m]")
       ->check(CLI::PositiveNumber);
+  app.add_option("--variance-components", options.variance_component_rounds,
+                 "rounds of variance component estimation: each drive's factors of one kind and "
+                 "the overlaps scaled by their variance factor (0 = off)")
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--log-level", log_level, "debug|info|warning|error");
   try {
     app.parse(argc, argv);
@@ -355,6 +359,17 @@ int MergeMainImpl(int argc, const char* const* argv) {
   report["solve"] = {{"usable", res.summary.usable()},
                      {"iterations", res.summary.iterations},
                      {"termination", SolveTerminationName(res.summary.termination)}};
+  Json components = Json::array();
+  for (const DriveAdjustment::VarianceComponent& c : res.variance_components) {
+    components.push_back({{"drive", c.drive.empty() ? Json(nullptr) : Json(c.drive)},
+                          {"kind", SubmapFactorKindName(c.kind)},
+                          {"factors", c.factors},
+                          {"redundancy", c.redundancy},
+                          {"estimated", c.estimated},
+                          {"variance_factor", c.variance_factor}});
+  }
+  report["variance_components"] = {{"rounds", res.variance_component_rounds},
+                                   {"groups", std::move(components)}};
   report["map_points"] = map.cloud.size();
   report["las_tiles"] = tiles->size();
   report["adjust_wall_s"] = adjust_s;

@@ -25,6 +25,12 @@
 //      whitened residual then exceeds consistency_gate_chi2 contradicts the rest (GNSS, the
 //      drives' chains, the other overlaps) and is removed, and the graph solved again (at most
 //      max_rejection_rounds).
+//   6. Optionally (Options::variance_component_rounds), variance component estimation: what
+//      each drive states about its own uncertainty is checked against the others. Per group
+//      (a drive's factors of one kind; the overlaps), sum chi2 / sum redundancy is its variance
+//      factor; the group's covariances are scaled by it and the graph solved again, until the
+//      factors settle. A drive whose GNSS or chain is stated tighter than it is then stops
+//      pulling the others by more than it is worth.
 //
 // The result holds every drive with its adjusted submap poses (scan poses follow rigidly), every
 // overlap tested with its verdict and its offset before and after (the translation between the
@@ -85,6 +91,20 @@ class DriveAdjustment {
     bool use_pose_priors = true;
     /// Cross-drive factors' robust loss (in sigmas of the whitened residual).
     RobustLoss overlap_loss = RobustLoss::Cauchy(5.0);
+    /// Variance component estimation (step 6): at most this many rounds of scaling each group's
+    /// stated covariances by its variance factor (sum of its factors' squared whitened residuals
+    /// over the sum of their redundancy numbers, SubmapGraph::FitFactors) and solving again, >= 0
+    /// (0: off). Groups: per drive, each factor kind; the cross-drive overlaps one more.
+    int variance_component_rounds = 0;
+    /// A group is estimated only with at least this much redundancy (its factors' residual
+    /// dimensions the estimate does not absorb); others keep a factor of 1, > 0.
+    double variance_component_min_redundancy = 5.0;
+    /// Variance factors are clamped to [min, max], 0 < min <= 1 <= max. The default min 1 only
+    /// loosens what a drive states: a group whose residuals are smaller than stated keeps its
+    /// covariance (a tighter one would need more redundancy than an overlap area gives to be
+    /// trusted, and overconfidence is what makes one drive pull another).
+    double variance_factor_min = 1.0;
+    double variance_factor_max = 100.0;
     /// The merged graph's solve (the whole graph at once: more time than level 2 gives a drive).
     SubmapGraph::Options graph = DefaultGraphOptions();
     PointIcpOptions icp;
@@ -127,6 +147,18 @@ class DriveAdjustment {
     double rotation_after_rad = 0.0;
   };
 
+  /// A group of factors of the variance component estimation and its variance factor.
+  struct VarianceComponent {
+    std::string drive;  ///< The drive's name; empty for the cross-drive overlaps.
+    SubmapFactorKind kind = SubmapFactorKind::kReckon;
+    int factors = 0;
+    double redundancy = 0.0;  ///< Of its factors, in the last round.
+    /// The product of the rounds' factors: its stated covariances were scaled by this (1 where
+    /// not estimated).
+    double variance_factor = 1.0;
+    bool estimated = false;  ///< Enough redundancy (Options::variance_component_min_redundancy).
+  };
+
   struct Result {
     GeodeticPoint origin;       ///< The common world: the first drive's.
     std::vector<Drive> drives;  ///< In the common world, adjusted submap poses.
@@ -137,6 +169,9 @@ class DriveAdjustment {
     std::vector<Eigen::Vector3d> gnss_bias_m;  ///< Per drive (zero without biases).
     SolveSummary summary;
     int rejection_rounds = 0;
+    /// Step 6's groups (empty when off) and its rounds.
+    std::vector<VarianceComponent> variance_components;
+    int variance_component_rounds = 0;
     int num_accepted() const;
   };
 

@@ -12,7 +12,8 @@
 namespace slam_mms::internal {
 
 StatusOr<std::vector<SubmapGraph::FactorFit>> FitResidualBlocks(
-    ceres::Problem* problem, const std::vector<ceres::ResidualBlockId>& blocks, int num_threads) {
+    ceres::Problem* problem, const std::vector<ceres::ResidualBlockId>& blocks,
+    const std::vector<double*>& parameters, int num_threads) {
   // Every residual block (they all shape the estimate), the reported ones first, in their order.
   std::vector<ceres::ResidualBlockId> all;
   problem->GetResidualBlocks(&all);
@@ -22,10 +23,13 @@ StatusOr<std::vector<SubmapGraph::FactorFit>> FitResidualBlocks(
   for (ceres::ResidualBlockId id : all) {
     if (position.count(id) == 0) order.push_back(id);
   }
-  std::vector<double*> params;
-  problem->GetParameterBlocks(&params);
+  if (static_cast<int>(parameters.size()) != problem->NumParameterBlocks()) {
+    return InternalError("FitResidualBlocks: " + std::to_string(parameters.size()) +
+                         " parameter blocks given, the problem has " +
+                         std::to_string(problem->NumParameterBlocks()));
+  }
   std::vector<double*> free;
-  for (double* p : params) {
+  for (double* p : parameters) {
     if (!problem->IsParameterBlockConstant(p)) free.push_back(p);
   }
   ceres::Problem::EvaluateOptions eo;

@@ -22,9 +22,13 @@
 namespace slam_mms::internal {
 
 /// `blocks`: the residual blocks to report, in that order (every block of the problem enters the
-/// estimate's Jacobian). FailedPrecondition where the normal matrix is singular on the free
-/// parameters (an unobservable direction: no redundancy can be defined).
+/// estimate's Jacobian). `parameters`: every parameter block of the problem in a fixed order (the
+/// constant ones are left out); Ceres's own listing is ordered by address, which would make the
+/// last digits depend on where the heap put the blocks. FailedPrecondition where the normal
+/// matrix is singular on the free parameters (an unobservable direction: no redundancy is
+/// defined).
 StatusOr<std::vector<SubmapGraph::FactorFit>> FitResidualBlocks(
-    ceres::Problem* problem, const std::vector<ceres::ResidualBlockId>& blocks, int num_threads);
+    ceres::Problem* problem, const std::vector<ceres::ResidualBlockId>& blocks,
+    const std::vector<double*>& parameters, int num_threads);
 
 }  // namespace slam_mms::internal

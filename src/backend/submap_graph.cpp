@@ -460,7 +460,10 @@ StatusOr<Eigen::Vector3d> SubmapGraph::GnssBias(int key) const {
 const std::vector<SubmapGraphFactor>& SubmapGraph::Factors() const { return impl_->factors; }
 
 StatusOr<std::vector<SubmapGraph::FactorFit>> SubmapGraph::FitFactors() const {
-  return internal::FitResidualBlocks(impl_->problem.get(), impl_->factor_blocks,
+  std::vector<double*> parameters;  // nodes in id order, then the GNSS biases in key order
+  for (Node* n : impl_->ordered) parameters.push_back(n->pose.data());
+  for (auto& [key, bias] : impl_->gnss_biases) parameters.push_back(bias->data());
+  return internal::FitResidualBlocks(impl_->problem.get(), impl_->factor_blocks, parameters,
                                      impl_->options.num_threads);
 }
 

@@ -229,31 +229,36 @@ struct Verifier {
   }
 };
 
-// A group of the variance component estimation: a drive's factors of one kind, or (drive -1) the
-// cross-drive overlaps.
-using VarianceGroup = std::pair<int64_t, SubmapFactorKind>;
-using VarianceScales = std::map<VarianceGroup, double>;
-
-double Scale(const VarianceScales& scales, int64_t drive, SubmapFactorKind kind) {
-  const auto it = scales.find({drive, kind});
-  return it == scales.end() ? 1.0 : it->second;
-}
-
-// The group of a factor of the merged graph (by the drives of its submaps).
-VarianceGroup GroupOf(const SubmapGraphFactor& f) {
-  const int64_t da = f.a / kDriveIdStride, db = f.b / kDriveIdStride;
-  if (f.kind == SubmapFactorKind::kGnssBias || f.kind == SubmapFactorKind::kGnssBiasLink) {
-    return {f.gnss_bias / kBiasKeyStride - 1, f.kind};
+// Variance component estimation (step 6). A group: a drive's factors of one kind, or (drive -1)
+// the cross-drive overlaps.
+struct VarianceGroup {
+  int64_t drive = -1;
+  SubmapFactorKind kind = SubmapFactorKind::kRegistration;
+  bool operator<(const VarianceGroup& o) const {
+    return std::tie(drive, kind) < std::tie(o.drive, o.kind);
   }
-  return {da == db ? da : -1, f.kind};
-}
+};
+// Per drive, per factor of its result (same order): the variance factor of its covariance; and
+// the overlaps'. Empty: every factor as stated.
+struct FactorScales {
+  std::vector<std::vector<double>> drive;
+  double overlap = 1.0;
+  double Of(size_t d, size_t i) const { return d < drive.size() ? drive[d][i] : 1.0; }
+};
+// Where a factor of the merged graph comes from: a drive's factor (drive, index into its result's
+// factors) or (drive -1) an overlap; a datum bias (index -1) of a drive.
+struct FactorOrigin {
+  int64_t drive = -1;
+  int64_t index = -1;
+};
 
-// The graph of every drive plus the accepted overlaps; each group's covariances scaled by its
-// variance factor in `scales` (absent: 1).
+// The graph of every drive plus the accepted overlaps; each factor's covariance scaled by
+// `scales` (null: as stated); `origins` (may be null): per factor of the graph, where it is from.
 StatusOr<SubmapGraph> BuildGraph(const std::vector<DriveAdjustment::Drive>& drives,
                                  const std::vector<DriveAdjustment::Overlap>& overlaps,
                                  const DriveAdjustment::Options& o,
-                                 const VarianceScales& scales = {}) {
+                                 const FactorScales* scales = nullptr,
+                                 std::vector<FactorOrigin>* origins = nullptr) {
   SLAM_MMS_ASSIGN_OR_RETURN(SubmapGraph graph, SubmapGraph::Create(o.graph));
   for (size_t d = 0; d < drives.size(); ++d) {
     const DriveResult& r = drives[d].result;
@@ -263,6 +268,7 @@ StatusOr<SubmapGraph> BuildGraph(const std::vector<DriveAdjustment::Drive>& driv
       const double v = o.gnss_bias_sigma_m * o.gnss_bias_sigma_m;
       SLAM_MMS_RETURN_IF_ERROR(
           graph.AddGnssBias(static_cast<int>(d), v * Eigen::Matrix3d::Identity()));
+      if (origins != nullptr) origins->push_back({static_cast<int64_t>(d), -1});
     }
     for (const DriveSubmap& s : r.submaps) {
       SLAM_MMS_RETURN_IF_ERROR(
@@ -270,10 +276,11 @@ StatusOr<SubmapGraph> BuildGraph(const std::vector<DriveAdjustment::Drive>& driv
       std::vector<SubmapScanPose> scans = s.scans;
       SLAM_MMS_RETURN_IF_ERROR(graph.SetScans(GraphId(d, s.id), scans).WithContext(ctx));
     }
-    for (const SubmapGraphFactor& given : r.factors) {
-      const SubmapId a = GraphId(d, given.a), b = GraphId(d, given.b);
-      SubmapGraphFactor f = given;
-      f.covariance *= Scale(scales, static_cast<int64_t>(d), f.kind);
+    for (size_t i = 0; i < r.factors.size(); ++i) {
+      const SubmapId a = GraphId(d, r.factors[i].a), b = GraphId(d, r.factors[i].b);
+      SubmapGraphFactor f = r.factors[i];
+      if (scales != nullptr) f.covariance *= scales->Of(d, i);
+      const size_t num_factors = graph.Factors().size();
       Status st;
       switch (f.kind) {
         case SubmapFactorKind::kRegistration:
@@ -325,37 +332,66 @@ StatusOr<SubmapGraph> BuildGraph(const std::vector<DriveAdjustment::Drive>& driv
                                     std::to_string(f.a) + "->" + std::to_string(f.b) + ": " +
                                     st.message());
       }
+      if (origins != nullptr && graph.Factors().size() > num_factors) {
+        origins->push_back({static_cast<int64_t>(d), static_cast<int64_t>(i)});
+      }
     }
   }
   for (const DriveAdjustment::Overlap& ov : overlaps) {
     if (!ov.accepted) continue;
     SLAM_MMS_RETURN_IF_ERROR(graph.AddRegistrationFactor(
         GraphId(ov.drive_a, ov.submap_a), GraphId(ov.drive_b, ov.submap_b), ov.T_a_b,
-        Scale(scales, -1, SubmapFactorKind::kRegistration) * ov.covariance, o.overlap_loss));
+        (scales != nullptr ? scales->overlap : 1.0) * ov.covariance, o.overlap_loss));
+    if (origins != nullptr) origins->push_back({-1, -1});
   }
   return graph;
 }
 
+// Factors whose errors are correlated in time (GNSS biases, the POS's attitude): their residuals
+// after the solve show only the part that varies between them (the estimate follows the rest),
+// so their variance is never estimated below the stated one.
+bool TimeCorrelated(SubmapFactorKind kind) {
+  return kind == SubmapFactorKind::kGnss || kind == SubmapFactorKind::kPosePrior ||
+         kind == SubmapFactorKind::kAttitudeChain || kind == SubmapFactorKind::kGnssBias ||
+         kind == SubmapFactorKind::kGnssBiasLink;
+}
+
 // Step 6: rounds of scaling each group by sum chi2 / sum redundancy and solving again, until
-// every factor of a round is within 5 % of 1; `graph` is replaced by the last solve.
+// every factor of a round is within 5 % of the last; `graph` is replaced by the last solve.
 Status EstimateVarianceComponents(const std::vector<DriveAdjustment::Drive>& drives,
                                   const std::vector<DriveAdjustment::Overlap>& overlaps,
                                   const DriveAdjustment::Options& o, SubmapGraph* graph,
-                                  DriveAdjustment::Result* out) {
-  VarianceScales scales;
+                                  std::vector<FactorOrigin> origins, DriveAdjustment::Result* out) {
+  // Each drive factor's group.
+  std::vector<std::vector<VarianceGroup>> group_of(drives.size());
+  for (size_t d = 0; d < drives.size(); ++d) {
+    for (const SubmapGraphFactor& f : drives[d].result.factors) {
+      group_of[d].push_back({static_cast<int64_t>(d), f.kind});
+    }
+  }
+  const VarianceGroup overlap_group;  // drive -1, registration
+  std::map<VarianceGroup, double> factor_of;
   std::map<VarianceGroup, DriveAdjustment::VarianceComponent> groups;
+  FactorScales scales;
   for (int round = 1; round <= o.variance_component_rounds; ++round) {
     SLAM_MMS_ASSIGN_OR_RETURN(const std::vector<SubmapGraph::FactorFit> fits, graph->FitFactors());
-    const std::vector<SubmapGraphFactor>& factors = graph->Factors();
+    if (fits.size() != origins.size()) {
+      return InternalError("DriveAdjustment: variance components: factor bookkeeping differs");
+    }
     std::map<VarianceGroup, std::pair<double, double>> sums;  // chi2, redundancy
     for (auto& [key, g] : groups) g.factors = 0;
-    for (size_t i = 0; i < factors.size(); ++i) {
-      const VarianceGroup key = GroupOf(factors[i]);
+    for (size_t i = 0; i < fits.size(); ++i) {
+      const FactorOrigin& from = origins[i];
+      if (from.drive >= 0 && from.index < 0) continue;  // a datum bias prior: not a measurement
+      const VarianceGroup key =
+          from.drive < 0
+              ? overlap_group
+              : group_of[static_cast<size_t>(from.drive)][static_cast<size_t>(from.index)];
       sums[key].first += fits[i].chi2;
       sums[key].second += fits[i].redundancy;
       DriveAdjustment::VarianceComponent& g = groups[key];
-      g.drive = key.first >= 0 ? drives[static_cast<size_t>(key.first)].name : std::string();
-      g.kind = key.second;
+      g.drive = key.drive >= 0 ? drives[static_cast<size_t>(key.drive)].name : std::string();
+      g.kind = key.kind;
       ++g.factors;
     }
     bool settled = true;
@@ -364,22 +400,33 @@ Status EstimateVarianceComponents(const std::vector<DriveAdjustment::Drive>& dri
       g.redundancy = sum.second;
       g.estimated = sum.second >= o.variance_component_min_redundancy;
       if (!g.estimated) continue;
-      const double factor = sum.first / sum.second;
-      double& scale = scales[key];
-      if (scale == 0.0) scale = 1.0;
-      const double next = std::clamp(scale * factor, o.variance_factor_min, o.variance_factor_max);
-      if (std::abs(std::log(next / scale)) > std::log(1.05)) settled = false;
-      scale = next;
+      double& factor = factor_of.emplace(key, 1.0).first->second;
+      const double next =
+          std::clamp(factor * sum.first / sum.second,
+                     TimeCorrelated(key.kind) ? 1.0 : o.variance_factor_min, o.variance_factor_max);
+      if (std::abs(std::log(next / factor)) > std::log(1.05)) settled = false;
+      factor = next;
     }
     out->variance_component_rounds = round;
     if (settled) break;
-    SLAM_MMS_ASSIGN_OR_RETURN(SubmapGraph g, BuildGraph(drives, overlaps, o, scales));
+    scales.drive.assign(drives.size(), {});
+    for (size_t d = 0; d < drives.size(); ++d) {
+      for (const VarianceGroup& key : group_of[d]) {
+        const auto it = factor_of.find(key);
+        scales.drive[d].push_back(it == factor_of.end() ? 1.0 : it->second);
+      }
+    }
+    const auto ov = factor_of.find(overlap_group);
+    scales.overlap = ov == factor_of.end() ? 1.0 : ov->second;
+    origins.clear();
+    SLAM_MMS_ASSIGN_OR_RETURN(SubmapGraph g, BuildGraph(drives, overlaps, o, &scales, &origins));
     SLAM_MMS_ASSIGN_OR_RETURN(out->summary, g.Solve(SolveTrigger::kFinish));
     *graph = std::move(g);
   }
   out->variance_components.clear();
   for (auto& [key, g] : groups) {
-    g.variance_factor = Scale(scales, key.first, key.second);
+    const auto it = factor_of.find(key);
+    g.variance_factor = it == factor_of.end() ? 1.0 : it->second;
     out->variance_components.push_back(g);
     SLAM_MMS_LOG(kInfo) << "DriveAdjustment: variance factor "
                         << (g.drive.empty() ? std::string("overlaps") : g.drive) << " "
@@ -601,8 +648,11 @@ StatusOr<DriveAdjustment::Result> DriveAdjustment::Run(std::vector<Drive> drives
 
   // Solve; reject what contradicts the rest; solve again.
   std::optional<SubmapGraph> graph;
+  std::vector<FactorOrigin> origins;  // of the graph's factors
   for (int round = 0;; ++round) {
-    SLAM_MMS_ASSIGN_OR_RETURN(SubmapGraph g, BuildGraph(drives, out.overlaps, options));
+    origins.clear();
+    SLAM_MMS_ASSIGN_OR_RETURN(SubmapGraph g,
+                              BuildGraph(drives, out.overlaps, options, nullptr, &origins));
     SLAM_MMS_ASSIGN_OR_RETURN(out.summary, g.Solve(SolveTrigger::kFinish));
     graph.emplace(std::move(g));
     out.rejection_rounds = round;
@@ -625,7 +675,7 @@ StatusOr<DriveAdjustment::Result> DriveAdjustment::Run(std::vector<Drive> drives
   // Variance component estimation.
   if (options.variance_component_rounds > 0) {
     SLAM_MMS_RETURN_IF_ERROR(
-        EstimateVarianceComponents(drives, out.overlaps, options, &*graph, &out));
+        EstimateVarianceComponents(drives, out.overlaps, options, &*graph, origins, &out));
   }
 
   // The adjusted drives.

@@ -189,8 +189,12 @@ int MergeMainImpl(int argc, const char* const* argv) {
       ->check(CLI::PositiveNumber);
   app.add_option("--variance-components", options.variance_component_rounds,
                  "rounds of variance component estimation: each drive's factors of one kind and "
-                 "the overlaps scaled by their variance factor (0 = off)")
+                 "the overlaps scaled by their variance factor (default 10; 0 = off)")
       ->check(CLI::NonNegativeNumber);
+  app.add_option("--variance-factor-min", options.variance_factor_min,
+                 "lowest variance factor of the relative factors (reckon, registration, loops, "
+                 "overlaps; default 1: what a drive states is only loosened)")
+      ->check(CLI::Range(1e-6, 1.0));
   app.add_option("--log-level", log_level, "debug|info|warning|error");
   try {
     app.parse(argc, argv);

@@ -357,7 +357,8 @@ bool TimeCorrelated(SubmapFactorKind kind) {
 }
 
 // Step 6: rounds of scaling each group by sum chi2 / sum redundancy and solving again, until
-// every factor of a round is within 5 % of the last; `graph` is replaced by the last solve.
+// every factor of a round is within 5 % of the last; `graph` is replaced by the last solve, and
+// the factors reported are those it was solved with.
 Status EstimateVarianceComponents(const std::vector<DriveAdjustment::Drive>& drives,
                                   const std::vector<DriveAdjustment::Overlap>& overlaps,
                                   const DriveAdjustment::Options& o, SubmapGraph* graph,
@@ -373,8 +374,19 @@ Status EstimateVarianceComponents(const std::vector<DriveAdjustment::Drive>& dri
   std::map<VarianceGroup, double> factor_of;
   std::map<VarianceGroup, DriveAdjustment::VarianceComponent> groups;
   FactorScales scales;
+  std::map<VarianceGroup, double> applied;  // the factors of the graph solved last
   for (int round = 1; round <= o.variance_component_rounds; ++round) {
-    SLAM_MMS_ASSIGN_OR_RETURN(const std::vector<SubmapGraph::FactorFit> fits, graph->FitFactors());
+    StatusOr<std::vector<SubmapGraph::FactorFit>> fitted = graph->FitFactors();
+    if (!fitted.ok() && fitted.status().code() == StatusCode::kFailedPrecondition) {
+      // A direction no factor observes (drives without GNSS: where they are as a whole): no
+      // redundancy is defined. The adjustment stands as solved, with the factors applied so far.
+      out->variance_components_skipped = fitted.status().message();
+      SLAM_MMS_LOG(kWarning) << "DriveAdjustment: variance components not estimated: "
+                             << fitted.status().message();
+      break;
+    }
+    SLAM_MMS_RETURN_IF_ERROR(fitted.status());
+    const std::vector<SubmapGraph::FactorFit>& fits = *fitted;
     if (fits.size() != origins.size()) {
       return InternalError("DriveAdjustment: variance components: factor bookkeeping differs");
     }
@@ -418,6 +430,7 @@ Status EstimateVarianceComponents(const std::vector<DriveAdjustment::Drive>& dri
     }
     const auto ov = factor_of.find(overlap_group);
     scales.overlap = ov == factor_of.end() ? 1.0 : ov->second;
+    applied = factor_of;
     origins.clear();
     SLAM_MMS_ASSIGN_OR_RETURN(SubmapGraph g, BuildGraph(drives, overlaps, o, &scales, &origins));
     SLAM_MMS_ASSIGN_OR_RETURN(out->summary, g.Solve(SolveTrigger::kFinish));
@@ -425,8 +438,8 @@ Status EstimateVarianceComponents(const std::vector<DriveAdjustment::Drive>& dri
   }
   out->variance_components.clear();
   for (auto& [key, g] : groups) {
-    const auto it = factor_of.find(key);
-    g.variance_factor = it == factor_of.end() ? 1.0 : it->second;
+    const auto it = applied.find(key);
+    g.variance_factor = it == applied.end() ? 1.0 : it->second;
     out->variance_components.push_back(g);
     SLAM_MMS_LOG(kInfo) << "DriveAdjustment: variance factor "
                         << (g.drive.empty() ? std::string("overlaps") : g.drive) << " "

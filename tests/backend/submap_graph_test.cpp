@@ -508,6 +508,22 @@ TEST(SubmapGraphTest, FactorFitsDoNotDependOnWhereTheHeapPutsTheNodes) {
   }
 }
 
+// A node no factor observes: no redundancy is defined, and FitFactors says so (the adjustment
+// then keeps its solve without variance components).
+TEST(SubmapGraphTest, FactorFitsRefuseAnUnobservedNode) {
+  auto g = SubmapGraph::Create();
+  ASSERT_TRUE(g.ok());
+  ASSERT_TRUE(g->AddSubmap(0, Eigen::Isometry3d::Identity()).ok());
+  ASSERT_TRUE(g->AddSubmap(1, Eigen::Isometry3d(Eigen::Translation3d(10, 0, 0))).ok());
+  ASSERT_TRUE(
+      g->AddPosePrior(0, Eigen::Isometry3d::Identity(), DiagonalCovariance(0.01, 0.1)).ok());
+  auto fits = g->FitFactors();
+  ASSERT_FALSE(fits.ok());
+  EXPECT_EQ(fits.status().code(), StatusCode::kFailedPrecondition);
+  EXPECT_NE(fits.status().message().find("not observed"), std::string::npos)
+      << fits.status().message();
+}
+
 TEST(SubmapGraphTest, InvalidInputsReturnStatusWithoutAborting) {
   SubmapGraph::Options bad;
   bad.active_submaps = 0;

@@ -372,8 +372,11 @@ int MergeMainImpl(int argc, const char* const* argv) {
                           {"estimated", c.estimated},
                           {"variance_factor", c.variance_factor}});
   }
-  report["variance_components"] = {{"rounds", res.variance_component_rounds},
-                                   {"groups", std::move(components)}};
+  report["variance_components"] = {
+      {"rounds", res.variance_component_rounds},
+      {"skipped", res.variance_components_skipped.empty() ? Json(nullptr)
+                                                          : Json(res.variance_components_skipped)},
+      {"groups", std::move(components)}};
   report["map_points"] = map.cloud.size();
   report["las_tiles"] = tiles->size();
   report["adjust_wall_s"] = adjust_s;

@@ -156,8 +156,7 @@ class DriveAdjustment {
     SubmapFactorKind kind = SubmapFactorKind::kReckon;
     int factors = 0;
     double redundancy = 0.0;  ///< Of its factors, in the last round.
-    /// The product of the rounds' factors: its stated covariances were scaled by this (1 where
-    /// not estimated).
+    /// Its stated covariances were scaled by this in the final solve (1 where not estimated).
     double variance_factor = 1.0;
     bool estimated = false;  ///< Enough redundancy (Options::variance_component_min_redundancy).
   };
@@ -175,6 +174,9 @@ class DriveAdjustment {
     /// Step 6's groups (empty when off) and its rounds.
     std::vector<VarianceComponent> variance_components;
     int variance_component_rounds = 0;
+    /// Why step 6 stopped without estimating (a direction no factor observes, e.g. drives
+    /// without GNSS); empty otherwise. The adjustment itself stands.
+    std::string variance_components_skipped;
     int num_accepted() const;
   };
 

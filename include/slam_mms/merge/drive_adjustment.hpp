@@ -25,12 +25,13 @@
 //      whitened residual then exceeds consistency_gate_chi2 contradicts the rest (GNSS, the
 //      drives' chains, the other overlaps) and is removed, and the graph solved again (at most
 //      max_rejection_rounds).
-//   6. Optionally (Options::variance_component_rounds), variance component estimation: what
+//   6. By default (Options::variance_component_rounds), variance component estimation: what
 //      each drive states about its own uncertainty is checked against the others. Per group
 //      (a drive's factors of one kind; the overlaps), sum chi2 / sum redundancy is its variance
 //      factor; the group's covariances are scaled by it and the graph solved again, until the
-//      factors settle. A drive whose GNSS or chain is stated tighter than it is then stops
-//      pulling the others by more than it is worth.
+//      factors settle (groups are only loosened by default, and GNSS and POS attitude never
+//      tightened: Options::variance_factor_min). A drive whose chain or attitude is stated
+//      tighter than it is then stops pulling the others by more than it is worth.
 //
 // The result holds every drive with its adjusted submap poses (scan poses follow rigidly), every
 // overlap tested with its verdict and its offset before and after (the translation between the

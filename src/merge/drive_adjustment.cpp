@@ -13,6 +13,7 @@
 #include <utility>
 
 #include "core/option_error.hpp"
+#include "merge/merge_graph.hpp"
 #include "registration/point_icp.hpp"
 #include "slam_mms/core/geodesy.hpp"
 #include "slam_mms/core/lie.hpp"
@@ -21,23 +22,12 @@
 namespace slam_mms {
 namespace {
 
-constexpr SubmapId kDriveIdStride = SubmapId{1} << 32;
+using merge_internal::BuildGraph;
+using merge_internal::EstimateVarianceComponents;
+using merge_internal::FactorOrigin;
+using merge_internal::GraphId;
+
 constexpr size_t kMinRegistrationPoints = 100;
-
-SubmapId GraphId(size_t drive, SubmapId id) {
-  return static_cast<SubmapId>(drive) * kDriveIdStride + id;
-}
-
-// A drive's own GNSS bias key in the merged graph (the keys below kBiasKeyStride are the
-// drives' datum biases, Options::gnss_bias_sigma_m).
-constexpr int kBiasKeyStride = 1 << 20;
-StatusOr<int> GraphBiasKey(size_t drive, int key) {
-  if (key < 0 || key >= kBiasKeyStride || drive + 1 >= size_t{1} << 10) {
-    return InvalidArgumentError("GNSS bias key " + std::to_string(key) + " of drive " +
-                                std::to_string(drive) + " out of range");
-  }
-  return static_cast<int>(drive + 1) * kBiasKeyStride + key;
-}
 
 // T_world0_worldi: the exact rigid transform between two local ENU frames (through ECEF).
 Eigen::Isometry3d EnuToEnu(const GeodeticPoint& from, const GeodeticPoint& to) {
@@ -228,226 +218,6 @@ struct Verifier {
     ov->covariance = RegistrationCovariance(best, o);
   }
 };
-
-// Variance component estimation (step 6). A group: a drive's factors of one kind, or (drive -1)
-// the cross-drive overlaps.
-struct VarianceGroup {
-  int64_t drive = -1;
-  SubmapFactorKind kind = SubmapFactorKind::kRegistration;
-  bool operator<(const VarianceGroup& o) const {
-    return std::tie(drive, kind) < std::tie(o.drive, o.kind);
-  }
-};
-// Per drive, per factor of its result (same order): the variance factor of its covariance; and
-// the overlaps'. Empty: every factor as stated.
-struct FactorScales {
-  std::vector<std::vector<double>> drive;
-  double overlap = 1.0;
-  double Of(size_t d, size_t i) const { return d < drive.size() ? drive[d][i] : 1.0; }
-};
-// Where a factor of the merged graph comes from: a drive's factor (drive, index into its result's
-// factors) or (drive -1) an overlap; a datum bias (index -1) of a drive.
-struct FactorOrigin {
-  int64_t drive = -1;
-  int64_t index = -1;
-};
-
-// The graph of every drive plus the accepted overlaps; each factor's covariance scaled by
-// `scales` (null: as stated); `origins` (may be null): per factor of the graph, where it is from.
-StatusOr<SubmapGraph> BuildGraph(const std::vector<DriveAdjustment::Drive>& drives,
-                                 const std::vector<DriveAdjustment::Overlap>& overlaps,
-                                 const DriveAdjustment::Options& o,
-                                 const FactorScales* scales = nullptr,
-                                 std::vector<FactorOrigin>* origins = nullptr) {
-  SLAM_MMS_ASSIGN_OR_RETURN(SubmapGraph graph, SubmapGraph::Create(o.graph));
-  for (size_t d = 0; d < drives.size(); ++d) {
-    const DriveResult& r = drives[d].result;
-    const std::string ctx = "drive '" + drives[d].name + "'";
-    const bool bias = o.gnss_bias_sigma_m > 0.0;
-    if (bias) {
-      const double v = o.gnss_bias_sigma_m * o.gnss_bias_sigma_m;
-      SLAM_MMS_RETURN_IF_ERROR(
-          graph.AddGnssBias(static_cast<int>(d), v * Eigen::Matrix3d::Identity()));
-      if (origins != nullptr) origins->push_back({static_cast<int64_t>(d), -1});
-    }
-    for (const DriveSubmap& s : r.submaps) {
-      SLAM_MMS_RETURN_IF_ERROR(
-          graph.AddSubmap(GraphId(d, s.id), s.T_world_submap).WithContext(ctx));
-      std::vector<SubmapScanPose> scans = s.scans;
-      SLAM_MMS_RETURN_IF_ERROR(graph.SetScans(GraphId(d, s.id), scans).WithContext(ctx));
-    }
-    for (size_t i = 0; i < r.factors.size(); ++i) {
-      const SubmapId a = GraphId(d, r.factors[i].a), b = GraphId(d, r.factors[i].b);
-      SubmapGraphFactor f = r.factors[i];
-      if (scales != nullptr) f.covariance *= scales->Of(d, i);
-      const size_t num_factors = graph.Factors().size();
-      Status st;
-      switch (f.kind) {
-        case SubmapFactorKind::kRegistration:
-          st = graph.AddRegistrationFactor(a, b, f.T, f.covariance, f.loss);
-          break;
-        case SubmapFactorKind::kReckon: st = graph.AddReckonFactor(a, b, f.T, f.covariance); break;
-        case SubmapFactorKind::kLoop:
-          st = graph.AddLoopFactor(a, b, f.T, f.covariance).status();
-          break;
-        case SubmapFactorKind::kPosePrior:
-          if (o.use_pose_priors) st = graph.AddPosePrior(a, f.T, f.covariance);
-          break;
-        case SubmapFactorKind::kAttitudeChain:
-          if (o.use_pose_priors) {
-            AttitudeChain chain;
-            chain.transition = f.transition;
-            chain.covariance = f.covariance.topLeftCorner<3, 3>();
-            st = graph.AddAttitudeChainFactor(a, b, f.T_a.linear(), f.T.linear(), chain);
-          }
-          break;
-        case SubmapFactorKind::kGnss: {
-          // The drive's own bias node (level 2's Gauss-Markov nodes), else the datum bias if any.
-          StatusOr<int> key = f.gnss_bias >= 0 ? GraphBiasKey(d, f.gnss_bias)
-                                               : StatusOr<int>(bias ? static_cast<int>(d) : -1);
-          st = key.ok()
-                   ? graph.AddGnssPrior(a, f.p_world_antenna, f.covariance.topLeftCorner<3, 3>(),
-                                        f.T_submap_body, f.t_body_antenna, *key)
-                   : key.status();
-          break;
-        }
-        case SubmapFactorKind::kGnssBias: {  // a run's first node (no datum bias: Run)
-          StatusOr<int> key = GraphBiasKey(d, f.gnss_bias);
-          st =
-              key.ok() ? graph.AddGnssBias(*key, f.covariance.topLeftCorner<3, 3>()) : key.status();
-          break;
-        }
-        case SubmapFactorKind::kGnssBiasLink: {
-          StatusOr<int> key = GraphBiasKey(d, f.gnss_bias);
-          StatusOr<int> from = GraphBiasKey(d, f.gnss_bias_from);
-          st = !key.ok()    ? key.status()
-               : !from.ok() ? from.status()
-                            : graph.AddGnssBiasLink(*from, *key, f.transition(0, 0),
-                                                    f.covariance.topLeftCorner<3, 3>());
-          break;
-        }
-      }
-      if (!st.ok()) {
-        return InvalidArgumentError(ctx + ": " + SubmapFactorKindName(f.kind) + " factor " +
-                                    std::to_string(f.a) + "->" + std::to_string(f.b) + ": " +
-                                    st.message());
-      }
-      if (origins != nullptr && graph.Factors().size() > num_factors) {
-        origins->push_back({static_cast<int64_t>(d), static_cast<int64_t>(i)});
-      }
-    }
-  }
-  for (const DriveAdjustment::Overlap& ov : overlaps) {
-    if (!ov.accepted) continue;
-    SLAM_MMS_RETURN_IF_ERROR(graph.AddRegistrationFactor(
-        GraphId(ov.drive_a, ov.submap_a), GraphId(ov.drive_b, ov.submap_b), ov.T_a_b,
-        (scales != nullptr ? scales->overlap : 1.0) * ov.covariance, o.overlap_loss));
-    if (origins != nullptr) origins->push_back({-1, -1});
-  }
-  return graph;
-}
-
-// Factors whose errors are correlated in time (GNSS biases, the POS's attitude): their residuals
-// after the solve show only the part that varies between them (the estimate follows the rest),
-// so their variance is never estimated below the stated one.
-bool TimeCorrelated(SubmapFactorKind kind) {
-  return kind == SubmapFactorKind::kGnss || kind == SubmapFactorKind::kPosePrior ||
-         kind == SubmapFactorKind::kAttitudeChain || kind == SubmapFactorKind::kGnssBias ||
-         kind == SubmapFactorKind::kGnssBiasLink;
-}
-
-// Step 6: rounds of scaling each group by sum chi2 / sum redundancy and solving again, until
-// every factor of a round is within 5 % of the last; `graph` is replaced by the last solve, and
-// the factors reported are those it was solved with.
-Status EstimateVarianceComponents(const std::vector<DriveAdjustment::Drive>& drives,
-                                  const std::vector<DriveAdjustment::Overlap>& overlaps,
-                                  const DriveAdjustment::Options& o, SubmapGraph* graph,
-                                  std::vector<FactorOrigin> origins, DriveAdjustment::Result* out) {
-  // Each drive factor's group.
-  std::vector<std::vector<VarianceGroup>> group_of(drives.size());
-  for (size_t d = 0; d < drives.size(); ++d) {
-    for (const SubmapGraphFactor& f : drives[d].result.factors) {
-      group_of[d].push_back({static_cast<int64_t>(d), f.kind});
-    }
-  }
-  const VarianceGroup overlap_group;  // drive -1, registration
-  std::map<VarianceGroup, double> factor_of;
-  std::map<VarianceGroup, DriveAdjustment::VarianceComponent> groups;
-  FactorScales scales;
-  std::map<VarianceGroup, double> applied;  // the factors of the graph solved last
-  for (int round = 1; round <= o.variance_component_rounds; ++round) {
-    StatusOr<std::vector<SubmapGraph::FactorFit>> fitted = graph->FitFactors();
-    if (!fitted.ok() && fitted.status().code() == StatusCode::kFailedPrecondition) {
-      // A direction no factor observes (drives without GNSS: where they are as a whole): no
-      // redundancy is defined. The adjustment stands as solved, with the factors applied so far.
-      out->variance_components_skipped = fitted.status().message();
-      SLAM_MMS_LOG(kWarning) << "DriveAdjustment: variance components not estimated: "
-                             << fitted.status().message();
-      break;
-    }
-    SLAM_MMS_RETURN_IF_ERROR(fitted.status());
-    const std::vector<SubmapGraph::FactorFit>& fits = *fitted;
-    if (fits.size() != origins.size()) {
-      return InternalError("DriveAdjustment: variance components: factor bookkeeping differs");
-    }
-    std::map<VarianceGroup, std::pair<double, double>> sums;  // chi2, redundancy
-    for (auto& [key, g] : groups) g.factors = 0;
-    for (size_t i = 0; i < fits.size(); ++i) {
-      const FactorOrigin& from = origins[i];
-      if (from.drive >= 0 && from.index < 0) continue;  // a datum bias prior: not a measurement
-      const VarianceGroup key =
-          from.drive < 0
-              ? overlap_group
-              : group_of[static_cast<size_t>(from.drive)][static_cast<size_t>(from.index)];
-      sums[key].first += fits[i].chi2;
-      sums[key].second += fits[i].redundancy;
-      DriveAdjustment::VarianceComponent& g = groups[key];
-      g.drive = key.drive >= 0 ? drives[static_cast<size_t>(key.drive)].name : std::string();
-      g.kind = key.kind;
-      ++g.factors;
-    }
-    bool settled = true;
-    for (const auto& [key, sum] : sums) {
-      DriveAdjustment::VarianceComponent& g = groups[key];
-      g.redundancy = sum.second;
-      g.estimated = sum.second >= o.variance_component_min_redundancy;
-      if (!g.estimated) continue;
-      double& factor = factor_of.emplace(key, 1.0).first->second;
-      const double next =
-          std::clamp(factor * sum.first / sum.second,
-                     TimeCorrelated(key.kind) ? 1.0 : o.variance_factor_min, o.variance_factor_max);
-      if (std::abs(std::log(next / factor)) > std::log(1.05)) settled = false;
-      factor = next;
-    }
-    out->variance_component_rounds = round;
-    if (settled) break;
-    scales.drive.assign(drives.size(), {});
-    for (size_t d = 0; d < drives.size(); ++d) {
-      for (const VarianceGroup& key : group_of[d]) {
-        const auto it = factor_of.find(key);
-        scales.drive[d].push_back(it == factor_of.end() ? 1.0 : it->second);
-      }
-    }
-    const auto ov = factor_of.find(overlap_group);
-    scales.overlap = ov == factor_of.end() ? 1.0 : ov->second;
-    applied = factor_of;
-    origins.clear();
-    SLAM_MMS_ASSIGN_OR_RETURN(SubmapGraph g, BuildGraph(drives, overlaps, o, &scales, &origins));
-    SLAM_MMS_ASSIGN_OR_RETURN(out->summary, g.Solve(SolveTrigger::kFinish));
-    *graph = std::move(g);
-  }
-  out->variance_components.clear();
-  for (auto& [key, g] : groups) {
-    const auto it = applied.find(key);
-    g.variance_factor = it == applied.end() ? 1.0 : it->second;
-    out->variance_components.push_back(g);
-    SLAM_MMS_LOG(kInfo) << "DriveAdjustment: variance factor "
-                        << (g.drive.empty() ? std::string("overlaps") : g.drive) << " "
-                        << SubmapFactorKindName(g.kind) << ": " << g.variance_factor << " ("
-                        << g.factors << " factors, redundancy " << g.redundancy << ")";
-  }
-  return OkStatus();
-}
 
 Status Positive(const char* field, double v) {
   if (v > 0.0) return OkStatus();

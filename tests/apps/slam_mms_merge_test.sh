@@ -5,7 +5,8 @@
 # (two drives of one street with their own outage drift), merged: the overlaps are found and
 # accepted, the offset between the drives where they overlap shrinks to <= 3 cm, the merged map is
 # sharper than the union of the two maps, every drive's ATE and outage error are reported against
-# the simulator's ground truth; the outputs exist; a folder without a drive result, an unwritable --out and an unknown --log-level fail with a message naming them.
+# the simulator's ground truth, each accepted overlap's registration error against the truth is
+# written and small; the outputs exist; a folder without a drive result, an unwritable --out and an unknown --log-level fail with a message naming them.
 set -uo pipefail
 merge=$1
 run=$2
@@ -48,6 +49,21 @@ for d in r["drives"]:
 e = r["map_entropy"]
 assert e["merged"] < e["union_before"], e
 print("merged report ok:", off, e)
+PY
+# overlaps.csv: each accepted registration with its error against the true relative pose (both
+# drives have ground truth): present, and small for a registration the adjustment accepted.
+python3 - "$tmp/m/merged/overlaps.csv" <<'PY' || fail "overlaps.csv"
+import csv, math, sys
+rows = list(csv.DictReader(open(sys.argv[1])))
+acc = [r for r in rows if r["accepted"] == "1"]
+assert acc, "no accepted overlap"
+for r in acc:
+    e = [float(r[k]) for k in ("truth_err_e_m", "truth_err_n_m", "truth_err_u_m")]
+    assert all(math.isfinite(float(r[k])) for k in ("x_m", "y_m", "z_m", "rx_deg", "ry_deg", "rz_deg")), r
+    assert math.hypot(*e) < 0.15 and float(r["truth_err_deg"]) < 0.5, r
+    assert float(r["truth_chi2"]) >= 0.0, r
+print("overlaps.csv ok:", len(acc), "accepted, truth error max %.3f m" %
+      max(math.hypot(float(r["truth_err_e_m"]), float(r["truth_err_n_m"]), float(r["truth_err_u_m"])) for r in acc))
 PY
 
 # A folder without a drive result; an unwritable --out.

@@ -3,6 +3,7 @@
 
 #include <CLI/CLI.hpp>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -13,6 +14,7 @@
 #include <system_error>
 #include <vector>
 
+#include "slam_mms/core/lie.hpp"
 #include "slam_mms/core/logging.hpp"
 #include "slam_mms/drive/open_drive.hpp"
 #include "slam_mms/eval/ground_truth.hpp"
@@ -247,29 +249,11 @@ int MergeMainImpl(int argc, const char* const* argv) {
   const double adjust_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
-  // Overlaps.
-  std::vector<double> before, after;
-  int verified = 0;
-  std::ofstream csv(merged / "overlaps.csv");
-  csv << "drive_a,submap_a,drive_b,submap_b,distance_m,verified,accepted,hypotheses_converged,"
-         "inlier_ratio,rms_m,self_rms_m,offset_before_m,offset_after_m,verdict\n";
-  for (const auto& ov : res.overlaps) {
-    verified += ov.verified ? 1 : 0;
-    if (ov.accepted) {
-      before.push_back(ov.offset_before_m);
-      after.push_back(ov.offset_after_m);
-    }
-    csv << res.drives[ov.drive_a].name << "," << ov.submap_a << "," << res.drives[ov.drive_b].name
-        << "," << ov.submap_b << "," << ov.distance_m << "," << ov.verified << "," << ov.accepted
-        << "," << ov.hypotheses_converged << "," << ov.inlier_ratio << "," << ov.rms_m << ","
-        << ov.self_rms_m << "," << ov.offset_before_m << "," << ov.offset_after_m << ",\""
-        << ov.verdict << "\"\n";
-  }
-  csv.close();
-
   // Trajectories and ground truth.
   Json drives_json = Json::array();
   std::vector<std::vector<Eigen::Isometry3d>> true_submap_poses;
+  // Per drive, where it has ground truth: the true pose of each submap (by id).
+  std::vector<std::map<SubmapId, Eigen::Isometry3d>> true_pose_of(res.drives.size());
   bool all_truth = true;
   for (size_t d = 0; d < res.drives.size(); ++d) {
     const Trajectory after_traj = ScanTrajectory(res.drives[d].result);
@@ -297,6 +281,7 @@ int MergeMainImpl(int argc, const char* const* argv) {
       for (const DriveSubmap& sub : res.drives[d].result.submaps) {
         auto T = truth.gt->T_world_body.Interpolate(sub.scans.front().stamp, 0.2);
         if (!T.ok()) all_truth = false;
+        if (T.ok()) true_pose_of[d][sub.id] = *T;
         poses.push_back(T.ok() ? *T : sub.T_world_submap);
       }
       true_submap_poses.push_back(std::move(poses));
@@ -311,6 +296,53 @@ int MergeMainImpl(int argc, const char* const* argv) {
     }
     drives_json.push_back(std::move(j));
   }
+
+  // Overlaps: each registration T_a_b (translation, rotation vector in submap a's frame) and,
+  // where both submaps have ground truth, its error against the true relative pose (translation in
+  // the common world's E, N, U axes; rotation angle; chi2 against the stated covariance).
+  std::vector<double> before, after;
+  int verified = 0;
+  std::ofstream csv(merged / "overlaps.csv");
+  csv << "drive_a,submap_a,drive_b,submap_b,distance_m,verified,accepted,hypotheses_converged,"
+         "inlier_ratio,rms_m,self_rms_m,offset_before_m,offset_after_m,x_m,y_m,z_m,rx_deg,ry_deg,"
+         "rz_deg,truth_err_e_m,truth_err_n_m,truth_err_u_m,truth_err_deg,truth_chi2,verdict\n";
+  constexpr double kDeg = 180.0 / M_PI;
+  for (const auto& ov : res.overlaps) {
+    verified += ov.verified ? 1 : 0;
+    if (ov.accepted) {
+      before.push_back(ov.offset_before_m);
+      after.push_back(ov.offset_after_m);
+    }
+    csv << res.drives[ov.drive_a].name << "," << ov.submap_a << "," << res.drives[ov.drive_b].name
+        << "," << ov.submap_b << "," << ov.distance_m << "," << ov.verified << "," << ov.accepted
+        << "," << ov.hypotheses_converged << "," << ov.inlier_ratio << "," << ov.rms_m << ","
+        << ov.self_rms_m << "," << ov.offset_before_m << "," << ov.offset_after_m;
+    if (ov.verified) {
+      const Eigen::Vector3d t = ov.T_a_b.translation(), r = kDeg * so3::Log(ov.T_a_b.linear());
+      csv << "," << t.x() << "," << t.y() << "," << t.z() << "," << r.x() << "," << r.y() << ","
+          << r.z();
+    } else {
+      csv << ",,,,,,";
+    }
+    const auto ta = true_pose_of[ov.drive_a].find(ov.submap_a);
+    const auto tb = true_pose_of[ov.drive_b].find(ov.submap_b);
+    if (ov.verified && ta != true_pose_of[ov.drive_a].end() &&
+        tb != true_pose_of[ov.drive_b].end()) {
+      const Eigen::Isometry3d T_true = ta->second.inverse() * tb->second;
+      const Eigen::Vector3d e =
+          ta->second.linear() * (ov.T_a_b.translation() - T_true.translation());
+      const double angle =
+          Eigen::AngleAxisd(T_true.linear().transpose() * ov.T_a_b.linear()).angle();
+      // Against the stated covariance (rotation first, as the factor's): 6 degrees of freedom.
+      const Vector6d e6 = se3::Log(T_true.inverse() * ov.T_a_b);
+      csv << "," << e.x() << "," << e.y() << "," << e.z() << "," << kDeg * angle << ","
+          << e6.dot(ov.covariance.ldlt().solve(e6));
+    } else {
+      csv << ",,,,,";
+    }
+    csv << ",\"" << ov.verdict << "\"\n";
+  }
+  csv.close();
 
   // Maps: merged, the union of the drives' own maps, the union at the true poses.
   const double voxel = 0.1;

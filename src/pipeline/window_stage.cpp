@@ -97,6 +97,22 @@ Status WindowStage::AddFactors(const Scan& scan, const ScanMotionInput& motion,
           ref_id_, cur_state, *step->T_submap_reg, step->cov_reg, FactorKind::kRegistration,
           RobustLoss::Huber(noise::kRegistrationHuberSigmas), prediction);
       if (!outcome.ok()) return outcome.status().WithContext("Localizer: F_Reg");
+      if (!outcome->id && rejected_in_a_row_ >= noise::kRejectedRegistrationsBeforeRecovery &&
+          !res->degenerate) {
+        // After a streak of rejections the prediction is what is off: the registration is taken
+        // as it is (checked against no prediction) until one passes the gate again.
+        MotionPrediction none = prediction;
+        none.covariance *= noise::kUnknownPredictionVarianceScale;
+        auto taken = window_->AddRelativePoseFactor(
+            ref_id_, cur_state, *step->T_submap_reg, step->cov_reg, FactorKind::kRegistration,
+            RobustLoss::Huber(noise::kRegistrationHuberSigmas), none);
+        if (!taken.ok()) return taken.status().WithContext("Localizer: F_Reg");
+        outcome->id = taken->id;
+        SLAM_MMS_LOG(kInfo) << "Localizer: scan " << scan.index << ": registration taken after "
+                            << rejected_in_a_row_
+                            << " rejected in a row (the motion prediction is off: d2 = "
+                            << outcome->mahalanobis_sq << ")";
+      }
       res->registration_used = outcome->id.has_value();
       res->registration_downweighted = outcome->covariance_scale > 1.0;
       res->consistency_mahalanobis_sq = outcome->mahalanobis_sq;
@@ -105,6 +121,8 @@ Status WindowStage::AddFactors(const Scan& scan, const ScanMotionInput& motion,
                              << ": registration rejected by the consistency check (d2 = "
                              << outcome->mahalanobis_sq << ")";
       }
+      // Recovery lasts until a registration passes the gate again.
+      rejected_in_a_row_ = outcome->consistent ? 0 : rejected_in_a_row_ + 1;
     }
   }
   res->timings.factors_ms = MsSince(t0);

@@ -77,6 +77,9 @@ class WindowStage {
   StateId next_id_ = 0;
   StateId ref_id_ = 0;
   StateId prev_id_ = 0;
+  /// Registrations in a row that failed the consistency gate (rejected, or taken down-weighted
+  /// in recovery: noise::kRejectedRegistrationsBeforeRecovery), across submaps.
+  int rejected_in_a_row_ = 0;
 };
 
 }  // namespace slam_mms::internal

@@ -1,7 +1,8 @@
 // WindowStage (steps 5-6 of Localizer::ProcessScan) on hand-made predictions and registrations: the
 // state ids of a window and across windows, the reference scan, the constant-velocity factor,
-// F_Reg pulling the pose and F_Reg rejected by the consistency check, F_Odom fixing the relative
-// motion, and the velocity of F_Odom with IMU states (full mode).
+// F_Reg pulling the pose and F_Reg rejected by the consistency check (and taken after a streak of
+// rejections), F_Odom fixing the relative motion, and the velocity of F_Odom with IMU states (full
+// mode).
 #include "pipeline/window_stage.hpp"
 
 #include <gtest/gtest.h>
@@ -132,6 +133,49 @@ TEST(WindowStageTest, ARegistrationFarFromThePredictionIsRejected) {
   EXPECT_GT(res.consistency_mahalanobis_sq, 22.46);
   ASSERT_TRUE(window.Optimize(MakeScan(1), &step, &prev, &res).ok());
   EXPECT_LT(DistM(step.T_submap_cur, Forward(0.5)), 1e-6);
+}
+
+// The gate's lock-out (noise::kRejectedRegistrationsBeforeRecovery): a motion prediction 5 m off
+// (a wrong velocity) makes every registration fail the gate; without a way out level 1 follows the
+// prediction alone and leaves its map (session 38: 11.6 m in 10 s after a POS re-converged).
+// After three rejected in a row, the next registrations that are not flagged degenerate are taken
+// as they are, until one passes the gate again; then a new streak starts from zero.
+TEST(WindowStageTest, AfterThreeRejectedRegistrationsInARowTheNextAreTaken) {
+  WindowStage window(Options(MappingMode::kLidarOnly));
+  ASSERT_TRUE(window.Start(Eigen::Vector3d::Zero(), Vector6d::Zero()).ok());
+  PreviousScan prev = Previous(1, Eigen::Isometry3d::Identity());
+  auto run = [&](int k, const Eigen::Isometry3d& pred, const Eigen::Isometry3d& reg,
+                 bool degenerate, LocalizationResult* res, ScanStep* step) {
+    *step = Step(MotionFactorType::kConstantVelocity, pred, reg);
+    *res = LocalizationResult();
+    res->degenerate = degenerate;
+    ASSERT_TRUE(window.AddFactors(MakeScan(k), ScanMotionInput(), prev, step, res).ok());
+    ASSERT_TRUE(window.Optimize(MakeScan(k), step, &prev, res).ok());
+    window.Advance(step->cur_state);
+    prev = Previous(k + 1, step->T_submap_cur);
+  };
+  LocalizationResult res;
+  ScanStep step;
+  for (int k = 1; k <= 7; ++k) {
+    const Eigen::Isometry3d reg = Forward(0.5 * k);
+    // Scan 4 is flagged degenerate: not taken, the streak goes on.
+    run(k, Forward(0.5 * k + 5.0), reg, /*degenerate=*/k == 4, &res, &step);
+    EXPECT_GT(res.consistency_mahalanobis_sq, 22.46) << k;
+    if (k <= 4) {
+      EXPECT_FALSE(res.registration_used) << k;
+      EXPECT_GT(DistM(step.T_submap_cur, reg), 1.0) << k;
+    } else {
+      EXPECT_TRUE(res.registration_used) << k;
+      EXPECT_FALSE(res.registration_downweighted) << k;
+      EXPECT_LT(DistM(step.T_submap_cur, reg), 0.05) << k;
+    }
+  }
+  // A registration within the gate ends the recovery: the next far one is rejected again.
+  run(8, Forward(4.0), Forward(4.01), false, &res, &step);
+  EXPECT_TRUE(res.registration_used);
+  EXPECT_LT(res.consistency_mahalanobis_sq, 22.46);
+  run(9, Forward(9.5), Forward(4.5), false, &res, &step);
+  EXPECT_FALSE(res.registration_used);
 }
 
 TEST(WindowStageTest, FOdomFixesThePosRelativeMotion) {

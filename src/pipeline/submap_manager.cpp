@@ -363,7 +363,9 @@ StatusOr<std::vector<SubmapPoseUpdate>> SubmapManager::OnSubmapFinished(
     // F_Reckon (eq 21): the serial chain from level 1.
     SLAM_MMS_RETURN_IF_ERROR(m.graph->AddReckonFactor(
         m.last_id, submap_id, rec->T_prev_this,
-        internal::DiagonalPoseCovariance(m.opt.reckon_sigma_rot_rad, m.opt.reckon_sigma_trans_m)));
+        m.opt.reckon_from_level1 ? rec->cov_prev_this
+                                 : internal::DiagonalPoseCovariance(m.opt.reckon_sigma_rot_rad,
+                                                                    m.opt.reckon_sigma_trans_m)));
     // F_Reg (§5.2.1): map-to-map registration with the previous submap (point-based ICP).
     if (m.opt.use_map_to_map) {
       auto prev_cloud = submaps.SubmapCloud(prev->id, SubmapSource::CloudKind::kRegistration);

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "pipeline/pose_covariance.hpp"
 #include "slam_mms/core/lie.hpp"
 
 namespace slam_mms {
@@ -214,6 +215,36 @@ TEST(SubmapManagerTest, GnssReturnPullsDriftedChainOntoTruthAndOnlyReadsTheSourc
                                      DriftedSubmap(kFinished - 1).inverse() *
                                      DriftedSubmap(kFinished);
   EXPECT_TRUE(updates[kFinished].T_world_submap.isApprox(expected, 1e-9));
+}
+
+// Options::reckon_from_level1: F_Reckon carries level 1's own covariance of the new reference in
+// the previous submap (SubmapRecord::cov_prev_this) instead of the fixed reckon_sigma_*.
+TEST(SubmapManagerTest, ReckonFromLevel1CarriesTheRecordsCovariance) {
+  Vector6d var;
+  var << 1e-7, 2e-7, 3e-7, 1e-4, 2e-4, 3e-4;
+  for (const bool from_level1 : {false, true}) {
+    SubmapManager::Options o = ChainOptions();
+    o.reckon_from_level1 = from_level1;
+    auto mgr = SubmapManager::Create(o);
+    ASSERT_TRUE(mgr.ok()) << mgr.status().ToString();
+    FakeSource source;
+    for (int i = 0; i < kFinished; ++i) {
+      source.records.push_back(MakeRecord(i));
+      source.records.back().cov_prev_this = (static_cast<double>(i + 1) * var).asDiagonal();
+      ASSERT_TRUE((*mgr)->OnSubmapFinished(source, i, false).ok());
+    }
+    int reckons = 0;
+    for (const SubmapGraphFactor& f : (*mgr)->graph().Factors()) {
+      if (f.kind != SubmapFactorKind::kReckon) continue;
+      ++reckons;
+      const Matrix6d expected = from_level1
+                                    ? Matrix6d((static_cast<double>(f.b + 1) * var).asDiagonal())
+                                    : Matrix6d(internal::DiagonalPoseCovariance(
+                                          o.reckon_sigma_rot_rad, o.reckon_sigma_trans_m));
+      EXPECT_TRUE(f.covariance.isApprox(expected, 1e-12)) << from_level1 << " " << f.b;
+    }
+    EXPECT_EQ(reckons, kFinished - 1);
+  }
 }
 
 TEST(SubmapManagerTest, NoTriggerNoSolveUntilFinish) {

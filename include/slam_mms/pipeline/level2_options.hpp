@@ -29,8 +29,15 @@ struct Level2Options {
   /// off), not for drift. > 0.
   double loop_gate_chi2 = 50.0;
   double long_outage_s = 10.0;  ///< GNSS back after at least this long: solve.
+  /// F_Reckon's covariance: fixed per axis (the default), or (reckon_from_level1) level 1's own
+  /// covariance of the new reference's pose in the previous submap (SubmapRecord::cov_prev_this:
+  /// the sliding window's marginal, whose reference is held). Against the truth on 30 simulated
+  /// drives the fixed sigmas are about 3x too loose (docs/sweep.md, session 38); level 1's own
+  /// covariance is about as large as the errors there. Off by default until measured on the whole
+  /// sweep and the per-drive tables.
   double reckon_sigma_rot_rad = 0.002;
   double reckon_sigma_trans_m = 0.05;
+  bool reckon_from_level1 = false;
   double gnss_sigma_scale = 1.0;  ///< Multiplies the GNSS measurement covariance.
   /// GNSS errors are time-correlated (an RTK-float or single-point bias wanders over tens of
   /// seconds), so fixes at 10 Hz are not independent: the fixes within this window [s] count as

@@ -32,9 +32,8 @@ struct Level2Options {
   /// F_Reckon's covariance: fixed per axis (the default), or (reckon_from_level1) level 1's own
   /// covariance of the new reference's pose in the previous submap (SubmapRecord::cov_prev_this:
   /// the sliding window's marginal, whose reference is held). Against the truth on 30 simulated
-  /// drives the fixed sigmas are about 3x too loose (docs/sweep.md, session 38); level 1's own
-  /// covariance is about as large as the errors there. Off by default until measured on the whole
-  /// sweep and the per-drive tables.
+  /// drives the fixed sigmas are about 3x too loose and level 1's own about 1.3x too tight in
+  /// sigma (docs/sweep.md, session 38): off by default, an option to measure with.
   double reckon_sigma_rot_rad = 0.002;
   double reckon_sigma_trans_m = 0.05;
   bool reckon_from_level1 = false;

@@ -368,6 +368,9 @@ StatusOr<FactorOutcome> SlidingWindowGraph::AddRelativePoseFactor(
       ++m.stats.checked;
       if (outcome.mahalanobis_sq <= m.options.consistency_gate_chi2) {
         ++m.stats.passed;
+      } else if (!pred->enforce) {
+        outcome.consistent = false;
+        ++m.stats.taken_inconsistent;
       } else {
         outcome.consistent = false;
         if (m.options.inconsistency_action == InconsistencyAction::kReject) {

@@ -18,7 +18,8 @@
 // prediction of the same relative pose (the caller's MotionPrediction, or else the kMotion factors
 // between the two states, directly or chained through consecutive states). When the squared
 // Mahalanobis distance d2 = e^T (Sigma_reg + Sigma_pred)^-1 e exceeds the chi-square gate, the
-// registration is rejected or down-weighted (its covariance inflated by d2 / gate), and counted.
+// registration is rejected or down-weighted (its covariance inflated by d2 / gate), and counted;
+// a caller's prediction with `enforce` false only reports the check.
 //
 // Window: after each Solve(), while more than Options::window_size non-kept states remain, the
 // oldest leaves the window. Options::exit_mode kMarginalize (default) folds the factors of the
@@ -82,9 +83,13 @@ struct StateInit {
 };
 
 /// A prediction of T_a_b with covariance (library convention), e.g. from IMU preintegration.
+/// `enforce` false: the registration is still checked and the outcome reports it, but it is added
+/// as it is even when it fails the gate (the host has concluded that the prediction is what is
+/// off; counted in ConsistencyStats::taken_inconsistent).
 struct MotionPrediction {
   Eigen::Isometry3d T_a_b = Eigen::Isometry3d::Identity();
   Matrix6d covariance = Matrix6d::Identity();
+  bool enforce = true;
 };
 
 /// What happened to a relative-pose factor handed to the graph.
@@ -102,7 +107,8 @@ struct ConsistencyStats {
   int passed = 0;
   int rejected = 0;
   int down_weighted = 0;
-  int unchecked = 0;  ///< Registrations with no motion prediction to compare with.
+  int taken_inconsistent = 0;  ///< Failed the gate, added as it is (MotionPrediction::enforce).
+  int unchecked = 0;           ///< Registrations with no motion prediction to compare with.
 };
 
 class SlidingWindowGraph {

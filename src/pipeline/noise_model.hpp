@@ -48,11 +48,9 @@ inline constexpr double kPredictionSigmaFloorTransM = 0.05;
 /// later registration fails the gate, level 1 follows the prediction alone and drifts away from
 /// its own map (11.6 m in 10 s on a simulated drive, docs/pipeline.md). So after this many
 /// registrations in a row rejected by the gate, the next ones that are not flagged degenerate
-/// are taken as they are (checked against the prediction with its covariance scaled by
-/// kUnknownPredictionVarianceScale: against none), until one passes the gate again. In normal
-/// runs no registration is rejected at all (18 drives of 64-198 s, session 38).
+/// are taken as they are (MotionPrediction::enforce false), until one passes the gate again. In
+/// normal runs no registration is rejected at all (18 drives of 64-198 s, session 38).
 inline constexpr int kRejectedRegistrationsBeforeRecovery = 3;
-inline constexpr double kUnknownPredictionVarianceScale = 1e8;
 /// A scan's reported pose variance where the window's covariance cannot be computed and no
 /// registration covariance exists (rad^2 and m^2 on every axis): "unknown", 2 m / 2 rad.
 inline constexpr double kUnknownPoseVariance = 4.0;

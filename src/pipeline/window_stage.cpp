@@ -93,21 +93,17 @@ Status WindowStage::AddFactors(const Scan& scan, const ScanMotionInput& motion,
       prediction.covariance = noise::kPredictionCovarianceInflation * cov_motion +
                               DiagonalPoseCovariance(noise::kPredictionSigmaFloorRotRad,
                                                      noise::kPredictionSigmaFloorTransM);
+      // After a streak of rejections the prediction is what is off: a registration that is not
+      // degenerate is taken as it is until one passes the gate again.
+      const bool recover =
+          window_options_.inconsistency_action == WindowInconsistencyAction::kReject &&
+          rejected_in_a_row_ >= noise::kRejectedRegistrationsBeforeRecovery && !res->degenerate;
+      prediction.enforce = !recover;
       auto outcome = window_->AddRelativePoseFactor(
           ref_id_, cur_state, *step->T_submap_reg, step->cov_reg, FactorKind::kRegistration,
           RobustLoss::Huber(noise::kRegistrationHuberSigmas), prediction);
       if (!outcome.ok()) return outcome.status().WithContext("Localizer: F_Reg");
-      if (!outcome->id && rejected_in_a_row_ >= noise::kRejectedRegistrationsBeforeRecovery &&
-          !res->degenerate) {
-        // After a streak of rejections the prediction is what is off: the registration is taken
-        // as it is (checked against no prediction) until one passes the gate again.
-        MotionPrediction none = prediction;
-        none.covariance *= noise::kUnknownPredictionVarianceScale;
-        auto taken = window_->AddRelativePoseFactor(
-            ref_id_, cur_state, *step->T_submap_reg, step->cov_reg, FactorKind::kRegistration,
-            RobustLoss::Huber(noise::kRegistrationHuberSigmas), none);
-        if (!taken.ok()) return taken.status().WithContext("Localizer: F_Reg");
-        outcome->id = taken->id;
+      if (recover && !outcome->consistent) {
         SLAM_MMS_LOG(kInfo) << "Localizer: scan " << scan.index << ": registration taken after "
                             << rejected_in_a_row_
                             << " rejected in a row (the motion prediction is off: d2 = "

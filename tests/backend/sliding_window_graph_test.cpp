@@ -323,6 +323,37 @@ TEST(SlidingWindowGraphTest, InconsistentRegistrationIsRejectedAndCounted) {
   EXPECT_EQ(st.rejected, 2);
 }
 
+// MotionPrediction::enforce false (Localizer's recovery from a streak of rejections): the check is
+// made and reported, the registration is added as it is, at its own covariance.
+TEST(SlidingWindowGraphTest, AnUnenforcedPredictionReportsTheCheckAndKeepsTheRegistration) {
+  auto g = SlidingWindowGraph::Create(SlidingWindowGraph::Options());
+  ASSERT_TRUE(g.ok());
+  for (int i = 0; i < 2; ++i) ASSERT_TRUE(g->AddState(i, StateInit{}).ok());
+  ASSERT_TRUE(
+      g->AddPosePrior(0, Eigen::Isometry3d::Identity(), DiagonalCovariance(1e-3, 1e-3)).ok());
+  ASSERT_TRUE(g->AddRelativePoseFactor(0, 1, Eigen::Isometry3d(Eigen::Translation3d(1.0, 0, 0)),
+                                       DiagonalCovariance(0.01, 0.05), FactorKind::kMotion)
+                  .ok());
+  MotionPrediction pred{Eigen::Isometry3d(Eigen::Translation3d(1.0, 0, 0)),
+                        DiagonalCovariance(0.01, 0.05)};
+  pred.enforce = false;
+  auto out = g->AddRelativePoseFactor(0, 1, Eigen::Isometry3d(Eigen::Translation3d(3.0, 0, 0)),
+                                      DiagonalCovariance(0.01, 0.05), FactorKind::kRegistration,
+                                      RobustLoss::None(), pred);
+  ASSERT_TRUE(out.ok());
+  EXPECT_TRUE(out->consistency_checked);
+  EXPECT_FALSE(out->consistent);
+  EXPECT_NEAR(out->mahalanobis_sq, 800.0, 1e-6);
+  EXPECT_TRUE(out->id.has_value());
+  EXPECT_EQ(out->covariance_scale, 1.0);
+  EXPECT_EQ(g->consistency_stats().taken_inconsistent, 1);
+  EXPECT_EQ(g->consistency_stats().rejected, 0);
+  auto s = g->Solve();
+  ASSERT_TRUE(s.ok() && s->usable());
+  // Equal weights: halfway between the motion factor's 1 m and the registration's 3 m.
+  EXPECT_NEAR(g->Pose(1)->translation().x(), 2.0, 1e-3);
+}
+
 TEST(SlidingWindowGraphTest, InconsistentRegistrationCanBeDownWeighted) {
   SlidingWindowGraph::Options o;
   o.inconsistency_action = SlidingWindowGraph::InconsistencyAction::kDownWeight;

@@ -331,12 +331,10 @@ int MergeMainImpl(int argc, const char* const* argv) {
       const Eigen::Isometry3d T_true = ta->second.inverse() * tb->second;
       const Eigen::Vector3d e =
           ta->second.linear() * (ov.T_a_b.translation() - T_true.translation());
-      const double angle =
-          Eigen::AngleAxisd(T_true.linear().transpose() * ov.T_a_b.linear()).angle();
-      // Against the stated covariance (rotation first, as the factor's): 6 degrees of freedom.
+      // Rotation first, as the factor's covariance: its angle, and chi2 with 6 degrees of freedom.
       const Vector6d e6 = se3::Log(T_true.inverse() * ov.T_a_b);
-      csv << "," << e.x() << "," << e.y() << "," << e.z() << "," << kDeg * angle << ","
-          << e6.dot(ov.covariance.ldlt().solve(e6));
+      csv << "," << e.x() << "," << e.y() << "," << e.z() << "," << kDeg * e6.head<3>().norm()
+          << "," << e6.dot(ov.covariance.ldlt().solve(e6));
     } else {
       csv << ",,,,,";
     }

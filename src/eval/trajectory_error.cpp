@@ -3,6 +3,7 @@
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include "core/option_error.hpp"
@@ -219,6 +220,19 @@ StatusOr<NeesResult> ComputeNees(const Trajectory& estimate, const Trajectory& g
   r.position_fraction_inside_95 = static_cast<double>(in_p) / n;
   r.attitude_fraction_inside_95 = static_cast<double>(in_r) / n;
   return r;
+}
+
+RelativePoseError RelativePoseErrorAgainstTruth(const Eigen::Isometry3d& T_a_b,
+                                                const Matrix6d& covariance,
+                                                const Eigen::Isometry3d& T_world_a_true,
+                                                const Eigen::Isometry3d& T_world_b_true) {
+  RelativePoseError out;
+  const Eigen::Isometry3d T_a_b_true = T_world_a_true.inverse() * T_world_b_true;
+  out.error = se3::Log(T_a_b_true.inverse() * T_a_b);
+  const Eigen::LLT<Matrix6d> llt(covariance);
+  out.chi2 = llt.info() == Eigen::Success ? out.error.dot(llt.solve(out.error))
+                                          : std::numeric_limits<double>::quiet_NaN();
+  return out;
 }
 
 }  // namespace slam_mms::eval

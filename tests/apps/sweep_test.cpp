@@ -220,6 +220,38 @@ TEST(SweepRulesTest, TablesNameEveryFailureByRunSeedAndRule) {
   fs::remove_all(dir);
 }
 
+// sweep.md's table of level 2's factors against the truth: chi2 mean and median over every run's
+// factors of a kind, RMS of error and stated sigma per axis.
+TEST(SweepRulesTest, TablesSummariseLevel2FactorsAgainstTheTruth) {
+  auto factor = [](const std::string& kind, double chi2, double err_x_m) {
+    return Json{{"kind", kind},
+                {"a", 0},
+                {"b", 1},
+                {"dt_s", 5.0},
+                {"distance_m", 50.0},
+                {"error", {0.0, 0.0, 0.0, err_x_m, 0.0, 0.0}},
+                {"sigma", {0.001, 0.001, 0.001, 0.02, 0.02, 0.02}},
+                {"chi2", chi2}};
+  };
+  RunRecord a = GoodRun(), b = GoodRun();
+  a.result["methods"]["full"]["level2_factors"] =
+      Json::array({factor("reckon", 1.0, 0.03), factor("registration", 20.0, 0.0)});
+  b.result["methods"]["full"]["level2_factors"] = Json::array({factor("reckon", 3.0, 0.04)});
+  const fs::path dir = testing::MakeTempDir("sweep_factors");
+  int failures = 0;
+  ASSERT_TRUE(WriteSweepTables({a, b}, nullptr, "cmd", dir, &failures).ok());
+  std::ifstream md(dir / "sweep.md");
+  const std::string text((std::istreambuf_iterator<char>(md)), std::istreambuf_iterator<char>());
+  // Reckon: chi2 mean 2, median (the upper of two) 3, none above 16.81; x error RMS
+  // sqrt((3^2 + 4^2) / 2) = 3.536 cm, stated 2 cm.
+  EXPECT_NE(text.find("| reckon | 2 | 2.00 | 3.00 | 0 | 0.000 / 0.000 / 0.000 | 0.057 / 0.057 / "
+                      "0.057 | 3.536 / 0.000 / 0.000 | 2.000 / 2.000 / 2.000 |"),
+            std::string::npos)
+      << text;
+  EXPECT_NE(text.find("| registration | 1 | 20.00 | 20.00 | 1 |"), std::string::npos) << text;
+  fs::remove_all(dir);
+}
+
 // The plan on the real OXTS archives: deterministic, a run is the same alone and in the sweep,
 // windows inside the drive, the CI subset one run per motion class.
 TEST(SweepPlanTest, PlanIsDeterministicAndIndependentOfTheSelection) {

@@ -278,6 +278,26 @@ TEST(TrajectoryErrorTest, NeesOfConsistentAndOverconfidentCovariances) {
   EXPECT_EQ(ComputeNees(no_cov, gt).status().code(), StatusCode::kInvalidArgument);
 }
 
+// A relative-pose measurement against the truth: the error in the true b frame, rotation first,
+// and its chi2 against the stated covariance; NaN where the covariance is not positive definite.
+TEST(TrajectoryErrorTest, RelativePoseErrorAgainstTruth) {
+  const Eigen::Isometry3d T_world_a = se3::Exp((Vector6d() << 0.1, -0.2, 0.7, 5, 3, 1).finished());
+  const Eigen::Isometry3d T_a_b_true =
+      se3::Exp((Vector6d() << 0.0, 0.05, 0.3, 20, 1, 0).finished());
+  const Eigen::Isometry3d T_world_b = T_world_a * T_a_b_true;
+  const Vector6d xi = (Vector6d() << 0.002, 0.0, -0.001, 0.03, -0.02, 0.01).finished();
+  const Eigen::Isometry3d T_a_b = T_a_b_true * se3::Exp(xi);
+  Matrix6d cov = Matrix6d::Zero();
+  cov.diagonal() << 1e-6, 1e-6, 4e-6, 1e-4, 1e-4, 4e-4;
+  const RelativePoseError e = RelativePoseErrorAgainstTruth(T_a_b, cov, T_world_a, T_world_b);
+  EXPECT_LT((e.error - xi).norm(), 1e-9);
+  const double expected = 4.0 + 0.0 + 0.25 + 9.0 + 4.0 + 0.25;
+  EXPECT_NEAR(e.chi2, expected, 1e-6);
+  Matrix6d bad = cov;
+  bad(2, 2) = -1.0;
+  EXPECT_TRUE(std::isnan(RelativePoseErrorAgainstTruth(T_a_b, bad, T_world_a, T_world_b).chi2));
+}
+
 TEST(TrajectoryErrorTest, WrapAngle) {
   EXPECT_NEAR(WrapAngle(3.0 * M_PI / 2.0), -M_PI / 2.0, 1e-12);
   EXPECT_NEAR(WrapAngle(-3.0 * M_PI / 2.0), M_PI / 2.0, 1e-12);

@@ -332,9 +332,10 @@ int MergeMainImpl(int argc, const char* const* argv) {
       const Eigen::Vector3d e =
           ta->second.linear() * (ov.T_a_b.translation() - T_true.translation());
       // Rotation first, as the factor's covariance: its angle, and chi2 with 6 degrees of freedom.
-      const Vector6d e6 = se3::Log(T_true.inverse() * ov.T_a_b);
-      csv << "," << e.x() << "," << e.y() << "," << e.z() << "," << kDeg * e6.head<3>().norm()
-          << "," << e6.dot(ov.covariance.ldlt().solve(e6));
+      const eval::RelativePoseError re =
+          eval::RelativePoseErrorAgainstTruth(ov.T_a_b, ov.covariance, ta->second, tb->second);
+      csv << "," << e.x() << "," << e.y() << "," << e.z() << "," << kDeg * re.error.head<3>().norm()
+          << "," << re.chi2;
     } else {
       csv << ",,,,,";
     }

@@ -4,6 +4,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <functional>
+#include <map>
 #include <optional>
 
 #include "slam_mms/core/logging.hpp"
@@ -112,6 +114,69 @@ Json MethodJson(const app::ModeRun& run, const app::MethodEvaluation& ev,
       {"scans_per_s", run.scans_per_s},
       {"wall_s", run.wall_s},
   };
+}
+
+// Level 2's relative factors of a drive (reckon, map-to-map registration, loop) as added, with
+// the times of their two submaps' references (their first scans; the reference is the body at
+// that scan, T_submap_scan of it maps it to the submap frame).
+struct RelativeFactorRecord {
+  SubmapFactorKind kind = SubmapFactorKind::kReckon;
+  SubmapId a = 0, b = 0;
+  Eigen::Isometry3d T_a_b = Eigen::Isometry3d::Identity();
+  Matrix6d covariance = Matrix6d::Identity();
+  Timestamp stamp_a, stamp_b;
+  Eigen::Isometry3d T_submap_scan_a = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d T_submap_scan_b = Eigen::Isometry3d::Identity();
+};
+
+std::vector<RelativeFactorRecord> RelativeFactors(const DriveResult& drive) {
+  std::map<SubmapId, const DriveSubmap*> by_id;
+  for (const DriveSubmap& s : drive.submaps) {
+    if (!s.scans.empty()) by_id[s.id] = &s;
+  }
+  std::vector<RelativeFactorRecord> out;
+  for (const SubmapGraphFactor& f : drive.factors) {
+    if (f.kind != SubmapFactorKind::kReckon && f.kind != SubmapFactorKind::kRegistration &&
+        f.kind != SubmapFactorKind::kLoop) {
+      continue;
+    }
+    const auto a = by_id.find(f.a), b = by_id.find(f.b);
+    if (a == by_id.end() || b == by_id.end()) continue;
+    out.push_back({f.kind, f.a, f.b, f.T, f.covariance, a->second->scans.front().stamp,
+                   b->second->scans.front().stamp, a->second->scans.front().T_submap_scan,
+                   b->second->scans.front().T_submap_scan});
+  }
+  return out;
+}
+
+// Each factor against the truth (eval::RelativePoseErrorAgainstTruth): the honesty of what level
+// 2 is told, over every drive of the sweep (sweep.md, "Level 2's relative factors").
+Json RelativeFactorsJson(const std::vector<RelativeFactorRecord>& factors,
+                         const eval::GroundTruth& gt) {
+  Json out = Json::array();
+  for (const RelativeFactorRecord& f : factors) {
+    StatusOr<Eigen::Isometry3d> body_a = gt.T_world_body.Interpolate(f.stamp_a);
+    StatusOr<Eigen::Isometry3d> body_b = gt.T_world_body.Interpolate(f.stamp_b);
+    if (!body_a.ok() || !body_b.ok()) continue;
+    const Eigen::Isometry3d T_world_a = *body_a * f.T_submap_scan_a.inverse();
+    const Eigen::Isometry3d T_world_b = *body_b * f.T_submap_scan_b.inverse();
+    const eval::RelativePoseError e =
+        eval::RelativePoseErrorAgainstTruth(f.T_a_b, f.covariance, T_world_a, T_world_b);
+    Json error = Json::array(), sigma = Json::array();
+    for (int i = 0; i < 6; ++i) {
+      error.push_back(e.error[i]);
+      sigma.push_back(std::sqrt(std::max(0.0, f.covariance(i, i))));
+    }
+    out.push_back({{"kind", SubmapFactorKindName(f.kind)},
+                   {"a", f.a},
+                   {"b", f.b},
+                   {"dt_s", f.stamp_b.SecondsSince(f.stamp_a)},
+                   {"distance_m", (T_world_b.translation() - T_world_a.translation()).norm()},
+                   {"error", error},
+                   {"sigma", sigma},
+                   {"chi2", Opt(e.chi2)}});
+  }
+  return out;
 }
 
 StatusOr<MappingSystem::Options> BaseOptions(const fs::path& config) {
@@ -246,8 +311,22 @@ int RunOne(const fs::path& run_dir) {
   Json methods = Json::object();
   std::optional<eval::GroundTruth> gt;
   std::optional<GeodeticPoint> origin;
+  std::vector<RelativeFactorRecord> full_factors;
+  Status export_status;
   for (const MappingMode mode : modes) {
-    app::ModeRun mr = app::RunMode(mode, options, **reader, PosWorkflow::kForward, false);
+    std::function<void(const MappingSystem&)> on_finished;
+    if (mode == MappingMode::kFull) {
+      on_finished = [&](const MappingSystem& system) {
+        StatusOr<DriveResult> drive = system.ExportDriveResult();
+        if (drive.ok()) {
+          full_factors = RelativeFactors(*drive);
+        } else {
+          export_status = drive.status();
+        }
+      };
+    }
+    app::ModeRun mr = app::RunMode(mode, options, **reader, PosWorkflow::kForward, false, nullptr,
+                                   {}, on_finished);
     if (!gt && mr.origin) {
       origin = *mr.origin;  // the frame gt is loaded in
       StatusOr<eval::GroundTruth> loaded =
@@ -259,6 +338,10 @@ int RunOne(const fs::path& run_dir) {
         mr, gt ? &*gt : nullptr, outages, mr.first_scan_start ? *mr.first_scan_start : reference,
         settings.num_threads);
     methods[mr.name] = MethodJson(mr, ev, gt ? &*gt : nullptr);
+    if (mode == MappingMode::kFull && gt) {
+      if (!export_status.ok()) return Fail(run_dir, *spec_json, export_status);
+      methods[mr.name]["level2_factors"] = RelativeFactorsJson(full_factors, *gt);
+    }
   }
   result["methods"] = methods;
   // The input's own error: the OXTS records' positions (the GNSS/INS solution the POS reads its

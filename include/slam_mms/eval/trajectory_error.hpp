@@ -134,6 +134,18 @@ struct NeesResult {
 /// meaningful for absolute covariances (a POS); level 1's are relative to their submap.
 StatusOr<NeesResult> ComputeNees(const Trajectory& estimate, const Trajectory& ground_truth);
 
+/// A relative-pose measurement (T_a_b with its covariance, rotation first, as level 2's factors)
+/// against the truth: error = se3::Log(T_a_b_true^-1 * T_a_b), rotation first, and its chi2
+/// (6 dof) against the covariance. chi2 is NaN where the covariance is not positive definite.
+struct RelativePoseError {
+  Eigen::Matrix<double, 6, 1> error = Eigen::Matrix<double, 6, 1>::Zero();
+  double chi2 = 0.0;
+};
+RelativePoseError RelativePoseErrorAgainstTruth(const Eigen::Isometry3d& T_a_b,
+                                                const Eigen::Matrix<double, 6, 6>& covariance,
+                                                const Eigen::Isometry3d& T_world_a_true,
+                                                const Eigen::Isometry3d& T_world_b_true);
+
 /// Wraps an angle to (-pi, pi].
 double WrapAngle(double angle_rad);
 

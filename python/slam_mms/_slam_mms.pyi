@@ -1139,6 +1139,21 @@ class Level2Options:
     @reckon_sigma_trans_m.setter
     def reckon_sigma_trans_m(self, value: float) -> None: ...
     @property
+    def reckon_sigma_rot_rad_per_m(self) -> float:
+        """[rad/m]"""
+    @reckon_sigma_rot_rad_per_m.setter
+    def reckon_sigma_rot_rad_per_m(self, value: float) -> None: ...
+    @property
+    def reckon_sigma_trans_per_m(self) -> float:
+        """[m/m]"""
+    @reckon_sigma_trans_per_m.setter
+    def reckon_sigma_trans_per_m(self, value: float) -> None: ...
+    @property
+    def reckon_from_level1(self) -> bool:
+        ...
+    @reckon_from_level1.setter
+    def reckon_from_level1(self, value: bool) -> None: ...
+    @property
     def gnss_sigma_scale(self) -> float:
         ...
     @gnss_sigma_scale.setter

@@ -354,6 +354,8 @@ void RegisterOptions(py::module_& m) {
       .Field("long_outage_s", &SO::long_outage_s, "[s]")
       .Field("reckon_sigma_rot_rad", &SO::reckon_sigma_rot_rad, "[rad]")
       .Field("reckon_sigma_trans_m", &SO::reckon_sigma_trans_m, "[m]")
+      .Field("reckon_sigma_rot_rad_per_m", &SO::reckon_sigma_rot_rad_per_m, "[rad/m]")
+      .Field("reckon_sigma_trans_per_m", &SO::reckon_sigma_trans_per_m, "[m/m]")
       .Field("reckon_from_level1", &SO::reckon_from_level1, "")
       .Field("gnss_sigma_scale", &SO::gnss_sigma_scale, "")
       .Field("gnss_correlation_s", &SO::gnss_correlation_s, "[s]")

@@ -83,6 +83,12 @@ Status Level2Options::Validate() const {
   if (!(reckon_sigma_trans_m > 0.0)) {
     return bad("reckon_sigma_trans_m", reckon_sigma_trans_m, "must be > 0");
   }
+  if (!(reckon_sigma_rot_rad_per_m >= 0.0)) {
+    return bad("reckon_sigma_rot_rad_per_m", reckon_sigma_rot_rad_per_m, "must be >= 0");
+  }
+  if (!(reckon_sigma_trans_per_m >= 0.0)) {
+    return bad("reckon_sigma_trans_per_m", reckon_sigma_trans_per_m, "must be >= 0");
+  }
   if (!(gnss_sigma_scale > 0.0)) return bad("gnss_sigma_scale", gnss_sigma_scale, "must be > 0");
   if (!(gnss_correlation_s >= 0.0)) {
     return bad("gnss_correlation_s", gnss_correlation_s, "must be >= 0");
@@ -361,11 +367,14 @@ StatusOr<std::vector<SubmapPoseUpdate>> SubmapManager::OnSubmapFinished(
   const SubmapRecord* prev = m.last_id >= 0 ? FindSubmap(submaps, m.last_id) : nullptr;
   if (prev != nullptr) {
     // F_Reckon (eq 21): the serial chain from level 1.
+    const double d = rec->T_prev_this.translation().norm();
     SLAM_MMS_RETURN_IF_ERROR(m.graph->AddReckonFactor(
         m.last_id, submap_id, rec->T_prev_this,
-        m.opt.reckon_from_level1 ? rec->cov_prev_this
-                                 : internal::DiagonalPoseCovariance(m.opt.reckon_sigma_rot_rad,
-                                                                    m.opt.reckon_sigma_trans_m)));
+        m.opt.reckon_from_level1
+            ? rec->cov_prev_this
+            : internal::DiagonalPoseCovariance(
+                  std::hypot(m.opt.reckon_sigma_rot_rad, m.opt.reckon_sigma_rot_rad_per_m * d),
+                  std::hypot(m.opt.reckon_sigma_trans_m, m.opt.reckon_sigma_trans_per_m * d))));
     // F_Reg (§5.2.1): map-to-map registration with the previous submap (point-based ICP).
     if (m.opt.use_map_to_map) {
       auto prev_cloud = submaps.SubmapCloud(prev->id, SubmapSource::CloudKind::kRegistration);

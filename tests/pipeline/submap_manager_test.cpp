@@ -247,6 +247,37 @@ TEST(SubmapManagerTest, ReckonFromLevel1CarriesTheRecordsCovariance) {
   }
 }
 
+// Options::reckon_sigma_*_per_m: F_Reckon's sigmas grow in quadrature with the distance between
+// the two references (the reckon's translation) above the fixed floor; negative rates are refused.
+TEST(SubmapManagerTest, ReckonSigmasGrowWithTheDistance) {
+  SubmapManager::Options o = ChainOptions();
+  o.reckon_sigma_rot_rad = 0.0003;
+  o.reckon_sigma_trans_m = 0.01;
+  o.reckon_sigma_rot_rad_per_m = 1e-5;
+  o.reckon_sigma_trans_per_m = 4e-4;
+  auto mgr = SubmapManager::Create(o);
+  ASSERT_TRUE(mgr.ok()) << mgr.status().ToString();
+  FakeSource source;
+  for (int i = 0; i < kFinished; ++i) {
+    source.records.push_back(MakeRecord(i));
+    ASSERT_TRUE((*mgr)->OnSubmapFinished(source, i, false).ok());
+  }
+  int reckons = 0;
+  for (const SubmapGraphFactor& f : (*mgr)->graph().Factors()) {
+    if (f.kind != SubmapFactorKind::kReckon) continue;
+    ++reckons;
+    const double d = f.T.translation().norm();
+    ASSERT_GT(d, 1.0);
+    const Matrix6d expected = internal::DiagonalPoseCovariance(
+        std::sqrt(0.0003 * 0.0003 + 1e-10 * d * d), std::sqrt(0.01 * 0.01 + 1.6e-7 * d * d));
+    EXPECT_TRUE(f.covariance.isApprox(expected, 1e-12)) << f.b << " d " << d;
+  }
+  EXPECT_EQ(reckons, kFinished - 1);
+  SubmapManager::Options bad = o;
+  bad.reckon_sigma_trans_per_m = -1e-4;
+  EXPECT_NE(bad.Validate().message().find("reckon_sigma_trans_per_m"), std::string::npos);
+}
+
 TEST(SubmapManagerTest, NoTriggerNoSolveUntilFinish) {
   // Loops on, but 4 submaps are fewer than loop_min_submap_gap: no candidate, so no trigger.
   SubmapManager::Options o;

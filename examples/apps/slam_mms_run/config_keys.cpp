@@ -408,6 +408,9 @@ const std::vector<std::pair<std::string, KeyHandler>>& Handlers() {
     SLAM_MMS_KEY_D("level2.long_outage_s", o->system.level2.long_outage_s);
     SLAM_MMS_KEY_D("level2.reckon_sigma_rot_rad", o->system.level2.reckon_sigma_rot_rad);
     SLAM_MMS_KEY_D("level2.reckon_sigma_trans_m", o->system.level2.reckon_sigma_trans_m);
+    SLAM_MMS_KEY_D("level2.reckon_sigma_rot_rad_per_m",
+                   o->system.level2.reckon_sigma_rot_rad_per_m);
+    SLAM_MMS_KEY_D("level2.reckon_sigma_trans_per_m", o->system.level2.reckon_sigma_trans_per_m);
     SLAM_MMS_KEY_B("level2.reckon_from_level1", o->system.level2.reckon_from_level1);
     SLAM_MMS_KEY_D("level2.gnss_sigma_scale", o->system.level2.gnss_sigma_scale);
     SLAM_MMS_KEY_D("level2.gnss_correlation_s", o->system.level2.gnss_correlation_s);

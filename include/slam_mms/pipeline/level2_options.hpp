@@ -36,6 +36,11 @@ struct Level2Options {
   /// sigma (docs/sweep.md, session 38): off by default, an option to measure with.
   double reckon_sigma_rot_rad = 0.002;
   double reckon_sigma_trans_m = 0.05;
+  /// Level 1's drift grows with the distance between the two references (d, the reckon's
+  /// translation): the fixed sigmas above are the floor, and these add in quadrature per metre of
+  /// d (sigma = hypot(floor, per_m * d)) [rad/m] and [m/m]. 0: fixed sigmas. >= 0.
+  double reckon_sigma_rot_rad_per_m = 0.0;
+  double reckon_sigma_trans_per_m = 0.0;
   bool reckon_from_level1 = false;
   double gnss_sigma_scale = 1.0;  ///< Multiplies the GNSS measurement covariance.
   /// GNSS errors are time-correlated (an RTK-float or single-point bias wanders over tens of

@@ -29,6 +29,9 @@
 //                                      Rz(Y) Ry(P) Rx(R) about the body axes (each |.| <= 10 deg)
 //   --calib-error-xyz-m X,Y,Z          ... and its lever arm off by X,Y,Z [m] in the body frame
 //                                      (each |.| <= 1 m)
+//   --imu-mount-error-rpy-deg R,P,Y    the IMU (body) mounted rotated against the car by
+//                                      Rz(Y) Ry(P) Rx(R) (each |.| <= 10 deg): the car's motion
+//                                      kept, the body's attitude (truth, IMU, INS records) rotated
 //   --lidar-time-offset-s T            LiDAR clock T s behind the IMU's: the scan stamps written
 //                                      are true - T (|T| <= 0.5; the ground truth stays true)
 // Realism models (all off by default; docs/simulator.md "Realism models"):
@@ -82,7 +85,7 @@ int Usage(const std::string& error) {
          "       [--volumetric-vegetation] [--realism]   (realism models, off by default)\n"
          "       [--max-range M]   (LiDAR range limit, default 120 m)\n"
          "       [--calib-error-rpy-deg R,P,Y] [--calib-error-xyz-m X,Y,Z] "
-         "[--lidar-time-offset-s T]\n"
+         "[--lidar-time-offset-s T] [--imu-mount-error-rpy-deg R,P,Y]\n"
          "         (a wrong calib_imu_to_velo.txt and a LiDAR clock T s behind the IMU's, on "
          "purpose;\n"
          "          scenario.json keeps the truth; see docs/simulator.md)\n"
@@ -168,6 +171,8 @@ int main(int argc, char** argv) {
   app.add_option("--date", o.date);
   app.add_option("--calib-error-rpy-deg", calib_error_rpy_deg)->delimiter(',')->expected(3);
   app.add_option("--calib-error-xyz-m", calib_error_xyz_m)->delimiter(',')->expected(3);
+  std::vector<double> imu_mount_error_rpy_deg;
+  app.add_option("--imu-mount-error-rpy-deg", imu_mount_error_rpy_deg)->delimiter(',')->expected(3);
   app.add_option("--lidar-time-offset-s", o.lidar_time_offset_s);
   app.add_flag("--laser-intrinsics", laser_intrinsics);
   app.add_option("--beam-divergence-mrad", beam_divergence_mrad);
@@ -204,6 +209,10 @@ int main(int argc, char** argv) {
   if (!calib_error_xyz_m.empty()) {
     o.calib_error_xyz_m =
         Eigen::Vector3d(calib_error_xyz_m[0], calib_error_xyz_m[1], calib_error_xyz_m[2]);
+  }
+  if (!imu_mount_error_rpy_deg.empty()) {
+    o.imu_mount_error_rpy_deg = Eigen::Vector3d(
+        imu_mount_error_rpy_deg[0], imu_mount_error_rpy_deg[1], imu_mount_error_rpy_deg[2]);
   }
   std::vector<double> numbers;
   for (const std::string& v : outages) {

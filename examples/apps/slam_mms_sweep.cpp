@@ -188,6 +188,22 @@ int main(int argc, char** argv) {
                  "rules (default): exit 1 on any failed rule; sanity: only on a run that is "
                  "not sane; never")
       ->check(CLI::IsMember({"rules", "sanity", "never"}));
+  std::vector<double> calib_sigma_rpy, calib_sigma_xyz;
+  app.add_option("--calib-error-sigma-rpy-deg", calib_sigma_rpy,
+                 "roll,pitch,yaw: each run's calibration file is written with a boresight error "
+                 "drawn from N(0, sigma) per axis (default 0: the true calibration)")
+      ->delimiter(',')
+      ->expected(3);
+  app.add_option("--calib-error-sigma-xyz-m", calib_sigma_xyz,
+                 "x,y,z: the same for the lever arm [m]")
+      ->delimiter(',')
+      ->expected(3);
+  std::vector<double> mount_sigma_rpy;
+  app.add_option("--imu-mount-error-sigma-rpy-deg", mount_sigma_rpy,
+                 "roll,pitch,yaw: each run's IMU is mounted rotated against the car by a draw "
+                 "from N(0, sigma) per axis (default 0: along the car)")
+      ->delimiter(',')
+      ->expected(3);
   app.add_flag("--version", version);
   try {
     app.parse(argc, argv);
@@ -219,6 +235,24 @@ int main(int argc, char** argv) {
     plan.scenarios.push_back(g);
   }
   plan.ci_subset = subset == "ci";
+  for (size_t i = 0; i < calib_sigma_rpy.size(); ++i) {
+    if (!(calib_sigma_rpy[i] >= 0.0 && calib_sigma_rpy[i] <= 3.0)) {
+      return Usage("--calib-error-sigma-rpy-deg: each sigma in [0, 3] deg");
+    }
+    plan.calib_error_sigma_rpy_deg(i) = calib_sigma_rpy[i];
+  }
+  for (size_t i = 0; i < calib_sigma_xyz.size(); ++i) {
+    if (!(calib_sigma_xyz[i] >= 0.0 && calib_sigma_xyz[i] <= 0.3)) {
+      return Usage("--calib-error-sigma-xyz-m: each sigma in [0, 0.3] m");
+    }
+    plan.calib_error_sigma_xyz_m(i) = calib_sigma_xyz[i];
+  }
+  for (size_t i = 0; i < mount_sigma_rpy.size(); ++i) {
+    if (!(mount_sigma_rpy[i] >= 0.0 && mount_sigma_rpy[i] <= 3.0)) {
+      return Usage("--imu-mount-error-sigma-rpy-deg: each sigma in [0, 3] deg");
+    }
+    plan.imu_mount_error_sigma_rpy_deg(i) = mount_sigma_rpy[i];
+  }
   RunSettings settings;
   settings.modes = modes;
   settings.config = config.empty() ? fs::path() : fs::absolute(config);

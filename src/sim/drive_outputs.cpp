@@ -130,6 +130,8 @@ Status WriteScenarioJson(const DriveSimulator::Options& o, const DriveSimulator&
                               o.calib_error_rpy_deg.z()};
   j["calib_error_xyz_m"] = {o.calib_error_xyz_m.x(), o.calib_error_xyz_m.y(),
                             o.calib_error_xyz_m.z()};
+  j["imu_mount_error_rpy_deg"] = {o.imu_mount_error_rpy_deg.x(), o.imu_mount_error_rpy_deg.y(),
+                                  o.imu_mount_error_rpy_deg.z()};
   j["lidar_time_offset_s"] = o.lidar_time_offset_s;
   j["gravity_mps2"] = o.gravity_mps2;
   j["trajectory"] = Json{{"epoch_ns", tr.epoch().nanoseconds()},

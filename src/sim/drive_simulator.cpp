@@ -108,6 +108,10 @@ Status DriveSimulator::Options::Validate() const {
   if (!calib_error_rpy_deg.allFinite() || !(calib_error_rpy_deg.cwiseAbs().maxCoeff() <= 10.0))
     return fail("calib_error_rpy_deg", vec(calib_error_rpy_deg),
                 "each angle must be finite and in [-10, 10] deg");
+  if (!imu_mount_error_rpy_deg.allFinite() ||
+      !(imu_mount_error_rpy_deg.cwiseAbs().maxCoeff() <= 10.0))
+    return fail("imu_mount_error_rpy_deg", vec(imu_mount_error_rpy_deg),
+                "each angle within +-10 deg");
   if (!calib_error_xyz_m.allFinite() || !(calib_error_xyz_m.cwiseAbs().maxCoeff() <= 1.0))
     return fail("calib_error_xyz_m", vec(calib_error_xyz_m),
                 "each component must be finite and in [-1, 1] m");
@@ -151,6 +155,26 @@ bool ParseDriveName(const std::string& name, std::string* date, int* id) {
     return false;
   }
   return true;
+}
+
+// The body's samples for an IMU mounted rotated against the car (Options::imu_mount_error_rpy_deg):
+// each attitude R_world_car * R_car_body, its yaw kept continuous with the car's; positions and
+// velocities (the car's, in world) as they are.
+std::vector<PoseSample> MountedBody(const std::vector<PoseSample>& car,
+                                    const Eigen::Vector3d& mount_rpy_deg) {
+  if (mount_rpy_deg.isZero(0.0)) return car;
+  constexpr double kDegToRad = M_PI / 180.0;
+  const Eigen::Matrix3d R_car_body = FromRollPitchYaw(
+      mount_rpy_deg.x() * kDegToRad, mount_rpy_deg.y() * kDegToRad, mount_rpy_deg.z() * kDegToRad);
+  std::vector<PoseSample> body = car;
+  for (PoseSample& s : body) {
+    const Eigen::Matrix3d R_world_body =
+        FromRollPitchYaw(s.rpy_rad.x(), s.rpy_rad.y(), s.rpy_rad.z()) * R_car_body;
+    Eigen::Vector3d rpy = RollPitchYaw(R_world_body);
+    rpy.z() = s.rpy_rad.z() + std::remainder(rpy.z() - s.rpy_rad.z(), 2.0 * M_PI);
+    s.rpy_rad = rpy;
+  }
+  return body;
 }
 
 }  // namespace
@@ -240,7 +264,9 @@ StatusOr<DriveSimulator> DriveSimulator::Create(const Options& options_in) {
   // Variant 0 keeps the seed's noise (the drive without variants differs only in its world).
   impl->sensor_seed =
       o.route_variant > 0 ? MixSeed(o.seed, 1000 + static_cast<uint64_t>(o.route_variant)) : o.seed;
-  SLAM_MMS_ASSIGN_OR_RETURN(impl->trajectory, ReferenceTrajectory::Fit(epoch, samples, o.fit));
+  SLAM_MMS_ASSIGN_OR_RETURN(
+      impl->trajectory,
+      ReferenceTrajectory::Fit(epoch, MountedBody(samples, o.imu_mount_error_rpy_deg), o.fit));
   if (window) {
     SLAM_MMS_ASSIGN_OR_RETURN(impl->trajectory,
                               impl->trajectory.Restricted(window->first, window->second));

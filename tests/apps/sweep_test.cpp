@@ -279,10 +279,74 @@ TEST(SweepPlanTest, PlanIsDeterministicAndIndependentOfTheSelection) {
     EXPECT_GE(r.oxts_start_s, 0.0);
     EXPECT_FALSE(r.motion.classes.empty());
     EXPECT_EQ(r.outage.has_value(), r.scenario == GnssScenario::kOutage);
+    EXPECT_TRUE(r.calib_error_rpy_deg.isZero(0.0));  // the true calibration unless asked
+    EXPECT_TRUE(r.calib_error_xyz_m.isZero(0.0));
+    EXPECT_TRUE(r.imu_mount_error_rpy_deg.isZero(0.0));
+  }
+  // A wrong calibration: each run's own draw, the same alone as in the whole sweep.
+  o.calib_error_sigma_rpy_deg = Eigen::Vector3d(0.3, 0.3, 1.0);
+  o.calib_error_sigma_xyz_m = Eigen::Vector3d(0.03, 0.03, 0.0);
+  o.imu_mount_error_sigma_rpy_deg = Eigen::Vector3d(0.0, 0.3, 1.0);
+  one.calib_error_sigma_rpy_deg = o.calib_error_sigma_rpy_deg;
+  one.calib_error_sigma_xyz_m = o.calib_error_sigma_xyz_m;
+  one.imu_mount_error_sigma_rpy_deg = o.imu_mount_error_sigma_rpy_deg;
+  auto wrong = BuildPlan(o);
+  auto wrong_alone = BuildPlan(one);
+  ASSERT_TRUE(wrong.ok() && wrong_alone.ok());
+  EXPECT_EQ((*wrong_alone)[0].calib_error_rpy_deg, (*wrong)[4].calib_error_rpy_deg);
+  EXPECT_NE((*wrong)[0].calib_error_rpy_deg, (*wrong)[1].calib_error_rpy_deg);
+  for (const SweepRun& r : *wrong) {
+    Eigen::Vector3d rpy, xyz, mount;
+    CalibrationErrorDraw(r.seed, o.calib_error_sigma_rpy_deg, o.calib_error_sigma_xyz_m,
+                         o.imu_mount_error_sigma_rpy_deg, &rpy, &xyz, &mount);
+    EXPECT_EQ(r.calib_error_rpy_deg, rpy);
+    EXPECT_EQ(r.calib_error_xyz_m, xyz);
+    EXPECT_EQ(r.imu_mount_error_rpy_deg, mount);
   }
   one.drives = {"2011_09_26_drive_9999"};
   EXPECT_FALSE(BuildPlan(one).ok());
   fs::remove_all(unpack);
+}
+
+TEST(SweepPlanTest, CalibrationErrorsAreDrawnPerRunFromTheirSigmas) {
+  const Eigen::Vector3d sigma_rpy(0.3, 0.2, 1.0), sigma_xyz(0.02, 0.03, 0.0),
+      sigma_mount(0.0, 0.3, 1.0);
+  Eigen::Vector3d rpy, xyz, mount, rpy2, xyz2, mount2;
+  CalibrationErrorDraw(7, sigma_rpy, sigma_xyz, sigma_mount, &rpy, &xyz, &mount);
+  CalibrationErrorDraw(7, sigma_rpy, sigma_xyz, sigma_mount, &rpy2, &xyz2, &mount2);
+  EXPECT_EQ(rpy, rpy2);  // a run's error is a function of its seed
+  EXPECT_EQ(xyz, xyz2);
+  EXPECT_EQ(mount, mount2);
+  EXPECT_EQ(xyz.z(), 0.0);  // sigma 0: no error on that axis
+  EXPECT_EQ(mount.x(), 0.0);
+  EXPECT_NE(mount.z() / sigma_mount.z(), rpy.z() / sigma_rpy.z());  // a draw of its own
+  // The boresight and lever arm do not depend on whether a mount error is drawn.
+  CalibrationErrorDraw(7, sigma_rpy, sigma_xyz, Eigen::Vector3d::Zero(), &rpy2, &xyz2, &mount2);
+  EXPECT_EQ(rpy, rpy2);
+  EXPECT_EQ(xyz, xyz2);
+  EXPECT_TRUE(mount2.isZero(0.0));
+  const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
+  CalibrationErrorDraw(7, zero, zero, zero, &rpy2, &xyz2, &mount2);
+  EXPECT_TRUE(rpy2.isZero(0.0));
+  EXPECT_TRUE(xyz2.isZero(0.0));
+  // Over many runs: zero mean, the sigma asked for, cut at 3 sigma, axes not equal.
+  const int n = 4000;
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero(), sum2 = Eigen::Vector3d::Zero();
+  int same = 0;
+  for (int seed = 1; seed <= n; ++seed) {
+    CalibrationErrorDraw(seed, sigma_rpy, sigma_xyz, sigma_mount, &rpy, &xyz, &mount);
+    for (int i = 0; i < 3; ++i) ASSERT_LE(std::abs(rpy(i)), 3.0 * sigma_rpy(i) + 1e-12);
+    sum += rpy;
+    sum2 += rpy.cwiseAbs2();
+    if (std::abs(rpy.x() / sigma_rpy.x() - rpy.z() / sigma_rpy.z()) < 1e-12) ++same;
+  }
+  for (int i = 0; i < 3; ++i) {
+    const double mean = sum(i) / n;
+    const double sd = std::sqrt(sum2(i) / n - mean * mean);
+    EXPECT_NEAR(mean, 0.0, 4.0 * sigma_rpy(i) / std::sqrt(n)) << "axis " << i;
+    EXPECT_NEAR(sd, sigma_rpy(i), 0.05 * sigma_rpy(i)) << "axis " << i;
+  }
+  EXPECT_EQ(same, 0);
 }
 
 TEST(SweepPlanTest, WindowMotionClassesFromTheRealMotion) {

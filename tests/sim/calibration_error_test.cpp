@@ -7,6 +7,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "slam_mms/core/lie.hpp"
 #include "slam_mms/io/kitti_raw_reader.hpp"
 #include "slam_mms/io/trajectory_io.hpp"
 #include "slam_mms/sim/drive_simulator.hpp"
@@ -108,6 +109,44 @@ TEST(CalibrationErrorTest, WritesTheWrongCalibrationAndDelayedScanStamps) {
   }
 }
 
+TEST(CalibrationErrorTest, AnImuMountedOffTheCarTurnsTheBodyNotTheCarsMotion) {
+  DriveSimulator::Options o;
+  o.seed = 3;
+  o.lead_in_s = 1.0;
+  o.duration_s = 0.3;
+  o.write_scene_cloud = false;
+  auto plain = DriveSimulator::Create(o);
+  ASSERT_TRUE(plain.ok()) << plain.status().ToString();
+  o.imu_mount_error_rpy_deg = Eigen::Vector3d(0.3, -0.5, 2.0);
+  auto mounted = DriveSimulator::Create(o);
+  ASSERT_TRUE(mounted.ok()) << mounted.status().ToString();
+  const Eigen::Matrix3d R_car_body =
+      FromRollPitchYaw(0.3 * M_PI / 180.0, -0.5 * M_PI / 180.0, 2.0 * M_PI / 180.0);
+  const ReferenceTrajectory& a = plain->trajectory();
+  const ReferenceTrajectory& b = mounted->trajectory();
+  int checked = 0;
+  for (double t = a.start_s() + 0.5; t < a.end_s() - 0.5; t += 0.5, ++checked) {
+    const BodyState car = a.Evaluate(t), body = b.Evaluate(t);
+    // The car's motion is kept ...
+    EXPECT_LT((body.T_world_body.translation() - car.T_world_body.translation()).norm(), 1e-3) << t;
+    EXPECT_LT((body.v_world_mps - car.v_world_mps).norm(), 1e-3) << t;
+    // ... the body is turned by the mount against it.
+    const Eigen::Matrix3d expected = car.T_world_body.linear() * R_car_body;
+    const double off_deg =
+        Eigen::AngleAxisd(expected.transpose() * body.T_world_body.linear()).angle() * 180.0 / M_PI;
+    EXPECT_LT(off_deg, 0.01) << t;
+    // So the body moves sideways where the car does not: by its speed times the mount's yaw.
+    const Eigen::Vector3d v_car = car.T_world_body.linear().transpose() * car.v_world_mps;
+    const Eigen::Vector3d v_body = body.T_world_body.linear().transpose() * body.v_world_mps;
+    if (v_car.norm() > 3.0) {
+      EXPECT_NEAR(std::atan2(-v_body.y(), v_body.x()) - std::atan2(-v_car.y(), v_car.x()),
+                  2.0 * M_PI / 180.0, 2e-3)
+          << t;
+    }
+  }
+  EXPECT_GT(checked, 4);
+}
+
 TEST(CalibrationErrorTest, ValidateNamesTheFieldOutOfRange) {
   auto expect_invalid = [](const DriveSimulator::Options& o, const std::string& field) {
     const Status st = o.Validate();
@@ -132,6 +171,12 @@ TEST(CalibrationErrorTest, ValidateNamesTheFieldOutOfRange) {
   o.lidar_time_offset_s = INFINITY;
   expect_invalid(o, "lidar_time_offset_s");
   o.lidar_time_offset_s = -0.5;
+  EXPECT_TRUE(o.Validate().ok());
+  o.imu_mount_error_rpy_deg = Eigen::Vector3d(0.0, 0.0, 11.0);
+  expect_invalid(o, "imu_mount_error_rpy_deg");
+  o.imu_mount_error_rpy_deg = Eigen::Vector3d(0.0, NAN, 0.0);
+  expect_invalid(o, "imu_mount_error_rpy_deg");
+  o.imu_mount_error_rpy_deg = Eigen::Vector3d(-10.0, 10.0, 3.0);
   EXPECT_TRUE(o.Validate().ok());
 }
 

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <random>
 #include <sstream>
 
 namespace slam_mms::sweep {
@@ -136,6 +137,26 @@ StatusOr<MotionStats> WindowMotion(const std::vector<sim::PoseSample>& all,
   return m;
 }
 
+void CalibrationErrorDraw(uint64_t seed, const Eigen::Vector3d& sigma_rpy_deg,
+                          const Eigen::Vector3d& sigma_xyz_m,
+                          const Eigen::Vector3d& sigma_mount_rpy_deg, Eigen::Vector3d* rpy_deg,
+                          Eigen::Vector3d* xyz_m, Eigen::Vector3d* mount_rpy_deg) {
+  // Its own stream (not the simulator's, which is seeded by `seed` too).
+  std::mt19937_64 gen(seed * 0x9E3779B97F4A7C15ull + 0x63616C6962ull);
+  const auto normal = [&gen]() {
+    const double u1 = (static_cast<double>(gen() >> 11) + 0.5) * 0x1.0p-53;  // (0, 1)
+    const double u2 = static_cast<double>(gen() >> 11) * 0x1.0p-53;
+    return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
+  };
+  const auto draw = [&normal](double sigma, double limit) {
+    const double z = std::clamp(normal(), -3.0, 3.0);  // drawn even where sigma is 0
+    return std::clamp(z * sigma, -limit, limit);
+  };
+  for (int i = 0; i < 3; ++i) (*rpy_deg)(i) = draw(sigma_rpy_deg(i), 10.0);
+  for (int i = 0; i < 3; ++i) (*xyz_m)(i) = draw(sigma_xyz_m(i), 1.0);
+  for (int i = 0; i < 3; ++i) (*mount_rpy_deg)(i) = draw(sigma_mount_rpy_deg(i), 10.0);
+}
+
 StatusOr<std::vector<SweepRun>> BuildPlan(const PlanOptions& o) {
   if (!(o.duration_s > 0.0)) return InvalidArgumentError("sweep: --duration must be > 0");
   if (o.runs_per_drive < 1) return InvalidArgumentError("sweep: --runs-per-drive must be >= 1");
@@ -186,6 +207,9 @@ StatusOr<std::vector<SweepRun>> BuildPlan(const PlanOptions& o) {
       if (run.scenario == GnssScenario::kOutage) {
         run.outage = std::make_pair(0.3 * duration, 0.4 * duration);
       }
+      CalibrationErrorDraw(run.seed, o.calib_error_sigma_rpy_deg, o.calib_error_sigma_xyz_m,
+                           o.imu_mount_error_sigma_rpy_deg, &run.calib_error_rpy_deg,
+                           &run.calib_error_xyz_m, &run.imu_mount_error_rpy_deg);
       SLAM_MMS_ASSIGN_OR_RETURN(run.motion, WindowMotion(loaded.samples, run.drive,
                                                          run.oxts_start_s + o.lead_in_s, duration));
       std::string short_name = run.drive.substr(0, run.drive.size() - 5);  // without _sync

@@ -12,6 +12,8 @@
 //
 // Thread safety: free functions and value types.
 
+#include <Eigen/Core>
+#include <cstdint>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -60,6 +62,15 @@ struct SweepRun {
   GnssScenario scenario = GnssScenario::kCanyon;
   /// The outage of kOutage, relative to the first scan: (start, duration) [s].
   std::optional<std::pair<double, double>> outage;
+  /// The error of the calibration file the simulator writes (DriveSimulator::Options
+  /// calib_error_rpy_deg / calib_error_xyz_m): the LiDAR boresight (roll, pitch, yaw about the
+  /// body axes) [deg] and lever arm [m] the systems are told are this far off the truth. Zero
+  /// unless PlanOptions::calib_error_sigma_* are set; drawn per run from its seed.
+  Eigen::Vector3d calib_error_rpy_deg = Eigen::Vector3d::Zero();
+  Eigen::Vector3d calib_error_xyz_m = Eigen::Vector3d::Zero();
+  /// The IMU mounted rotated against the car (DriveSimulator::Options::imu_mount_error_rpy_deg)
+  /// [deg]; zero unless PlanOptions::imu_mount_error_sigma_rpy_deg is set.
+  Eigen::Vector3d imu_mount_error_rpy_deg = Eigen::Vector3d::Zero();
   MotionStats motion;
 };
 
@@ -75,7 +86,25 @@ struct PlanOptions {
                                          GnssScenario::kOutage, GnssScenario::kFloat,
                                          GnssScenario::kSps};
   bool ci_subset = false;  ///< Keep the first run of each motion class only.
+  /// A wrong calibration file on every run (the real drive's class: KITTI 0013's factory boresight
+  /// is 0.8-1.7 deg off its OXTS attitude, docs/calibration.md): each run's error is drawn per
+  /// axis from N(0, sigma) (CalibrationErrorDraw), the same for a run in a whole sweep and alone.
+  /// Zero (default): the true calibration is written.
+  Eigen::Vector3d calib_error_sigma_rpy_deg = Eigen::Vector3d::Zero();
+  Eigen::Vector3d calib_error_sigma_xyz_m = Eigen::Vector3d::Zero();
+  /// An IMU mounted off the car's axes on every run (KITTI 0013's OXTS heading is 1.4-1.6 deg off
+  /// its direction of travel), drawn the same way. Zero (default): mounted along the car.
+  Eigen::Vector3d imu_mount_error_sigma_rpy_deg = Eigen::Vector3d::Zero();
 };
+
+/// The calibration and mounting errors of the run with `seed`: per axis a normal draw of sigma,
+/// cut at 3 sigma (and at the simulator's 10 deg / 1 m), from a generator of its own seeded by
+/// `seed` (Box-Muller on std::mt19937_64, so that it is the same with any standard library);
+/// drawn in the order boresight, lever arm, mount, whichever sigmas are zero.
+void CalibrationErrorDraw(uint64_t seed, const Eigen::Vector3d& sigma_rpy_deg,
+                          const Eigen::Vector3d& sigma_xyz_m,
+                          const Eigen::Vector3d& sigma_mount_rpy_deg, Eigen::Vector3d* rpy_deg,
+                          Eigen::Vector3d* xyz_m, Eigen::Vector3d* mount_rpy_deg);
 
 /// The drives of INDEX.tsv (names as "<date>_drive_<nnnn>_sync"), in its order.
 StatusOr<std::vector<std::string>> ListDrives(const std::filesystem::path& oxts_archives);

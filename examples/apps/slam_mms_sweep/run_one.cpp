@@ -9,6 +9,8 @@
 #include <optional>
 
 #include "slam_mms/core/logging.hpp"
+#include "slam_mms/drive/drive_runner.hpp"
+#include "slam_mms/drive/extrinsic_calibrator.hpp"
 #include "slam_mms/drive/open_drive.hpp"
 #include "slam_mms/eval/ground_truth.hpp"
 #include "slam_mms/eval/relative_error.hpp"
@@ -185,6 +187,26 @@ StatusOr<MappingSystem::Options> BaseOptions(const fs::path& config) {
   return options;
 }
 
+// The whole --config (with drive.*: the sweep runs the boresight self-calibration where
+// drive.estimate_extrinsics is set, as slam_mms_run does).
+StatusOr<app::RunConfig> BaseConfig(const fs::path& config) {
+  app::RunConfig c;
+  if (!config.empty()) SLAM_MMS_RETURN_IF_ERROR(app::ApplyConfigFile(config, &c));
+  return c;
+}
+
+// The rotation from `truth` to `estimate` about the body axes, as a rotation vector [deg], and
+// the lever-arm difference [m].
+Json ExtrinsicErrorJson(const Eigen::Isometry3d& T_body_lidar_estimate,
+                        const Eigen::Isometry3d& T_body_lidar_truth) {
+  const Eigen::AngleAxisd aa(T_body_lidar_estimate.linear() *
+                             T_body_lidar_truth.linear().transpose());
+  const Eigen::Vector3d rot = aa.axis() * aa.angle() * (180.0 / M_PI);
+  const Eigen::Vector3d xyz =
+      T_body_lidar_estimate.translation() - T_body_lidar_truth.translation();
+  return Json{{"rot_deg", {rot.x(), rot.y(), rot.z()}}, {"xyz_m", {xyz.x(), xyz.y(), xyz.z()}}};
+}
+
 }  // namespace
 
 Json SpecToJson(const SweepRun& r, const RunSettings& s) {
@@ -196,6 +218,13 @@ Json SpecToJson(const SweepRun& r, const RunSettings& s) {
          {"seed", r.seed},
          {"scenario", GnssScenarioName(r.scenario)},
          {"outage", r.outage ? Json::array({r.outage->first, r.outage->second}) : Json(nullptr)},
+         {"calib_error_rpy_deg",
+          {r.calib_error_rpy_deg.x(), r.calib_error_rpy_deg.y(), r.calib_error_rpy_deg.z()}},
+         {"calib_error_xyz_m",
+          {r.calib_error_xyz_m.x(), r.calib_error_xyz_m.y(), r.calib_error_xyz_m.z()}},
+         {"imu_mount_error_rpy_deg",
+          {r.imu_mount_error_rpy_deg.x(), r.imu_mount_error_rpy_deg.y(),
+           r.imu_mount_error_rpy_deg.z()}},
          {"motion",
           {{"path_m", r.motion.path_m},
            {"mean_speed_mps", r.motion.mean_speed_mps},
@@ -228,6 +257,17 @@ Status SpecFromJson(const Json& j, SweepRun* r, RunSettings* s) {
     if (!j.at("outage").is_null()) {
       r->outage =
           std::make_pair(j.at("outage").at(0).get<double>(), j.at("outage").at(1).get<double>());
+    }
+    // Absent in the specs of sweeps before session 40: the true calibration.
+    r->calib_error_rpy_deg.setZero();
+    r->calib_error_xyz_m.setZero();
+    r->imu_mount_error_rpy_deg.setZero();
+    if (j.contains("calib_error_rpy_deg")) {
+      for (int i = 0; i < 3; ++i) {
+        r->calib_error_rpy_deg(i) = j.at("calib_error_rpy_deg").at(i).get<double>();
+        r->calib_error_xyz_m(i) = j.at("calib_error_xyz_m").at(i).get<double>();
+        r->imu_mount_error_rpy_deg(i) = j.at("imu_mount_error_rpy_deg").at(i).get<double>();
+      }
     }
     const Json& m = j.at("motion");
     r->motion.path_m = m.at("path_m").get<double>();
@@ -273,6 +313,9 @@ int RunOne(const fs::path& run_dir) {
   so.seed = run.seed;
   so.write_scene_cloud = false;
   so.num_threads = settings.num_threads;
+  so.calib_error_rpy_deg = run.calib_error_rpy_deg;
+  so.calib_error_xyz_m = run.calib_error_xyz_m;
+  so.imu_mount_error_rpy_deg = run.imu_mount_error_rpy_deg;
   ApplyScenario(run, &so);
   const auto t0 = std::chrono::steady_clock::now();
   StatusOr<sim::DriveSimulator> simulator = sim::DriveSimulator::Create(so);
@@ -295,9 +338,34 @@ int RunOne(const fs::path& run_dir) {
   // The methods, as slam_mms_run runs them.
   StatusOr<std::unique_ptr<DriveReader>> reader = OpenDrive(summary->drive_dir, {});
   if (!reader.ok()) return Fail(run_dir, *spec_json, reader.status());
-  StatusOr<MappingSystem::Options> base = BaseOptions(settings.config);
+  StatusOr<app::RunConfig> base = BaseConfig(settings.config);
   if (!base.ok()) return Fail(run_dir, *spec_json, base.status());
-  MappingSystem::Options options = *base;
+  MappingSystem::Options options = base->system;
+  // The calibration file against the truth, and the self-calibration where the config asks.
+  const Eigen::Isometry3d T_body_lidar_true = so.T_lidar_body.inverse();
+  result["sim"]["calibration_file_error"] =
+      ExtrinsicErrorJson((*reader)->streams().T_body_lidar, T_body_lidar_true);
+  if (base->drive.estimate_extrinsics) {
+    options.T_body_lidar = (*reader)->streams().T_body_lidar;
+    StatusOr<ExtrinsicCalibration> cal =
+        CalibrateDriveExtrinsics(**reader, options, base->drive.extrinsic_calibration);
+    if (!cal.ok()) return Fail(run_dir, *spec_json, cal.status());
+    DriveExtrinsics estimated;
+    estimated.T_body_lidar = cal->T_body_lidar_estimated;
+    estimated.lidar_time_offset_s = cal->time_offset_s;
+    Json observable = Json::object();
+    for (int i = 0; i < 7; ++i) observable[ExtrinsicParameterName(i)] = cal->observable[i];
+    const Eigen::Vector3d c = cal->correction_rpy_rad * (180.0 / M_PI);
+    result["calibration"] = {
+        {"correction_rpy_deg", {c.x(), c.y(), c.z()}},
+        {"correction_xyz_m",
+         {cal->correction_xyz_m.x(), cal->correction_xyz_m.y(), cal->correction_xyz_m.z()}},
+        {"time_offset_s", cal->time_offset_s},
+        {"observable", observable},
+        {"error", ExtrinsicErrorJson(cal->T_body_lidar_estimated, T_body_lidar_true)},
+        {"wall_s", cal->wall_s}};
+    *reader = OverrideExtrinsics(std::move(*reader), estimated);
+  }
   options.T_body_lidar = (*reader)->streams().T_body_lidar;
   if ((*reader)->streams().t_body_antenna_m) {
     options.ins.gnss.t_body_antenna = *(*reader)->streams().t_body_antenna_m;

@@ -106,6 +106,15 @@ class DriveSimulator {
     /// calibration is written (WrittenTLidarBody).
     Eigen::Vector3d calib_error_rpy_deg = Eigen::Vector3d::Zero();
     Eigen::Vector3d calib_error_xyz_m = Eigen::Vector3d::Zero();
+    /// The IMU (the body frame) mounted rotated against the car (roll, pitch, yaw [deg] about
+    /// the car's axes, R_car_body = Rz(yaw) Ry(pitch) Rx(roll), each |.| <= 10 deg): the car
+    /// keeps its motion (positions, velocities, its own attitude from the route or the records),
+    /// the body's attitude is R_world_car * R_car_body. Everything the simulator writes follows
+    /// the body: the ground truth, the IMU, the INS records (their vf/vl/vu then show a sideways
+    /// velocity where the car has none) and the LiDAR through T_lidar_body. A system that holds
+    /// the body's x axis along the travel (a non-holonomic constraint without misalignment
+    /// states) is then wrong by this much. Zero (default): the IMU is mounted along the car.
+    Eigen::Vector3d imu_mount_error_rpy_deg = Eigen::Vector3d::Zero();
     /// The LiDAR clock runs this much behind the IMU clock [s] (|.| <= 0.5): the scan stamps
     /// written (velodyne_points/timestamps*.txt) are the true times - lidar_time_offset_s, so that
     /// true = written + lidar_time_offset_s (DriveExtrinsics::lidar_time_offset_s's convention).

@@ -150,7 +150,7 @@ void CalibrationErrorDraw(uint64_t seed, const Eigen::Vector3d& sigma_rpy_deg,
   };
   const auto draw = [&normal](double sigma, double limit) {
     const double z = std::clamp(normal(), -3.0, 3.0);  // drawn even where sigma is 0
-    return std::clamp(z * sigma, -limit, limit);
+    return sigma > 0.0 ? std::clamp(z * sigma, -limit, limit) : 0.0;
   };
   for (int i = 0; i < 3; ++i) (*rpy_deg)(i) = draw(sigma_rpy_deg(i), 10.0);
   for (int i = 0; i < 3; ++i) (*xyz_m)(i) = draw(sigma_xyz_m(i), 1.0);

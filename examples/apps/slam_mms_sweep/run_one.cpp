@@ -345,11 +345,19 @@ int RunOne(const fs::path& run_dir) {
   const Eigen::Isometry3d T_body_lidar_true = so.T_lidar_body.inverse();
   result["sim"]["calibration_file_error"] =
       ExtrinsicErrorJson((*reader)->streams().T_body_lidar, T_body_lidar_true);
+  StatusOr<ExtrinsicCalibration> cal = FailedPreconditionError("not run");
   if (base->drive.estimate_extrinsics) {
     options.T_body_lidar = (*reader)->streams().T_body_lidar;
-    StatusOr<ExtrinsicCalibration> cal =
-        CalibrateDriveExtrinsics(**reader, options, base->drive.extrinsic_calibration);
-    if (!cal.ok()) return Fail(run_dir, *spec_json, cal.status());
+    cal = CalibrateDriveExtrinsics(**reader, options, base->drive.extrinsic_calibration);
+    if (!cal.ok() && cal.status().code() != StatusCode::kFailedPrecondition) {
+      return Fail(run_dir, *spec_json, cal.status());
+    }
+  }
+  if (base->drive.estimate_extrinsics && !cal.ok()) {
+    // A drive that cannot give the calibration (too few scans where the POS is good, as on an
+    // SPS drive's 4 m) runs with the file, as a calibration on by default would.
+    result["calibration"] = {{"status", cal.status().ToString()}, {"applied", false}};
+  } else if (base->drive.estimate_extrinsics) {
     DriveExtrinsics estimated;
     estimated.T_body_lidar = cal->T_body_lidar_estimated;
     estimated.lidar_time_offset_s = cal->time_offset_s;
@@ -363,7 +371,8 @@ int RunOne(const fs::path& run_dir) {
         {"time_offset_s", cal->time_offset_s},
         {"observable", observable},
         {"error", ExtrinsicErrorJson(cal->T_body_lidar_estimated, T_body_lidar_true)},
-        {"wall_s", cal->wall_s}};
+        {"wall_s", cal->wall_s},
+        {"applied", true}};
     *reader = OverrideExtrinsics(std::move(*reader), estimated);
   }
   options.T_body_lidar = (*reader)->streams().T_body_lidar;

@@ -8,7 +8,12 @@
 //                  [--modes gnss_ins,gnss_ins_smoothed,full,lidar_only] [--subset ci]
 //                  [--jobs N] [--timeout S] [--config FILE] [--rerun] [--keep-drives]
 //                  [--no-real] [--fail-on rules|sanity|never]
+//                  [--calib-error-sigma-rpy-deg R,P,Y] [--calib-error-sigma-xyz-m X,Y,Z]
+//                  [--imu-mount-error-sigma-rpy-deg R,P,Y]
 //
+// The last three write each run's calibration file wrong, or mount its IMU off the car's axes,
+// by a draw from N(0, sigma) per axis from the run's seed (plan.hpp, CalibrationErrorDraw); a
+// --config with drive.estimate_extrinsics: true runs the boresight self-calibration first.
 // Each run is a child process (slam_mms_sweep --run-one DIR/runs/<id>), so a crash or a hang
 // (killed after --timeout) fails that run's `sane` rule and the sweep goes on. A run whose
 // result.json exists for the same spec and the same executable is reused (a killed sweep

@@ -363,12 +363,20 @@ int RunOne(const fs::path& run_dir) {
     estimated.lidar_time_offset_s = cal->time_offset_s;
     Json observable = Json::object();
     for (int i = 0; i < 7; ++i) observable[ExtrinsicParameterName(i)] = cal->observable[i];
-    const Eigen::Vector3d c = cal->correction_rpy_rad * (180.0 / M_PI);
+    constexpr double kDeg = 180.0 / M_PI;
+    const Eigen::Vector3d c = cal->correction_rpy_rad * kDeg;
     result["calibration"] = {
         {"correction_rpy_deg", {c.x(), c.y(), c.z()}},
         {"correction_xyz_m",
          {cal->correction_xyz_m.x(), cal->correction_xyz_m.y(), cal->correction_xyz_m.z()}},
         {"time_offset_s", cal->time_offset_s},
+        {"sigma_rpy_deg",
+         {cal->sigma_rpy_rad.x() * kDeg, cal->sigma_rpy_rad.y() * kDeg,
+          cal->sigma_rpy_rad.z() * kDeg}},
+        {"sigma_xyz_m", {cal->sigma_xyz_m.x(), cal->sigma_xyz_m.y(), cal->sigma_xyz_m.z()}},
+        {"pos_attitude_sigma_deg",
+         {cal->pos_attitude_sigma_rad.x() * kDeg, cal->pos_attitude_sigma_rad.y() * kDeg,
+          cal->pos_attitude_sigma_rad.z() * kDeg}},
         {"observable", observable},
         {"error", ExtrinsicErrorJson(cal->T_body_lidar_estimated, T_body_lidar_true)},
         {"wall_s", cal->wall_s},

@@ -12,7 +12,11 @@
 //        "max_pos_err_m", "max_drift_from_start_m" (the largest position error once the first
 //        poses are aligned: the method's own drift), "max_pos_err_in_outage_m",
 //        "max_rot_err_in_outage_deg", "mme", "degenerate_fraction", "scans_per_s", "wall_s"}}}
-// Metrics that do not exist (no segment, no pose in an outage) are null.
+// Metrics that do not exist (no segment, no pose in an outage) are null. "sim" also holds
+// "calibration_file_error" ({"rot_deg", "xyz_m"}: the calibration file against the truth); where
+// the config sets drive.estimate_extrinsics, "calibration" holds the self-calibration's
+// correction, sigmas, observability, wall time and "error" against the truth ("applied": false
+// and "status" where it could not run).
 //
 // The real-frame check (slam_mms_sweep --real-one DIR): lidar_only on the real KITTI frames,
 // relative error over 10..50 m segments against the OXTS poses, into DIR/result.json as

@@ -240,23 +240,22 @@ int main(int argc, char** argv) {
     plan.scenarios.push_back(g);
   }
   plan.ci_subset = subset == "ci";
-  for (size_t i = 0; i < calib_sigma_rpy.size(); ++i) {
-    if (!(calib_sigma_rpy[i] >= 0.0 && calib_sigma_rpy[i] <= 3.0)) {
-      return Usage("--calib-error-sigma-rpy-deg: each sigma in [0, 3] deg");
+  // Each sigma of a --*-sigma-* option in [0, max].
+  const auto sigmas = [](const std::vector<double>& given, double max, Eigen::Vector3d* out) {
+    for (size_t i = 0; i < given.size(); ++i) {
+      if (!(given[i] >= 0.0 && given[i] <= max)) return false;
+      (*out)(i) = given[i];
     }
-    plan.calib_error_sigma_rpy_deg(i) = calib_sigma_rpy[i];
+    return true;
+  };
+  if (!sigmas(calib_sigma_rpy, 3.0, &plan.calib_error_sigma_rpy_deg)) {
+    return Usage("--calib-error-sigma-rpy-deg: each sigma in [0, 3] deg");
   }
-  for (size_t i = 0; i < calib_sigma_xyz.size(); ++i) {
-    if (!(calib_sigma_xyz[i] >= 0.0 && calib_sigma_xyz[i] <= 0.3)) {
-      return Usage("--calib-error-sigma-xyz-m: each sigma in [0, 0.3] m");
-    }
-    plan.calib_error_sigma_xyz_m(i) = calib_sigma_xyz[i];
+  if (!sigmas(calib_sigma_xyz, 0.3, &plan.calib_error_sigma_xyz_m)) {
+    return Usage("--calib-error-sigma-xyz-m: each sigma in [0, 0.3] m");
   }
-  for (size_t i = 0; i < mount_sigma_rpy.size(); ++i) {
-    if (!(mount_sigma_rpy[i] >= 0.0 && mount_sigma_rpy[i] <= 3.0)) {
-      return Usage("--imu-mount-error-sigma-rpy-deg: each sigma in [0, 3] deg");
-    }
-    plan.imu_mount_error_sigma_rpy_deg(i) = mount_sigma_rpy[i];
+  if (!sigmas(mount_sigma_rpy, 3.0, &plan.imu_mount_error_sigma_rpy_deg)) {
+    return Usage("--imu-mount-error-sigma-rpy-deg: each sigma in [0, 3] deg");
   }
   RunSettings settings;
   settings.modes = modes;

@@ -111,7 +111,7 @@ Status DriveSimulator::Options::Validate() const {
   if (!imu_mount_error_rpy_deg.allFinite() ||
       !(imu_mount_error_rpy_deg.cwiseAbs().maxCoeff() <= 10.0))
     return fail("imu_mount_error_rpy_deg", vec(imu_mount_error_rpy_deg),
-                "each angle within +-10 deg");
+                "each angle must be finite and in [-10, 10] deg");
   if (!calib_error_xyz_m.allFinite() || !(calib_error_xyz_m.cwiseAbs().maxCoeff() <= 1.0))
     return fail("calib_error_xyz_m", vec(calib_error_xyz_m),
                 "each component must be finite and in [-1, 1] m");

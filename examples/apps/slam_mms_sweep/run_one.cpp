@@ -16,6 +16,7 @@
 #include "slam_mms/eval/relative_error.hpp"
 #include "slam_mms/eval/trajectory_error.hpp"
 #include "slam_mms/sim/drive_simulator.hpp"
+#include "slam_mms_run/calibration.hpp"
 #include "slam_mms_run/config_file.hpp"
 #include "slam_mms_run/json_file.hpp"
 #include "slam_mms_run/outputs.hpp"
@@ -345,43 +346,28 @@ int RunOne(const fs::path& run_dir) {
   const Eigen::Isometry3d T_body_lidar_true = so.T_lidar_body.inverse();
   result["sim"]["calibration_file_error"] =
       ExtrinsicErrorJson((*reader)->streams().T_body_lidar, T_body_lidar_true);
-  StatusOr<ExtrinsicCalibration> cal = FailedPreconditionError("not run");
   if (base->drive.estimate_extrinsics) {
     options.T_body_lidar = (*reader)->streams().T_body_lidar;
-    cal = CalibrateDriveExtrinsics(**reader, options, base->drive.extrinsic_calibration);
-    if (!cal.ok() && cal.status().code() != StatusCode::kFailedPrecondition) {
+    StatusOr<ExtrinsicCalibration> cal =
+        CalibrateDriveExtrinsics(**reader, options, base->drive.extrinsic_calibration);
+    if (cal.ok()) {
+      // slam_mms_run's report.json "extrinsics" (no file is written here), and the truth.
+      Json c = Json::parse(app::CalibrationJson(*cal, "", 0.0));
+      c.erase("calibration_file");
+      c["error"] = ExtrinsicErrorJson(cal->T_body_lidar_estimated, T_body_lidar_true);
+      c["applied"] = true;
+      result["calibration"] = std::move(c);
+      DriveExtrinsics estimated;
+      estimated.T_body_lidar = cal->T_body_lidar_estimated;
+      estimated.lidar_time_offset_s = cal->time_offset_s;
+      *reader = OverrideExtrinsics(std::move(*reader), estimated);
+    } else if (cal.status().code() == StatusCode::kFailedPrecondition) {
+      // A drive that cannot give the calibration (too few scans where the POS is good, as on an
+      // SPS drive's 4 m) runs with the file, as a calibration on by default would.
+      result["calibration"] = {{"status", cal.status().ToString()}, {"applied", false}};
+    } else {
       return Fail(run_dir, *spec_json, cal.status());
     }
-  }
-  if (base->drive.estimate_extrinsics && !cal.ok()) {
-    // A drive that cannot give the calibration (too few scans where the POS is good, as on an
-    // SPS drive's 4 m) runs with the file, as a calibration on by default would.
-    result["calibration"] = {{"status", cal.status().ToString()}, {"applied", false}};
-  } else if (base->drive.estimate_extrinsics) {
-    DriveExtrinsics estimated;
-    estimated.T_body_lidar = cal->T_body_lidar_estimated;
-    estimated.lidar_time_offset_s = cal->time_offset_s;
-    Json observable = Json::object();
-    for (int i = 0; i < 7; ++i) observable[ExtrinsicParameterName(i)] = cal->observable[i];
-    constexpr double kDeg = 180.0 / M_PI;
-    const Eigen::Vector3d c = cal->correction_rpy_rad * kDeg;
-    result["calibration"] = {
-        {"correction_rpy_deg", {c.x(), c.y(), c.z()}},
-        {"correction_xyz_m",
-         {cal->correction_xyz_m.x(), cal->correction_xyz_m.y(), cal->correction_xyz_m.z()}},
-        {"time_offset_s", cal->time_offset_s},
-        {"sigma_rpy_deg",
-         {cal->sigma_rpy_rad.x() * kDeg, cal->sigma_rpy_rad.y() * kDeg,
-          cal->sigma_rpy_rad.z() * kDeg}},
-        {"sigma_xyz_m", {cal->sigma_xyz_m.x(), cal->sigma_xyz_m.y(), cal->sigma_xyz_m.z()}},
-        {"pos_attitude_sigma_deg",
-         {cal->pos_attitude_sigma_rad.x() * kDeg, cal->pos_attitude_sigma_rad.y() * kDeg,
-          cal->pos_attitude_sigma_rad.z() * kDeg}},
-        {"observable", observable},
-        {"error", ExtrinsicErrorJson(cal->T_body_lidar_estimated, T_body_lidar_true)},
-        {"wall_s", cal->wall_s},
-        {"applied", true}};
-    *reader = OverrideExtrinsics(std::move(*reader), estimated);
   }
   options.T_body_lidar = (*reader)->streams().T_body_lidar;
   if ((*reader)->streams().t_body_antenna_m) {

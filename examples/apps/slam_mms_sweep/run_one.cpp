@@ -182,12 +182,6 @@ Json RelativeFactorsJson(const std::vector<RelativeFactorRecord>& factors,
   return out;
 }
 
-StatusOr<MappingSystem::Options> BaseOptions(const fs::path& config) {
-  MappingSystem::Options options;
-  if (!config.empty()) SLAM_MMS_RETURN_IF_ERROR(app::ApplyConfigFile(config, &options));
-  return options;
-}
-
 // The whole --config (with drive.*: the sweep runs the boresight self-calibration where
 // drive.estimate_extrinsics is set, as slam_mms_run does).
 StatusOr<app::RunConfig> BaseConfig(const fs::path& config) {
@@ -342,6 +336,12 @@ int RunOne(const fs::path& run_dir) {
   StatusOr<app::RunConfig> base = BaseConfig(settings.config);
   if (!base.ok()) return Fail(run_dir, *spec_json, base.status());
   MappingSystem::Options options = base->system;
+  // The run's outage as slam_mms_run --gnss-outage gives it: to the self-calibration's POS too.
+  std::vector<eval::OutageWindow> outages;
+  if (run.outage) {
+    options.gnss_outages.push_back(*run.outage);
+    outages.push_back({run.outage->first, run.outage->second});
+  }
   // The calibration file against the truth, and the self-calibration where the config asks.
   const Eigen::Isometry3d T_body_lidar_true = so.T_lidar_body.inverse();
   result["sim"]["calibration_file_error"] =
@@ -355,7 +355,7 @@ int RunOne(const fs::path& run_dir) {
       Json c = Json::parse(app::CalibrationJson(*cal, "", 0.0));
       c.erase("calibration_file");
       c["error"] = ExtrinsicErrorJson(cal->T_body_lidar_estimated, T_body_lidar_true);
-      c["applied"] = true;
+      c["run_with_estimate"] = true;
       result["calibration"] = std::move(c);
       DriveExtrinsics estimated;
       estimated.T_body_lidar = cal->T_body_lidar_estimated;
@@ -364,7 +364,7 @@ int RunOne(const fs::path& run_dir) {
     } else if (cal.status().code() == StatusCode::kFailedPrecondition) {
       // A drive that cannot give the calibration (too few scans where the POS is good, as on an
       // SPS drive's 4 m) runs with the file, as a calibration on by default would.
-      result["calibration"] = {{"status", cal.status().ToString()}, {"applied", false}};
+      result["calibration"] = {{"status", cal.status().ToString()}, {"run_with_estimate", false}};
     } else {
       return Fail(run_dir, *spec_json, cal.status());
     }
@@ -372,11 +372,6 @@ int RunOne(const fs::path& run_dir) {
   options.T_body_lidar = (*reader)->streams().T_body_lidar;
   if ((*reader)->streams().t_body_antenna_m) {
     options.ins.gnss.t_body_antenna = *(*reader)->streams().t_body_antenna_m;
-  }
-  std::vector<eval::OutageWindow> outages;
-  if (run.outage) {
-    options.gnss_outages.push_back(*run.outage);
-    outages.push_back({run.outage->first, run.outage->second});
   }
   const Timestamp reference = (*reader)->ScanStart(0);
   Json methods = Json::object();
@@ -448,18 +443,38 @@ int RunOne(const fs::path& run_dir) {
 int RealOne(const fs::path& run_dir, const fs::path& drive_dir, const fs::path& config) {
   app::InstallLogSink();
   Json spec{{"drive", drive_dir.string()}, {"config", config.string()}};
-  StatusOr<MappingSystem::Options> base = BaseOptions(config);
+  StatusOr<app::RunConfig> base = BaseConfig(config);
   if (!base.ok()) return Fail(run_dir, spec, base.status());
   // lidar_only on the frames read with KITTI's vertical-angle correction (as the peer reads
-  // them: KISS-ICP corrects every KITTI scan by 0.205 deg) and as recorded.
+  // them: KISS-ICP corrects every KITTI scan by 0.205 deg) and as recorded; after the boresight
+  // self-calibration where the config asks for it, as slam_mms_run does.
   Json result{{"spec", spec}};
   for (const double correction_deg : {kKittiVerticalCorrectionDeg, 0.0}) {
     DriveSourceOptions source;
     source.kitti_vertical_correction_deg = correction_deg;
     StatusOr<std::unique_ptr<DriveReader>> reader = OpenDrive(drive_dir, source);
     if (!reader.ok()) return Fail(run_dir, spec, reader.status());
-    MappingSystem::Options options = *base;
+    MappingSystem::Options options = base->system;
     options.T_body_lidar = (*reader)->streams().T_body_lidar;
+    Json calibration;
+    if (base->drive.estimate_extrinsics) {
+      StatusOr<ExtrinsicCalibration> cal =
+          CalibrateDriveExtrinsics(**reader, options, base->drive.extrinsic_calibration);
+      if (cal.ok()) {
+        calibration = Json::parse(app::CalibrationJson(*cal, "", 0.0));
+        calibration.erase("calibration_file");
+        calibration["run_with_estimate"] = true;
+        DriveExtrinsics estimated;
+        estimated.T_body_lidar = cal->T_body_lidar_estimated;
+        estimated.lidar_time_offset_s = cal->time_offset_s;
+        *reader = OverrideExtrinsics(std::move(*reader), estimated);
+        options.T_body_lidar = (*reader)->streams().T_body_lidar;
+      } else if (cal.status().code() == StatusCode::kFailedPrecondition) {
+        calibration = {{"status", cal.status().ToString()}, {"run_with_estimate", false}};
+      } else {
+        return Fail(run_dir, spec, cal.status());
+      }
+    }
     app::ModeRun mr =
         app::RunMode(MappingMode::kLidarOnly, options, **reader, PosWorkflow::kForward, false);
     if (!mr.status.ok()) return Fail(run_dir, spec, mr.status);
@@ -487,6 +502,9 @@ int RealOne(const fs::path& run_dir, const fs::path& drive_dir, const fs::path& 
         {"t_rel_pct_by_length", t},
         {"r_rel_deg_per_100m_by_length", r},
         {"scans_per_s", mr.scans_per_s}};
+    if (!calibration.is_null()) {
+      result[correction_deg != 0.0 ? "real" : "real_uncorrected"]["calibration"] = calibration;
+    }
   }
   const Status written = app::WriteJsonFile(result, run_dir / "result.json", 2);
   return written.ok() ? 0 : 1;

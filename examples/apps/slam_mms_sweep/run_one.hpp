@@ -14,9 +14,10 @@
 //        "max_rot_err_in_outage_deg", "mme", "degenerate_fraction", "scans_per_s", "wall_s"}}}
 // Metrics that do not exist (no segment, no pose in an outage) are null. "sim" also holds
 // "calibration_file_error" ({"rot_deg", "xyz_m"}: the calibration file against the truth); where
-// the config sets drive.estimate_extrinsics, "calibration" holds the self-calibration's
-// correction, sigmas, observability, wall time and "error" against the truth ("applied": false
-// and "status" where it could not run).
+// the config sets drive.estimate_extrinsics, "calibration" holds slam_mms_run's report.json
+// "extrinsics" (correction, sigmas, which parameters were observable and applied, wall time),
+// "error" against the truth and "run_with_estimate" (false, with "status", where it could not
+// run). --real-one puts the same in "real"/"real_uncorrected" "calibration".
 //
 // The real-frame check (slam_mms_sweep --real-one DIR): lidar_only on the real KITTI frames,
 // relative error over 10..50 m segments against the OXTS poses, into DIR/result.json as

@@ -392,9 +392,13 @@ void RegisterMappingSystem(py::module_& m) {
             d["sigma_rpy_rad"] = c.sigma_rpy_rad;
             d["sigma_xyz_m"] = c.sigma_xyz_m;
             d["sigma_time_s"] = c.sigma_time_s;
-            py::dict observable;
-            for (int i = 0; i < 7; ++i) observable[ExtrinsicParameterName(i)] = c.observable[i];
+            py::dict observable, applied;
+            for (int i = 0; i < 7; ++i) {
+              observable[ExtrinsicParameterName(i)] = c.observable[i];
+              applied[ExtrinsicParameterName(i)] = c.applied[i];
+            }
             d["observable"] = observable;
+            d["applied"] = applied;
             d["scans_used"] = c.scans_used;
             d["rms_initial_m"] = c.rms_initial_m;
             d["rms_final_m"] = c.rms_final_m;
@@ -403,7 +407,7 @@ void RegisterMappingSystem(py::module_& m) {
           },
           "With estimate_extrinsics: the boresight self-calibration the run was made with "
           "(CalibrateExtrinsics' estimate, its sigmas and which of the seven parameters the drive "
-          "observes), else None.")
+          "observes, and which it applied), else None.")
       .def_property_readonly("ok", [](const DriveRun& r) { return r.status.ok(); })
       .def_property_readonly("status_message",
                              [](const DriveRun& r) { return r.status.ToString(); })

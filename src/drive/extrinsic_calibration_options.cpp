@@ -55,6 +55,14 @@ Status ExtrinsicCalibrationOptions::Validate() const {
     return FieldError("systematic_error_m", systematic_error_m, "must be >= 0");
   if (!(min_prior_reduction >= 1.0))
     return FieldError("min_prior_reduction", min_prior_reduction, "must be >= 1");
+  if (!(pos_drift_knot_interval_s > 0.0))
+    return FieldError("pos_drift_knot_interval_s", pos_drift_knot_interval_s, "must be > 0");
+  if (!(pos_max_velocity_error_mps > 0.0))
+    return FieldError("pos_max_velocity_error_mps", pos_max_velocity_error_mps, "must be > 0");
+  if (!(pos_error_correlation_s > 0.0))
+    return FieldError("pos_error_correlation_s", pos_error_correlation_s, "must be > 0");
+  if (!(min_significance >= 0.0))
+    return FieldError("min_significance", min_significance, "must be >= 0");
   if (jackknife_blocks < 2) return FieldError("jackknife_blocks", jackknife_blocks, "must be >= 2");
   return OkStatus();
 }

@@ -3,6 +3,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/SVD>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <unordered_set>
 
@@ -51,6 +52,62 @@ void Apply(const Vector7d& d, Params* p) {
   p->time += d(6);
 }
 
+CalibrationProblem::CalibrationProblem(std::vector<CalScan> scans, const PosTrack& pos,
+                                       const ExtrinsicCalibrationOptions& o, int num_threads)
+    : scans_(std::move(scans)), pos_(pos), o_(o), pool_(std::max(1, num_threads)) {
+  if (!o.estimate_pos_drift || scans_.empty()) return;
+  const double t0 = scans_.front().t_start;
+  double t1 = t0;
+  for (const CalScan& s : scans_) t1 = std::max(t1, s.t_start + s.duration);
+  const double step = o.pos_drift_knot_interval_s;
+  num_knots_ = static_cast<int>(std::floor((t1 - t0) / step)) + 2;
+  for (CalScan& s : scans_) {
+    const double u = (s.t_start + 0.5 * s.duration - t0) / step;
+    s.knot = std::clamp(static_cast<int>(std::floor(u)), 0, num_knots_ - 2);
+    s.knot_frac = std::clamp(u - s.knot, 0.0, 1.0);
+  }
+}
+
+void CalibrationProblem::SetShifts(const VectorXd& knots) {
+  for (CalScan& s : scans_) {
+    s.shift = num_knots_ == 0 ? Eigen::Vector3d::Zero()
+                              : Eigen::Vector3d((1.0 - s.knot_frac) * knots.segment<3>(3 * s.knot) +
+                                                s.knot_frac * knots.segment<3>(3 * s.knot + 3));
+  }
+}
+
+MatrixXd CalibrationProblem::KnotPrior() const {
+  MatrixXd P = MatrixXd::Zero(dim(), dim());
+  if (num_knots_ == 0) return P;
+  const double dt = o_.pos_drift_knot_interval_s;
+  const double tau = o_.pos_error_correlation_s;
+  const double t0 = scans_.front().t_start;
+  constexpr double kGaugeSigmaM = 1.0;
+  constexpr double kMinSigmaM = 1e-4;
+  // sum_j w_j (sum_k c_jk x_k)^2 over the knots' x, y and z alike.
+  const auto add = [&](const std::vector<std::pair<int, double>>& c, double sigma) {
+    const double w = 1.0 / std::pow(std::max(sigma, kMinSigmaM), 2);
+    for (const auto& [ka, ca] : c) {
+      for (const auto& [kb, cb] : c) {
+        P.block<3, 3>(7 + 3 * ka, 7 + 3 * kb).diagonal().array() += w * ca * cb;
+      }
+    }
+  };
+  for (int k = 0; k < num_knots_; ++k) {
+    add({{k, 1.0}}, kGaugeSigmaM);
+    // The POS's stated sigma s about the knot, its error a Gauss-Markov process of s and tau
+    // whose rate is one of v = s sqrt(2 / tau) (at most the velocity cap) and tau (the
+    // options): first differences of v dt, second differences of v sqrt(2 dt / tau) dt.
+    const double s = pos_.At(t0 + k * dt).pos_sigma_m;
+    const double v = std::min(s * std::sqrt(2.0 / tau), o_.pos_max_velocity_error_mps);
+    if (k + 1 < num_knots_) add({{k, -1.0}, {k + 1, 1.0}}, v * dt);
+    if (k >= 1 && k + 1 < num_knots_) {
+      add({{k - 1, 1.0}, {k, -2.0}, {k + 1, 1.0}}, v * std::sqrt(2.0 * dt / tau) * dt);
+    }
+  }
+  return P;
+}
+
 void CalibrationProblem::UpdatePoses(const Params& p) {
   for (CalScan& s : scans_) s.pose = pos_.At(s.t_start + p.time);
 }
@@ -91,7 +148,8 @@ std::vector<Association> CalibrationProblem::Associate(const Params& p, double g
   ParallelFor(scans_.size(), [&](size_t ia) {
     const CalScan& a = scans_[ia];
     if (a.partners.empty()) return;
-    const Eigen::Isometry3d Wa = a.pose.T_world_body * X;
+    Eigen::Isometry3d Wa = a.pose.T_world_body * X;
+    Wa.translation() += a.shift;
     std::vector<uint32_t> idx(k);
     std::vector<float> d2(k);
     int round = 0;
@@ -99,7 +157,9 @@ std::vector<Association> CalibrationProblem::Associate(const Params& p, double g
       for (int m = 0; m < o_.partners_per_point; ++m) {
         const int ib = a.partners[(round++) % a.partners.size()];
         const CalScan& b = scans_[ib];
-        const Eigen::Isometry3d Mba = (b.pose.T_world_body * X).inverse() * Wa;
+        Eigen::Isometry3d Wb = b.pose.T_world_body * X;
+        Wb.translation() += b.shift;
+        const Eigen::Isometry3d Mba = Wb.inverse() * Wa;
         const Eigen::Vector3d qb = Mba * a.q[j].cast<double>();
         const Eigen::Vector3f qf = qb.cast<float>();
         if (b.tree->knnSearch(qf.data(), k, idx.data(), d2.data()) != static_cast<size_t>(k))
@@ -129,7 +189,8 @@ std::vector<Association> CalibrationProblem::Associate(const Params& p, double g
   return all;
 }
 
-double CalibrationProblem::Residual(const Association& s, const Params& p, Vector7d* J) const {
+double CalibrationProblem::Residual(const Association& s, const Params& p, Vector7d* J,
+                                    Eigen::Vector3d* nw_out) const {
   const CalScan& a = scans_[s.a];
   const CalScan& b = scans_[s.b];
   const Eigen::Matrix3d& Ra = a.pose.T_world_body.linear();
@@ -138,7 +199,8 @@ double CalibrationProblem::Residual(const Association& s, const Params& p, Vecto
   const Eigen::Vector3d wa = Ra * (Rq + p.t) + a.pose.T_world_body.translation();
   const Eigen::Vector3d wb = Rb * (Rc + p.t) + b.pose.T_world_body.translation();
   const Eigen::Vector3d nw = Rb * Rn;
-  const Eigen::Vector3d d = wa - wb;
+  const Eigen::Vector3d d = wa - wb + a.shift - b.shift;
+  if (nw_out != nullptr) *nw_out = nw;
   if (J != nullptr) {
     const Eigen::Vector3d na = Ra.transpose() * nw, nb = Rb.transpose() * nw;
     J->head<3>() = Rq.cross(na) - Rc.cross(nb) + Rn.cross(Rb.transpose() * d);
@@ -155,29 +217,52 @@ double CalibrationProblem::Residual(const Association& s, const Params& p, Vecto
 std::vector<CalibrationProblem::Normal> CalibrationProblem::Accumulate(
     const std::vector<Association>& as, const Params& p, int blocks) const {
   const int nt = pool_.num_threads();
-  std::vector<std::vector<Normal>> part(nt, std::vector<Normal>(blocks));
+  const int n = dim();
+  std::vector<std::vector<Normal>> part(nt, std::vector<Normal>(blocks, Normal(n)));
   pool_.Run([&](int t) {
     size_t begin, end;
     pool_.Range(t, as.size(), &begin, &end);
     Vector7d J;
+    Eigen::Vector3d nw;
+    // The residual's gradient, sparse: the 7, then up to two knots of each scan's shift.
+    std::array<int, 19> idx;
+    std::array<double, 19> val;
     for (size_t i = begin; i < end; ++i) {
-      const double r = Residual(as[i], p, &J);
+      const double r = Residual(as[i], p, &J, &nw);
       const double w = registration_internal::HuberWeight(r, o_.huber_m);
+      int m = 0;
+      for (int k = 0; k < 7; ++k) {
+        idx[m] = k;
+        val[m++] = J(k);
+      }
+      if (num_knots_ > 0) {
+        for (const auto& [scan, sign] : {std::pair{as[i].a, 1.0}, std::pair{as[i].b, -1.0}}) {
+          const CalScan& sc = scans_[scan];
+          for (int axis = 0; axis < 3; ++axis) {
+            idx[m] = 7 + 3 * sc.knot + axis;
+            val[m++] = sign * (1.0 - sc.knot_frac) * nw(axis);
+            idx[m] = 7 + 3 * (sc.knot + 1) + axis;
+            val[m++] = sign * sc.knot_frac * nw(axis);
+          }
+        }
+      }
       Normal& nrm = part[t][blocks == 1 ? 0 : scans_[as[i].a].block];
-      nrm.H.selfadjointView<Eigen::Lower>().rankUpdate(J, w);
-      nrm.g += w * r * J;
+      for (int u = 0; u < m; ++u) {
+        const double wu = w * val[u];
+        nrm.g(idx[u]) += wu * r;
+        for (int v = 0; v < m; ++v) nrm.H(idx[u], idx[v]) += wu * val[v];
+      }
       nrm.wrr += w * r * r;
       nrm.w += w;
       ++nrm.n;
     }
   });
-  std::vector<Normal> out(blocks);
+  std::vector<Normal> out(blocks, Normal(n));
   for (int t = 0; t < nt; ++t) {
     for (int b = 0; b < blocks; ++b) {
       out[b] += part[t][b];
     }
   }
-  for (Normal& nrm : out) nrm.H = nrm.H.selfadjointView<Eigen::Lower>();
   return out;
 }
 
@@ -187,10 +272,9 @@ double CalibrationProblem::Rms(const std::vector<Association>& as, const Params&
   return as.empty() ? 0.0 : std::sqrt(s / as.size());
 }
 
-Matrix7d WithPriorAndFixed(const Matrix7d& H, const Vector7d& prior_info,
+MatrixXd WithPriorAndFixed(const MatrixXd& H, const MatrixXd& prior,
                            const std::array<bool, 7>& free) {
-  Matrix7d A = H;
-  A.diagonal() += prior_info;
+  MatrixXd A = H + prior;
   for (int i = 0; i < 7; ++i) {
     if (free[i]) continue;
     A.row(i).setZero();
@@ -200,13 +284,13 @@ Matrix7d WithPriorAndFixed(const Matrix7d& H, const Vector7d& prior_info,
   return A;
 }
 
-Vector7d SolveStep(const Matrix7d& H, const Vector7d& g, const Vector7d& offset_from_prior,
-                   const Vector7d& prior_info, const std::array<bool, 7>& free) {
-  Vector7d b = -g - prior_info.cwiseProduct(offset_from_prior);
+VectorXd SolveStep(const MatrixXd& H, const VectorXd& g, const VectorXd& offset_from_prior,
+                   const MatrixXd& prior, const std::array<bool, 7>& free) {
+  VectorXd b = -g - prior * offset_from_prior;
   for (int i = 0; i < 7; ++i) {
     if (!free[i]) b(i) = 0.0;
   }
-  return WithPriorAndFixed(H, prior_info, free).ldlt().solve(b);
+  return WithPriorAndFixed(H, prior, free).ldlt().solve(b);
 }
 
 }  // namespace slam_mms::calib_internal

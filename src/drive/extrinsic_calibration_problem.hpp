@@ -1,8 +1,9 @@
 #pragma once
 // The least-squares problem of CalibrateExtrinsics (extrinsic_calibrator.hpp): the POS as a
 // continuous trajectory, the scans kept for it, their de-skew, point-to-plane associations with
-// partner scans and the Huber-weighted normal equations over the 7 parameters. Private to the
-// library (src/pipeline).
+// partner scans and the Huber-weighted normal equations over the 7 parameters and the POS's
+// position corrections (knots, ExtrinsicCalibrationOptions::estimate_pos_drift). Private to the
+// library (src/drive).
 //
 // Thread safety: CalibrationProblem is used from one thread; it runs its loops on its own pool.
 
@@ -24,6 +25,8 @@ namespace slam_mms::calib_internal {
 
 using Vector7d = Eigen::Matrix<double, 7, 1>;
 using Matrix7d = Eigen::Matrix<double, 7, 7>;
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
 
 // ---- The POS as a continuous trajectory ---------------------------------------------------------
 
@@ -88,6 +91,10 @@ struct CalScan {
   std::vector<int> partners;
   PosTrack::Sample pose;  // body at t_start + dt
   int block = 0;          // jackknife block
+  // The POS position correction at the scan (world): (1 - knot_frac) x knot + knot_frac x knot+1.
+  int knot = 0;
+  double knot_frac = 0.0;
+  Eigen::Vector3d shift = Eigen::Vector3d::Zero();
 };
 
 // One point of scan a against the plane (c, n) of partner scan b, both in their lidar frames.
@@ -119,12 +126,23 @@ void Apply(const Vector7d& d, Params* p);
 
 class CalibrationProblem {
  public:
+  // Sets the knots of the POS correction over the scans' span (none where
+  // !o.estimate_pos_drift).
   CalibrationProblem(std::vector<CalScan> scans, const PosTrack& pos,
-                     const ExtrinsicCalibrationOptions& o, int num_threads)
-      : scans_(std::move(scans)), pos_(pos), o_(o), pool_(std::max(1, num_threads)) {}
+                     const ExtrinsicCalibrationOptions& o, int num_threads);
 
   std::vector<CalScan>& scans() { return scans_; }
   const std::vector<CalScan>& scans() const { return scans_; }
+
+  // Knots of the POS correction, and the size of the full parameter vector:
+  // [the 7 of Params, knot 0 (x, y, z world), knot 1, ...].
+  int num_knots() const { return num_knots_; }
+  int dim() const { return 7 + 3 * num_knots_; }
+  // Each scan's shift from the knots (3 x num_knots values).
+  void SetShifts(const VectorXd& knots);
+  // The knots' prior information (random walk and gauge, see the options), dim() x dim(), zero
+  // in the first 7 rows and columns.
+  MatrixXd KnotPrior() const;
 
   // Poses at scan starts for the time offset of `p`.
   void UpdatePoses(const Params& p);
@@ -135,12 +153,15 @@ class CalibrationProblem {
   // Point-to-plane associations at `p` with residual gate `gate`.
   std::vector<Association> Associate(const Params& p, double gate) const;
 
-  // Residual and its Jacobian over [phi, dt_xyz, dtime] (see the header comment).
-  double Residual(const Association& s, const Params& p, Vector7d* J) const;
+  // Residual and its Jacobian over [phi, dt_xyz, dtime] (see the header comment); `nw` (may be
+  // null): the plane normal in world, the residual's gradient in scan a's shift (-nw in b's).
+  double Residual(const Association& s, const Params& p, Vector7d* J,
+                  Eigen::Vector3d* nw = nullptr) const;
 
   struct Normal {
-    Matrix7d H = Matrix7d::Zero();
-    Vector7d g = Vector7d::Zero();
+    explicit Normal(int dim = 7) : H(MatrixXd::Zero(dim, dim)), g(VectorXd::Zero(dim)) {}
+    MatrixXd H;
+    VectorXd g;
     double wrr = 0.0, w = 0.0;  // sum of w r^2, sum of w
     size_t n = 0;
     Normal& operator+=(const Normal& o) {
@@ -171,13 +192,15 @@ class CalibrationProblem {
   const PosTrack& pos_;
   const ExtrinsicCalibrationOptions& o_;
   mutable internal::WorkerPool pool_;
+  int num_knots_ = 0;
 };
 
-// H + diag(prior_info) with the rows and columns of the fixed parameters replaced by identity.
-Matrix7d WithPriorAndFixed(const Matrix7d& H, const Vector7d& prior_info,
+// H + prior with the rows and columns of the fixed parameters (free[i] false, i < 7) replaced by
+// identity.
+MatrixXd WithPriorAndFixed(const MatrixXd& H, const MatrixXd& prior,
                            const std::array<bool, 7>& free);
-// Solves (H + prior) d = -(g + prior gradient) over the free parameters.
-Vector7d SolveStep(const Matrix7d& H, const Vector7d& g, const Vector7d& offset_from_prior,
-                   const Vector7d& prior_info, const std::array<bool, 7>& free);
+// Solves (H + prior) d = -(g + prior x offset_from_prior) over the free parameters.
+VectorXd SolveStep(const MatrixXd& H, const VectorXd& g, const VectorXd& offset_from_prior,
+                   const MatrixXd& prior, const std::array<bool, 7>& free);
 
 }  // namespace slam_mms::calib_internal

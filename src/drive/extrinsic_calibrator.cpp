@@ -146,19 +146,26 @@ void AssignPartners(const PosTrack& track, double time_offset_initial_s,
   }
 }
 
-// The Gauss-Newton rounds and the sigmas about the prior `initial`.
+// The Gauss-Newton rounds and the sigmas about the prior `initial`, over the 7 parameters and the
+// knots of the POS correction (CalibrationProblem::dim(); the knots' prior mean is zero).
 class Solver {
  public:
   Solver(CalibrationProblem* cal, const Params& initial, const ExtrinsicCalibrationOptions& o,
          const std::atomic<bool>* stop)
-      : cal_(*cal), initial_(initial), o_(o), stop_(stop) {
-    prior_info_ << o.prior_sigma_rpy_rad.cwiseInverse().cwiseAbs2(),
+      : cal_(*cal), initial_(initial), o_(o), stop_(stop), prior_(cal->KnotPrior()) {
+    Vector7d info;
+    info << o.prior_sigma_rpy_rad.cwiseInverse().cwiseAbs2(),
         o.prior_sigma_xyz_m.cwiseInverse().cwiseAbs2(),
         1.0 / (o.prior_sigma_time_s * o.prior_sigma_time_s);
+    prior_.diagonal().head<7>() += info;
+    knots_ = VectorXd::Zero(3 * cal->num_knots());
+    cal_.SetShifts(knots_);
   }
 
-  // Rounds of re-de-skew, re-association and Gauss-Newton steps from *p over the free set `fr`;
-  // `last` gets the associations of the last round.
+  const VectorXd& knots() const { return knots_; }
+
+  // Rounds of re-de-skew, re-association and Gauss-Newton steps from *p over the free set `fr`
+  // (the knots always free); `last` gets the associations of the last round.
   Status Solve(Params* p, const std::array<bool, 7>& fr, int rounds, std::vector<Association>* last,
                ExtrinsicCalibration* result) {
     for (int round = 0; round < rounds; ++round) {
@@ -180,10 +187,11 @@ class Solver {
         const std::vector<CalibrationProblem::Normal> nb = cal_.Accumulate(*last, *p, 1);
         // Data weighted by the residual variance, so that the prior has its stated weight.
         const double s2 = std::max(nb[0].wrr / std::max(1.0, nb[0].n - 7.0), 1e-6);
-        const Vector7d d =
-            SolveStep(nb[0].H / s2, nb[0].g / s2, Difference(*p, initial_), prior_info_, fr);
-        Apply(d, p);
+        const VectorXd d = SolveStep(nb[0].H / s2, nb[0].g / s2, Offset(*p), prior_, fr);
+        Apply(d.head<7>(), p);
+        knots_ += d.tail(knots_.size());
         cal_.UpdatePoses(*p);
+        cal_.SetShifts(knots_);
         step_norm = std::max(
             {d.head<3>().norm() / 1e-5, d.segment<3>(3).norm() / 1e-4, std::abs(d(6)) / 1e-5});
       }
@@ -194,29 +202,38 @@ class Solver {
     return OkStatus();
   }
 
-  // Formal and jackknife (over time blocks) sigmas from the normal equations at `at`.
+  // Formal and jackknife (over time blocks) sigmas of the 7 from the normal equations at `at`
+  // (the knots marginalised), and the systematic floor.
   void Sigmas(const Params& at, const std::array<bool, 7>& fr, const std::vector<Association>& last,
               Vector7d* formal, Vector7d* jack, Vector7d* floor) const {
     const std::vector<CalibrationProblem::Normal> blocks =
         cal_.Accumulate(last, at, o_.jackknife_blocks);
-    CalibrationProblem::Normal all;
+    CalibrationProblem::Normal all(cal_.dim());
     for (const auto& b : blocks) all += b;
     const double dof = std::max<double>(1.0, static_cast<double>(all.n) - 7.0);
     const double s2 = all.wrr / dof;
-    const Vector7d off = Difference(at, initial_);
-    const Matrix7d cov = WithPriorAndFixed(all.H / s2, prior_info_, fr).inverse();
+    const VectorXd off = Offset(at);
+    const MatrixXd cov = WithPriorAndFixed(all.H / s2, prior_, fr).inverse();
     for (int i = 0; i < 7; ++i) (*formal)(i) = fr[i] ? std::sqrt(std::max(0.0, cov(i, i))) : 0.0;
     // The systematic floor: a parameter whose unit change moves the residuals by `sensitivity`
-    // (weighted RMS) cannot be known better than systematic_error_m / sensitivity, however many
-    // residuals there are.
+    // (weighted RMS; the part the POS correction cannot take: the Schur complement onto the 7)
+    // cannot be known better than systematic_error_m / sensitivity, however many residuals there
+    // are.
+    Matrix7d S = all.H.topLeftCorner<7, 7>();
+    const int nk = cal_.dim() - 7;
+    if (nk > 0) {
+      const MatrixXd Hkk = all.H.bottomRightCorner(nk, nk) + s2 * prior_.bottomRightCorner(nk, nk);
+      const MatrixXd Hkp = all.H.bottomLeftCorner(nk, 7);
+      S -= Hkp.transpose() * Hkk.ldlt().solve(Hkp);
+    }
     for (int i = 0; i < 7; ++i) {
-      const double sensitivity = std::sqrt(std::max(0.0, all.H(i, i)) / std::max(all.w, 1e-12));
+      const double sensitivity = std::sqrt(std::max(0.0, S(i, i)) / std::max(all.w, 1e-12));
       (*floor)(i) = fr[i] ? o_.systematic_error_m / std::max(sensitivity, 1e-12) : 0.0;
     }
     std::vector<Vector7d> loo;
     for (const auto& b : blocks) {
       if (b.n == 0) continue;
-      loo.push_back(SolveStep((all.H - b.H) / s2, (all.g - b.g) / s2, off, prior_info_, fr));
+      loo.push_back(SolveStep((all.H - b.H) / s2, (all.g - b.g) / s2, off, prior_, fr).head<7>());
     }
     jack->setZero();
     if (loo.size() >= 2) {
@@ -230,21 +247,32 @@ class Solver {
   }
 
  private:
+  // The parameters' offset from the prior mean: [p - initial, knots].
+  VectorXd Offset(const Params& p) const {
+    VectorXd off(cal_.dim());
+    off.head<7>() = Difference(p, initial_);
+    off.tail(knots_.size()) = knots_;
+    return off;
+  }
+
   CalibrationProblem& cal_;
   const Params initial_;
   const ExtrinsicCalibrationOptions& o_;
   const std::atomic<bool>* stop_;
-  Vector7d prior_info_;
+  MatrixXd prior_;
+  VectorXd knots_;
 };
 
-// kTravelDirection: the POS's mean heading error from its own velocity (see the header), applied
-// to the observable yaw (and the observable lever arm components it turns).
-void ApplyTravelReference(const CalibrationProblem& cal, const PosTrack& track,
-                          const ExtrinsicCalibrationOptions& o,
-                          const std::array<bool, 7>& observable, Params* p_io,
-                          ExtrinsicCalibration* out) {
-  Params& p = *p_io;
-  ExtrinsicCalibration& result = *out;
+// kTravelDirection: the POS's mean heading error from its own velocity (see the header).
+struct TravelReference {
+  bool found = false;
+  double eps_z = 0.0;  // [rad]
+  double sigma = 0.0;  // its standard error and the travel allowance [rad]
+  int samples = 0;
+};
+
+TravelReference EstimateTravelReference(const CalibrationProblem& cal, const PosTrack& track,
+                                        const ExtrinsicCalibrationOptions& o, double time_offset) {
   // The POS's mean heading error from its own velocity in its body frame (v_body =
   // v (1, -eps_z, eps_y) for an attitude error R_est = R_true Exp(eps)), per time block; the map
   // placed the scans with R_est, so the extrinsic in the true body frame is Exp(eps) X. Heading
@@ -253,7 +281,7 @@ void ApplyTravelReference(const CalibrationProblem& cal, const PosTrack& track,
   std::vector<double> block_sum(o.jackknife_blocks, 0.0);
   std::vector<int> block_n(o.jackknife_blocks, 0);
   for (const CalScan& sc : cal.scans()) {
-    const PosTrack::Sample smp = track.At(sc.t_start + p.time);
+    const PosTrack::Sample smp = track.At(sc.t_start + time_offset);
     const double speed = smp.v_world.norm();
     if (speed < o.travel_min_speed_mps ||
         std::abs(smp.omega_world.z()) > o.travel_max_yaw_rate_radps) {
@@ -265,37 +293,48 @@ void ApplyTravelReference(const CalibrationProblem& cal, const PosTrack& track,
   }
   std::vector<double> means;
   double total = 0.0;
-  int n_total = 0;
+  TravelReference ref;
   for (int b = 0; b < o.jackknife_blocks; ++b) {
     if (block_n[b] == 0) continue;
     means.push_back(block_sum[b] / block_n[b]);
     total += block_sum[b];
-    n_total += block_n[b];
+    ref.samples += block_n[b];
   }
-  result.travel_samples = n_total;
-  if (means.size() >= 2) {
-    const double eps_z = total / n_total;
-    double var = 0.0;
-    for (const double m : means) var += (m - eps_z) * (m - eps_z);
-    const double sem = std::sqrt(var / static_cast<double>(means.size() * (means.size() - 1)));
-    result.travel_correction_rad = Eigen::Vector3d(0.0, 0.0, eps_z);
-    result.attitude_reference = "travel_direction";
-    result.pos_attitude_sigma_rad(2) = std::hypot(sem, o.travel_sigma_rad);
-    Eigen::Vector3d e = result.travel_correction_rad;
-    if (!observable[2]) e(2) = 0.0;
-    const Eigen::Matrix3d Re = so3::Exp(e);
-    p.R = Re * p.R;
-    if (observable[3] || observable[4] || observable[5]) {
-      const Eigen::Vector3d t_rot = Re * p.t;
-      for (int i = 0; i < 3; ++i) {
-        if (observable[3 + i]) p.t(i) = t_rot(i);
-      }
-    }
-  } else {
+  if (means.size() < 2) {
     SLAM_MMS_LOG(kWarning) << "CalibrateExtrinsics: too few straight stretches above "
                            << o.travel_min_speed_mps
                            << " m/s for the travel-direction attitude reference; the POS "
                               "attitude is the reference";
+    return ref;
+  }
+  ref.found = true;
+  ref.eps_z = total / ref.samples;
+  double var = 0.0;
+  for (const double m : means) var += (m - ref.eps_z) * (m - ref.eps_z);
+  const double sem = std::sqrt(var / static_cast<double>(means.size() * (means.size() - 1)));
+  ref.sigma = std::hypot(sem, o.travel_sigma_rad);
+  return ref;
+}
+
+// Moves the applied yaw (and the applied lever arm components it turns) to the travel frame.
+void ApplyTravelReference(const TravelReference& ref, const std::array<bool, 7>& applied,
+                          Params* p_io, ExtrinsicCalibration* out) {
+  Params& p = *p_io;
+  ExtrinsicCalibration& result = *out;
+  result.travel_samples = ref.samples;
+  if (!ref.found) return;
+  result.travel_correction_rad = Eigen::Vector3d(0.0, 0.0, ref.eps_z);
+  result.attitude_reference = "travel_direction";
+  result.pos_attitude_sigma_rad(2) = ref.sigma;
+  Eigen::Vector3d e = result.travel_correction_rad;
+  if (!applied[2]) e(2) = 0.0;
+  const Eigen::Matrix3d Re = so3::Exp(e);
+  p.R = Re * p.R;
+  if (applied[3] || applied[4] || applied[5]) {
+    const Eigen::Vector3d t_rot = Re * p.t;
+    for (int i = 0; i < 3; ++i) {
+      if (applied[3 + i]) p.t(i) = t_rot(i);
+    }
   }
 }
 
@@ -372,16 +411,34 @@ StatusOr<ExtrinsicCalibration> CalibrateExtrinsics(const DriveReader& reader,
   Vector7d max_sigma;
   max_sigma << Eigen::Vector3d::Constant(o.max_sigma_rpy_rad),
       Eigen::Vector3d::Constant(o.max_sigma_xyz_m), o.max_sigma_time_s;
-  std::array<bool, 7> observable{};
-  bool all_observable = true;
-  for (int i = 0; i < 7; ++i) {
-    const double s = std::max({formal(i), jack(i), floor(i)});
-    observable[i] = free[i] && s <= max_sigma(i) && s * o.min_prior_reduction <= prior_sigma(i);
-    if (free[i] && !observable[i]) all_observable = false;
+  TravelReference travel;
+  if (o.attitude_reference == ExtrinsicCalibrationOptions::AttitudeReference::kTravelDirection) {
+    travel = EstimateTravelReference(cal, track, o, p.time);
   }
-  if (!all_observable) {
-    // Hold the unobservable ones at their initial values and solve the others again.
-    std::array<bool, 7> fr = observable;
+  std::array<bool, 7> observable{}, applied{};
+  bool all_applied = true;
+  {
+    // The correction of the first solve over its sigma (rotations in the reported roll, pitch,
+    // yaw terms, with the attitude reference's sigma; the yaw in the travel frame with that one's).
+    Vector7d corr;
+    corr << RollPitchYaw(p.R * initial.R.transpose()), p.t - initial.t, p.time - initial.time;
+    Eigen::Vector3d reference_sigma = result.pos_attitude_sigma_rad;
+    if (travel.found) {
+      corr(2) += travel.eps_z;
+      reference_sigma(2) = travel.sigma;
+    }
+    for (int i = 0; i < 7; ++i) {
+      const double s = std::max({formal(i), jack(i), floor(i)});
+      observable[i] = free[i] && s <= max_sigma(i) && s * o.min_prior_reduction <= prior_sigma(i);
+      const double total = i < 3 ? std::hypot(s, reference_sigma(i)) : s;
+      result.significance(i) = free[i] ? std::abs(corr(i)) / std::max(total, 1e-12) : 0.0;
+      applied[i] = observable[i] && result.significance(i) >= o.min_significance;
+      if (free[i] && !applied[i]) all_applied = false;
+    }
+  }
+  if (!all_applied) {
+    // Hold the others at their initial values and solve the applied ones again.
+    std::array<bool, 7> fr = applied;
     const Vector7d off = Difference(p, initial);
     Params q = initial;
     Eigen::Vector3d keep_rot = off.head<3>();
@@ -391,7 +448,8 @@ StatusOr<ExtrinsicCalibration> CalibrateExtrinsics(const DriveReader& reader,
     }
     q.R = so3::Exp(keep_rot) * initial.R;
     if (fr[6]) q.time = p.time;
-    if (std::any_of(fr.begin(), fr.end(), [](bool b) { return b; })) {
+    // (The knots again too: they took what the held ones leave.)
+    if (cal.num_knots() > 0 || std::any_of(fr.begin(), fr.end(), [](bool b) { return b; })) {
       SLAM_MMS_RETURN_IF_ERROR(solver.Solve(&q, fr, std::max(3, o.max_rounds / 2), &last, &result));
     }
     p = q;
@@ -402,10 +460,25 @@ StatusOr<ExtrinsicCalibration> CalibrateExtrinsics(const DriveReader& reader,
     floor = s2;
   }
   result.observable = observable;
+  result.applied = applied;
+  if (cal.num_knots() > 0) {
+    const VectorXd& k = solver.knots();
+    const int nk = cal.num_knots();
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero(), rate2 = Eigen::Vector3d::Zero();
+    for (int i = 0; i < nk; ++i) mean += k.segment<3>(3 * i) / nk;
+    for (int i = 0; i < nk; ++i) {
+      result.pos_drift_max_m =
+          std::max(result.pos_drift_max_m, (k.segment<3>(3 * i) - mean).norm());
+      if (i + 1 < nk) rate2 += (k.segment<3>(3 * i + 3) - k.segment<3>(3 * i)).cwiseAbs2();
+    }
+    result.pos_drift_knots = nk;
+    result.pos_drift_rate_rms_mps =
+        (rate2 / std::max(1, nk - 1)).cwiseSqrt() / o.pos_drift_knot_interval_s;
+  }
   cal.Deskew(p);
   result.rms_final_m = cal.Rms(cal.Associate(p, o.final_gate_m), p);
   if (o.attitude_reference == ExtrinsicCalibrationOptions::AttitudeReference::kTravelDirection) {
-    ApplyTravelReference(cal, track, o, observable, &p, &result);
+    ApplyTravelReference(travel, applied, &p, &result);
   }
   {
     // Held rotation axes exactly at the initial value in the reported (roll, pitch, yaw) terms
@@ -413,7 +486,7 @@ StatusOr<ExtrinsicCalibration> CalibrateExtrinsics(const DriveReader& reader,
     Eigen::Vector3d rpy = RollPitchYaw(p.R * initial.R.transpose());
     bool changed = false;
     for (int i = 0; i < 3; ++i) {
-      if (!observable[i] && rpy(i) != 0.0) {
+      if (!applied[i] && rpy(i) != 0.0) {
         rpy(i) = 0.0;
         changed = true;
       }
@@ -426,13 +499,13 @@ StatusOr<ExtrinsicCalibration> CalibrateExtrinsics(const DriveReader& reader,
   result.correction_rpy_rad = RollPitchYaw(p.R * initial.R.transpose());
   result.correction_xyz_m = corr.segment<3>(3);
   for (int i = 0; i < 3; ++i) {
-    result.sigma_rpy_rad(i) = observable[i] ? std::hypot(std::max({formal(i), jack(i), floor(i)}),
-                                                         result.pos_attitude_sigma_rad(i))
-                                            : 0.0;
+    result.sigma_rpy_rad(i) = applied[i] ? std::hypot(std::max({formal(i), jack(i), floor(i)}),
+                                                      result.pos_attitude_sigma_rad(i))
+                                         : 0.0;
     result.sigma_xyz_m(i) =
-        observable[3 + i] ? std::max({formal(3 + i), jack(3 + i), floor(3 + i)}) : 0.0;
+        applied[3 + i] ? std::max({formal(3 + i), jack(3 + i), floor(3 + i)}) : 0.0;
   }
-  result.sigma_time_s = observable[6] ? std::max({formal(6), jack(6), floor(6)}) : 0.0;
+  result.sigma_time_s = applied[6] ? std::max({formal(6), jack(6), floor(6)}) : 0.0;
   result.residuals = last.size();
   result.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_wall).count();
   return result;

@@ -41,9 +41,15 @@ std::string CalibrationJson(const ExtrinsicCalibration& c, const std::string& fi
   j["sigma_rpy_deg"] = Vec(c.sigma_rpy_rad, kDeg);
   j["sigma_xyz_m"] = Vec(c.sigma_xyz_m);
   j["sigma_time_offset_s"] = c.sigma_time_s;
-  Json obs = Json::object();
-  for (int i = 0; i < 7; ++i) obs[ExtrinsicParameterName(i)] = c.observable[i];
+  Json obs = Json::object(), applied = Json::object(), significance = Json::object();
+  for (int i = 0; i < 7; ++i) {
+    obs[ExtrinsicParameterName(i)] = c.observable[i];
+    applied[ExtrinsicParameterName(i)] = c.applied[i];
+    significance[ExtrinsicParameterName(i)] = c.significance(i);
+  }
   j["observable"] = std::move(obs);
+  j["applied"] = std::move(applied);
+  j["significance"] = std::move(significance);
   j["attitude_reference"] = c.attitude_reference;
   j["attitude_reference_sigma_deg"] = Vec(c.pos_attitude_sigma_rad, kDeg);
   j["travel_direction_correction_deg"] = Vec(c.travel_correction_rad, kDeg);
@@ -68,6 +74,9 @@ std::string CalibrationJson(const ExtrinsicCalibration& c, const std::string& fi
   j["rms_initial_m"] = c.rms_initial_m;
   j["rms_final_m"] = c.rms_final_m;
   j["total_heading_change_deg"] = c.total_heading_change_rad * kDeg;
+  j["pos_drift"] = Json{{"knots", c.pos_drift_knots},
+                        {"rate_rms_mps", Vec(c.pos_drift_rate_rms_mps)},
+                        {"max_m", c.pos_drift_max_m}};
   j["wall_s"] = c.wall_s;
   j["calibration_file"] = file_name;
   return j.dump();
@@ -94,22 +103,27 @@ StatusOr<RunCalibration> CalibrateRunExtrinsics(const DriveReader& reader,
   SLAM_MMS_RETURN_IF_ERROR(
       WriteKittiImuToVelo(written, out.file, "slam_mms_run --calibrate-extrinsics"));
   out.json = CalibrationJson(c, name, input_time_offset_s);
-  std::string unobservable;
+  std::string unobservable, insignificant;
   for (int i = 0; i < 7; ++i) {
     if (!c.observable[i]) unobservable += std::string(" ") + ExtrinsicParameterName(i);
+    if (c.observable[i] && !c.applied[i]) {
+      insignificant += std::string(" ") + ExtrinsicParameterName(i);
+    }
   }
   std::printf(
       "[calibration] %d scans, %zu residuals, rms %.4f -> %.4f m, %.1f s\n"
       "[calibration] correction rpy [%.4f %.4f %.4f] deg (sigma [%.4f %.4f %.4f]), xyz "
       "[%.4f %.4f %.4f] m (sigma [%.4f %.4f %.4f]), time offset %.4f s (sigma %.4f)\n"
-      "[calibration] held at the file's values (not observable in this drive):%s\n",
+      "[calibration] held at the file's values: not observable in this drive:%s; within %.0f "
+      "sigma of the file:%s\n",
       c.scans_used, c.residuals, c.rms_initial_m, c.rms_final_m, c.wall_s,
       c.correction_rpy_rad(0) * kDeg, c.correction_rpy_rad(1) * kDeg,
       c.correction_rpy_rad(2) * kDeg, c.sigma_rpy_rad(0) * kDeg, c.sigma_rpy_rad(1) * kDeg,
       c.sigma_rpy_rad(2) * kDeg, c.correction_xyz_m(0), c.correction_xyz_m(1),
       c.correction_xyz_m(2), c.sigma_xyz_m(0), c.sigma_xyz_m(1), c.sigma_xyz_m(2),
       written.lidar_time_offset_s, c.sigma_time_s,
-      unobservable.empty() ? " none" : unobservable.c_str());
+      unobservable.empty() ? " none" : unobservable.c_str(), calibration.min_significance,
+      insignificant.empty() ? " none" : insignificant.c_str());
   std::fflush(stdout);
   return out;
 }

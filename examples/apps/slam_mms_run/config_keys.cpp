@@ -436,6 +436,30 @@ const std::vector<std::pair<std::string, KeyHandler>>& Handlers() {
               ExtrinsicCalibrationOptions::AttitudeReference::kTravelDirection}}));
     SLAM_MMS_KEY_I("drive.extrinsic_calibration.max_scans",
                    o->drive.extrinsic_calibration.max_scans);
+    SLAM_MMS_KEY_D("drive.extrinsic_calibration.max_pos_sigma_m",
+                   o->drive.extrinsic_calibration.max_pos_sigma_m);
+    SLAM_MMS_KEY_D("drive.extrinsic_calibration.max_pos_sigma_ratio",
+                   o->drive.extrinsic_calibration.max_pos_sigma_ratio);
+    SLAM_MMS_KEY_B("drive.extrinsic_calibration.estimate_rotation",
+                   o->drive.extrinsic_calibration.estimate_rotation);
+    SLAM_MMS_KEY_B("drive.extrinsic_calibration.estimate_translation",
+                   o->drive.extrinsic_calibration.estimate_translation);
+    SLAM_MMS_KEY_B("drive.extrinsic_calibration.estimate_time_offset",
+                   o->drive.extrinsic_calibration.estimate_time_offset);
+    SLAM_MMS_KEY_B("drive.extrinsic_calibration.estimate_pos_drift",
+                   o->drive.extrinsic_calibration.estimate_pos_drift);
+    SLAM_MMS_KEY_D("drive.extrinsic_calibration.pos_drift_knot_interval_s",
+                   o->drive.extrinsic_calibration.pos_drift_knot_interval_s);
+    SLAM_MMS_KEY_D("drive.extrinsic_calibration.pos_error_correlation_s",
+                   o->drive.extrinsic_calibration.pos_error_correlation_s);
+    SLAM_MMS_KEY_D("drive.extrinsic_calibration.pos_max_velocity_error_mps",
+                   o->drive.extrinsic_calibration.pos_max_velocity_error_mps);
+    SLAM_MMS_KEY_D("drive.extrinsic_calibration.max_sigma_rpy_rad",
+                   o->drive.extrinsic_calibration.max_sigma_rpy_rad);
+    SLAM_MMS_KEY_D("drive.extrinsic_calibration.min_significance",
+                   o->drive.extrinsic_calibration.min_significance);
+    SLAM_MMS_KEY_D("drive.extrinsic_calibration.systematic_error_m",
+                   o->drive.extrinsic_calibration.systematic_error_m);
 #undef SLAM_MMS_KEY_D
 #undef SLAM_MMS_KEY_F
 #undef SLAM_MMS_KEY_I

@@ -53,6 +53,29 @@ struct ExtrinsicCalibrationOptions {
   /// scans of a few seconds together; it is the drift in outages that breaks their consistency.
   double max_pos_sigma_m = 0.5;
   double max_pos_sigma_ratio = 3.0;
+  /// The POS's own position error, estimated with the extrinsic as a correction in world axes,
+  /// linear between knots every pos_drift_knot_interval_s [s] over the scans used. Its prior is
+  /// the POS's error as a Gauss-Markov process of the POS's stated position sigma s and
+  /// correlation time pos_error_correlation_s (tau, the GNSS error's), whose rate is a
+  /// Gauss-Markov process of sigma v = s sqrt(2 / tau) and tau: knots dt apart differ by
+  /// v dt, their rates by v sqrt(2 dt / tau) (and 1 m about the POS at each knot, the gauge: the
+  /// scans' consistency does not see a common shift). A GNSS/INS on float or code fixes wanders
+  /// by a few cm/s (4.7 cm/s vertical on a simulated float drive whose attitude was 0.006 deg
+  /// off); the scans' path tilts by that rate over the speed, and without this model the
+  /// boresight takes it (0.35 deg of roll and pitch there). A shift of the scans is told apart
+  /// from a rotation by the scans' geometry, as in a registration, except where it is not: along
+  /// walls parallel to the path a yaw and a sideways drift look alike, over flat ground a pitch
+  /// and a vertical one, so a POS that wanders leaves those to the turns and facades (and the
+  /// lever arm and clock offset to the turns) (docs/calibration.md).
+  /// The drift's rate is also capped at pos_max_velocity_error_mps: a POS whose position is
+  /// metres off (a code-only GNSS) is not off by metres per second, since its INS holds the
+  /// velocity (a GNSS/INS velocity error is a few cm/s: 4.7 cm/s vertical on that float drive).
+  /// Without the cap, the real KITTI frames' POS (sigma of metres) "drifted" 0.8 m/s and took the
+  /// whole extrinsic with it.
+  bool estimate_pos_drift = true;
+  double pos_drift_knot_interval_s = 1.0;
+  double pos_error_correlation_s = 30.0;
+  double pos_max_velocity_error_mps = 0.1;
   /// The attitude the boresight is relative to. The map constrains only the sum of the
   /// boresight and the POS's own attitude error (on level roads the rotations commute), so the
   /// POS's heading error (0.05-0.3 deg for a tactical or navigation IMU over a minute of driving)
@@ -85,6 +108,13 @@ struct ExtrinsicCalibrationOptions {
   double max_sigma_xyz_m = 0.03;
   double max_sigma_time_s = 0.003;
   double min_prior_reduction = 5.0;
+  /// Applied: observable and its correction at least min_significance x its sigma (rotations:
+  /// with the attitude reference's sigma in quadrature); the others are held at the initial value.
+  /// A correction the data cannot tell from their noise, or from the POS's own attitude error
+  /// (which the map cannot tell from a boresight), keeps the calibration file's value: on the
+  /// simulated sweep with a right file, yaw corrections of 0.05-0.1 deg within one sigma of the
+  /// POS's heading error made the extrinsic worse than the file (docs/calibration.md).
+  double min_significance = 3.0;
   /// The residuals' systematic error that no number of them averages away [m]: a parameter is
   /// known at best to systematic_error_m / its sensitivity (the weighted RMS change of the
   /// residuals per unit of it). 0.5 mm: the smallest floor that covers the bias left with the

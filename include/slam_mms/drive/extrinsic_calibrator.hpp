@@ -20,10 +20,16 @@
 // largest of the formal one (Huber-weighted normal equations, scaled by the residual variance),
 // a leave-one-block-out jackknife over time blocks of the drive (the formal one ignores that
 // residuals of one scan are correlated) and a systematic floor (Options::systematic_error_m).
-// Unobservable parameters are then held at their initial
-// values and the others solved again: the result never invents a number the drive cannot give
-// (a straight drive cannot give the lever arm, level roads never its vertical component, constant
-// speed never the time offset apart from the forward lever arm).
+// An observable parameter is applied where its correction is significant
+// (Options::min_significance). The others are then held at their initial values and the
+// applied ones solved again: the result never invents a number the drive cannot give (a straight
+// drive cannot give the lever arm, level roads never its vertical component, constant speed
+// never the time offset apart from the forward lever arm), nor replaces the file's value with
+// one it cannot tell from it.
+//
+// The POS's own position error, which tilts the scans' path by its rate over the speed, is
+// estimated with them (a correction linear between knots, Options::estimate_pos_drift); the
+// seven's sigmas are those with it marginalised.
 //
 // Scans where the POS is worse than usual (GNSS outages: Options::max_pos_sigma_*) are not used.
 //
@@ -55,9 +61,10 @@ struct ExtrinsicCalibration {
   Eigen::Vector3d correction_rpy_rad = Eigen::Vector3d::Zero();
   Eigen::Vector3d correction_xyz_m = Eigen::Vector3d::Zero();
   /// 1 sigma (see the file comment) of the correction; 0 for a parameter held at its initial
-  /// value. sigma_rpy_rad includes pos_attitude_sigma_rad in quadrature: the map constrains only
-  /// the sum of the boresight and the POS's own attitude error (on level roads the two rotations
-  /// commute), so no drive gives the boresight better than its POS gives the attitude.
+  /// value (not applied). sigma_rpy_rad includes pos_attitude_sigma_rad in quadrature: the map
+  /// constrains only the sum of the boresight and the POS's own attitude error (on level roads the
+  /// two rotations commute), so no drive gives the boresight better than its POS gives the
+  /// attitude.
   Eigen::Vector3d sigma_rpy_rad = Eigen::Vector3d::Zero();
   Eigen::Vector3d sigma_xyz_m = Eigen::Vector3d::Zero();
   double sigma_time_s = 0.0;
@@ -68,6 +75,12 @@ struct ExtrinsicCalibration {
   Eigen::Matrix<double, 7, 1> systematic_sigma = Eigen::Matrix<double, 7, 1>::Zero();
   /// Whether the drive determines each parameter (false also for one not estimated).
   std::array<bool, 7> observable{};
+  /// Whether the estimate replaced the initial value: observable and significant
+  /// (Options::min_significance). The others are held at their initial values.
+  std::array<bool, 7> applied{};
+  /// Each parameter's correction over its sigma in the first solve (all free; rotations with the
+  /// attitude reference's sigma in quadrature); 0 for one not estimated.
+  Eigen::Matrix<double, 7, 1> significance = Eigen::Matrix<double, 7, 1>::Zero();
   /// The sigma of the attitude reference, body axes: the median over the scans used of the POS's
   /// own attitude sigma (its covariance); with kTravelDirection, for pitch and yaw that reference's
   /// (yaw: the standard error of its time-block means and travel_sigma_rad in quadrature).
@@ -79,6 +92,12 @@ struct ExtrinsicCalibration {
   /// drive without straight stretches, logged).
   std::string attitude_reference = "pos";
   int travel_samples = 0;
+  /// The POS's position correction (Options::estimate_pos_drift): its knots (0: not estimated),
+  /// the RMS of its rate between knots per world axis [m/s] and its largest excursion from its
+  /// mean [m] (the part of the POS's error the scans' consistency sees).
+  int pos_drift_knots = 0;
+  Eigen::Vector3d pos_drift_rate_rms_mps = Eigen::Vector3d::Zero();
+  double pos_drift_max_m = 0.0;
   int scans_used = 0;
   int scans_skipped_pos = 0;         ///< POS sigma above max_pos_sigma_m.
   int scans_skipped_unreadable = 0;  ///< ReadScan failed.

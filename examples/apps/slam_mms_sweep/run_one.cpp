@@ -190,6 +190,29 @@ StatusOr<app::RunConfig> BaseConfig(const fs::path& config) {
   return c;
 }
 
+// The boresight self-calibration of drive.estimate_extrinsics, as slam_mms_run runs it: its
+// report.json "extrinsics" (no file written) with "run_with_estimate", and *reader replaced by
+// one with the estimate. A drive that cannot give it (FailedPrecondition: too few scans where the
+// POS is good, as on an SPS drive's 4 m) runs with the file, as a calibration on by default
+// would: {"status", "run_with_estimate": false}. Other errors are returned.
+StatusOr<Json> SelfCalibrate(const MappingSystem::Options& options,
+                             const ExtrinsicCalibrationOptions& calibration,
+                             std::unique_ptr<DriveReader>* reader) {
+  StatusOr<ExtrinsicCalibration> cal = CalibrateDriveExtrinsics(**reader, options, calibration);
+  if (!cal.ok()) {
+    if (cal.status().code() != StatusCode::kFailedPrecondition) return cal.status();
+    return Json{{"status", cal.status().ToString()}, {"run_with_estimate", false}};
+  }
+  Json c = Json::parse(app::CalibrationJson(*cal, "", 0.0));
+  c.erase("calibration_file");
+  c["run_with_estimate"] = true;
+  DriveExtrinsics estimated;
+  estimated.T_body_lidar = cal->T_body_lidar_estimated;
+  estimated.lidar_time_offset_s = cal->time_offset_s;
+  *reader = OverrideExtrinsics(std::move(*reader), estimated);
+  return c;
+}
+
 // The rotation from `truth` to `estimate` about the body axes, as a rotation vector [deg], and
 // the lever-arm difference [m].
 Json ExtrinsicErrorJson(const Eigen::Isometry3d& T_body_lidar_estimate,
@@ -348,26 +371,12 @@ int RunOne(const fs::path& run_dir) {
       ExtrinsicErrorJson((*reader)->streams().T_body_lidar, T_body_lidar_true);
   if (base->drive.estimate_extrinsics) {
     options.T_body_lidar = (*reader)->streams().T_body_lidar;
-    StatusOr<ExtrinsicCalibration> cal =
-        CalibrateDriveExtrinsics(**reader, options, base->drive.extrinsic_calibration);
-    if (cal.ok()) {
-      // slam_mms_run's report.json "extrinsics" (no file is written here), and the truth.
-      Json c = Json::parse(app::CalibrationJson(*cal, "", 0.0));
-      c.erase("calibration_file");
-      c["error"] = ExtrinsicErrorJson(cal->T_body_lidar_estimated, T_body_lidar_true);
-      c["run_with_estimate"] = true;
-      result["calibration"] = std::move(c);
-      DriveExtrinsics estimated;
-      estimated.T_body_lidar = cal->T_body_lidar_estimated;
-      estimated.lidar_time_offset_s = cal->time_offset_s;
-      *reader = OverrideExtrinsics(std::move(*reader), estimated);
-    } else if (cal.status().code() == StatusCode::kFailedPrecondition) {
-      // A drive that cannot give the calibration (too few scans where the POS is good, as on an
-      // SPS drive's 4 m) runs with the file, as a calibration on by default would.
-      result["calibration"] = {{"status", cal.status().ToString()}, {"run_with_estimate", false}};
-    } else {
-      return Fail(run_dir, *spec_json, cal.status());
+    StatusOr<Json> c = SelfCalibrate(options, base->drive.extrinsic_calibration, &*reader);
+    if (!c.ok()) return Fail(run_dir, *spec_json, c.status());
+    if (c->contains("T_body_lidar_estimated")) {
+      (*c)["error"] = ExtrinsicErrorJson((*reader)->streams().T_body_lidar, T_body_lidar_true);
     }
+    result["calibration"] = std::move(c).value();
   }
   options.T_body_lidar = (*reader)->streams().T_body_lidar;
   if ((*reader)->streams().t_body_antenna_m) {
@@ -458,22 +467,10 @@ int RealOne(const fs::path& run_dir, const fs::path& drive_dir, const fs::path& 
     options.T_body_lidar = (*reader)->streams().T_body_lidar;
     Json calibration;
     if (base->drive.estimate_extrinsics) {
-      StatusOr<ExtrinsicCalibration> cal =
-          CalibrateDriveExtrinsics(**reader, options, base->drive.extrinsic_calibration);
-      if (cal.ok()) {
-        calibration = Json::parse(app::CalibrationJson(*cal, "", 0.0));
-        calibration.erase("calibration_file");
-        calibration["run_with_estimate"] = true;
-        DriveExtrinsics estimated;
-        estimated.T_body_lidar = cal->T_body_lidar_estimated;
-        estimated.lidar_time_offset_s = cal->time_offset_s;
-        *reader = OverrideExtrinsics(std::move(*reader), estimated);
-        options.T_body_lidar = (*reader)->streams().T_body_lidar;
-      } else if (cal.status().code() == StatusCode::kFailedPrecondition) {
-        calibration = {{"status", cal.status().ToString()}, {"run_with_estimate", false}};
-      } else {
-        return Fail(run_dir, spec, cal.status());
-      }
+      StatusOr<Json> c = SelfCalibrate(options, base->drive.extrinsic_calibration, &*reader);
+      if (!c.ok()) return Fail(run_dir, spec, c.status());
+      calibration = std::move(c).value();
+      options.T_body_lidar = (*reader)->streams().T_body_lidar;
     }
     app::ModeRun mr =
         app::RunMode(MappingMode::kLidarOnly, options, **reader, PosWorkflow::kForward, false);

@@ -103,8 +103,13 @@ struct ExtrinsicCalibrationOptions {
   bool estimate_rotation = true;
   bool estimate_translation = true;
   bool estimate_time_offset = true;
-  /// Observable: sigma <= max_sigma_* and sigma <= prior sigma / min_prior_reduction.
-  double max_sigma_rpy_rad = 0.05 * 3.14159265358979 / 180.0;
+  /// Observable: sigma <= max_sigma_* and sigma <= prior sigma / min_prior_reduction. 0.1 deg:
+  /// with the POS's drift marginalised, the systematic floor of a yaw came out 0.055-0.073 deg on
+  /// drives whose yaw the data gave to 0.01 deg; with the significance test below, what is
+  /// applied is more than 3 sigma off the file (on the simulated sweep: a wrong file's yaw
+  /// median 0.88 -> 0.70 deg, rule failures 8 -> 3; a right file kept on every run, as at
+  /// 0.05 deg).
+  double max_sigma_rpy_rad = 0.1 * 3.14159265358979 / 180.0;
   double max_sigma_xyz_m = 0.03;
   double max_sigma_time_s = 0.003;
   double min_prior_reduction = 5.0;

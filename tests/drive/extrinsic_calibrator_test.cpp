@@ -74,12 +74,12 @@ void Print(const ExtrinsicCalibration& r, const Eigen::Isometry3d& truth, double
   std::printf("error vs truth: rpy [%.4f %.4f %.4f] deg, xyz [%.4f %.4f %.4f] m, time %.5f s\n",
               rot_err(0), rot_err(1), rot_err(2), t_err(0), t_err(1), t_err(2),
               r.time_offset_s - true_offset);
-  std::printf("attitude reference sigma [%.4f %.4f %.4f] deg, significance [%.1f %.1f %.1f %.1f %.1f "
-              "%.1f %.1f]\n",
-              r.pos_attitude_sigma_rad(0) / kDeg, r.pos_attitude_sigma_rad(1) / kDeg,
-              r.pos_attitude_sigma_rad(2) / kDeg, r.significance(0), r.significance(1),
-              r.significance(2), r.significance(3), r.significance(4), r.significance(5),
-              r.significance(6));
+  std::printf(
+      "attitude reference sigma [%.4f %.4f %.4f] deg, significance [%.1f %.1f %.1f %.1f %.1f "
+      "%.1f %.1f]\n",
+      r.pos_attitude_sigma_rad(0) / kDeg, r.pos_attitude_sigma_rad(1) / kDeg,
+      r.pos_attitude_sigma_rad(2) / kDeg, r.significance(0), r.significance(1), r.significance(2),
+      r.significance(3), r.significance(4), r.significance(5), r.significance(6));
   std::printf("POS correction: %d knots, rate rms [%.4f %.4f %.4f] m/s, max %.3f m\n",
               r.pos_drift_knots, r.pos_drift_rate_rms_mps(0), r.pos_drift_rate_rms_mps(1),
               r.pos_drift_rate_rms_mps(2), r.pos_drift_max_m);

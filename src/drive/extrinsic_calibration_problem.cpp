@@ -145,11 +145,18 @@ std::vector<Association> CalibrationProblem::Associate(const Params& p, double g
   const int k = o_.num_neighbours;
   const float max_d2 =
       static_cast<float>(o_.max_neighbour_distance_m * o_.max_neighbour_distance_m);
+  // Each scan's lidar frame in world (POS, extrinsic, POS correction) and its inverse, once per
+  // call rather than per query point.
+  std::vector<Eigen::Isometry3d> W(scans_.size()), W_inv(scans_.size());
+  for (size_t i = 0; i < scans_.size(); ++i) {
+    W[i] = scans_[i].pose.T_world_body * X;
+    W[i].translation() += scans_[i].shift;
+    W_inv[i] = W[i].inverse();
+  }
   ParallelFor(scans_.size(), [&](size_t ia) {
     const CalScan& a = scans_[ia];
     if (a.partners.empty()) return;
-    Eigen::Isometry3d Wa = a.pose.T_world_body * X;
-    Wa.translation() += a.shift;
+    const Eigen::Isometry3d& Wa = W[ia];
     std::vector<uint32_t> idx(k);
     std::vector<float> d2(k);
     int round = 0;
@@ -157,9 +164,7 @@ std::vector<Association> CalibrationProblem::Associate(const Params& p, double g
       for (int m = 0; m < o_.partners_per_point; ++m) {
         const int ib = a.partners[(round++) % a.partners.size()];
         const CalScan& b = scans_[ib];
-        Eigen::Isometry3d Wb = b.pose.T_world_body * X;
-        Wb.translation() += b.shift;
-        const Eigen::Isometry3d Mba = Wb.inverse() * Wa;
+        const Eigen::Isometry3d Mba = W_inv[ib] * Wa;
         const Eigen::Vector3d qb = Mba * a.q[j].cast<double>();
         const Eigen::Vector3f qf = qb.cast<float>();
         if (b.tree->knnSearch(qf.data(), k, idx.data(), d2.data()) != static_cast<size_t>(k))

@@ -338,6 +338,20 @@ void ApplyTravelReference(const TravelReference& ref, const std::array<bool, 7>&
   }
 }
 
+// ExtrinsicCalibration's pos_drift_* from the knots (3 per knot, `interval` [s] apart).
+void SummarisePosDrift(const VectorXd& knots, double interval, ExtrinsicCalibration* out) {
+  const int nk = static_cast<int>(knots.size() / 3);
+  if (nk == 0) return;
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero(), rate2 = Eigen::Vector3d::Zero();
+  for (int i = 0; i < nk; ++i) mean += knots.segment<3>(3 * i) / nk;
+  for (int i = 0; i < nk; ++i) {
+    out->pos_drift_max_m = std::max(out->pos_drift_max_m, (knots.segment<3>(3 * i) - mean).norm());
+    if (i + 1 < nk) rate2 += (knots.segment<3>(3 * i + 3) - knots.segment<3>(3 * i)).cwiseAbs2();
+  }
+  out->pos_drift_knots = nk;
+  out->pos_drift_rate_rms_mps = (rate2 / std::max(1, nk - 1)).cwiseSqrt() / interval;
+}
+
 }  // namespace
 
 const char* ExtrinsicParameterName(int i) {
@@ -427,8 +441,9 @@ StatusOr<ExtrinsicCalibration> CalibrateExtrinsics(const DriveReader& reader,
       corr(2) += travel.eps_z;
       reference_sigma(2) = travel.sigma;
     }
+    const Vector7d data_sigma = formal.cwiseMax(jack).cwiseMax(floor);
     for (int i = 0; i < 7; ++i) {
-      const double s = std::max({formal(i), jack(i), floor(i)});
+      const double s = data_sigma(i);
       observable[i] = free[i] && s <= max_sigma(i) && s * o.min_prior_reduction <= prior_sigma(i);
       const double total = i < 3 ? std::hypot(s, reference_sigma(i)) : s;
       result.significance(i) = free[i] ? std::abs(corr(i)) / std::max(total, 1e-12) : 0.0;
@@ -461,20 +476,7 @@ StatusOr<ExtrinsicCalibration> CalibrateExtrinsics(const DriveReader& reader,
   }
   result.observable = observable;
   result.applied = applied;
-  if (cal.num_knots() > 0) {
-    const VectorXd& k = solver.knots();
-    const int nk = cal.num_knots();
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero(), rate2 = Eigen::Vector3d::Zero();
-    for (int i = 0; i < nk; ++i) mean += k.segment<3>(3 * i) / nk;
-    for (int i = 0; i < nk; ++i) {
-      result.pos_drift_max_m =
-          std::max(result.pos_drift_max_m, (k.segment<3>(3 * i) - mean).norm());
-      if (i + 1 < nk) rate2 += (k.segment<3>(3 * i + 3) - k.segment<3>(3 * i)).cwiseAbs2();
-    }
-    result.pos_drift_knots = nk;
-    result.pos_drift_rate_rms_mps =
-        (rate2 / std::max(1, nk - 1)).cwiseSqrt() / o.pos_drift_knot_interval_s;
-  }
+  SummarisePosDrift(solver.knots(), o.pos_drift_knot_interval_s, &result);
   cal.Deskew(p);
   result.rms_final_m = cal.Rms(cal.Associate(p, o.final_gate_m), p);
   if (o.attitude_reference == ExtrinsicCalibrationOptions::AttitudeReference::kTravelDirection) {
@@ -498,14 +500,13 @@ StatusOr<ExtrinsicCalibration> CalibrateExtrinsics(const DriveReader& reader,
   result.time_offset_s = p.time;
   result.correction_rpy_rad = RollPitchYaw(p.R * initial.R.transpose());
   result.correction_xyz_m = corr.segment<3>(3);
+  const Vector7d data_sigma = formal.cwiseMax(jack).cwiseMax(floor);
   for (int i = 0; i < 3; ++i) {
-    result.sigma_rpy_rad(i) = applied[i] ? std::hypot(std::max({formal(i), jack(i), floor(i)}),
-                                                      result.pos_attitude_sigma_rad(i))
-                                         : 0.0;
-    result.sigma_xyz_m(i) =
-        applied[3 + i] ? std::max({formal(3 + i), jack(3 + i), floor(3 + i)}) : 0.0;
+    result.sigma_rpy_rad(i) =
+        applied[i] ? std::hypot(data_sigma(i), result.pos_attitude_sigma_rad(i)) : 0.0;
+    result.sigma_xyz_m(i) = applied[3 + i] ? data_sigma(3 + i) : 0.0;
   }
-  result.sigma_time_s = applied[6] ? std::max({formal(6), jack(6), floor(6)}) : 0.0;
+  result.sigma_time_s = applied[6] ? data_sigma(6) : 0.0;
   result.residuals = last.size();
   result.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_wall).count();
   return result;

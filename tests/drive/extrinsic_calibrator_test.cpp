@@ -39,14 +39,14 @@ Case Open(const std::filesystem::path& drive_dir, bool stated_noise = false) {
   if (!r.ok()) return c;
   c.reader = std::move(r).value();
   MappingSystem::Options mo;
-  if (stated_noise) {
+  // SLAM_MMS_CAL_LAND: scripts/experiments/land_vehicle_pos.yaml's POS (stated noise and more).
+  const bool land = std::getenv("SLAM_MMS_CAL_LAND") != nullptr;
+  if (stated_noise || land) {
     mo.use_stated_imu_noise = true;
     mo.ins.use_stated_attitude_sigma = true;
   }
-  if (std::getenv("SLAM_MMS_CAL_LAND")) {  // scripts/experiments/land_vehicle_pos.yaml's POS
-    mo.use_stated_imu_noise = true;
+  if (land) {
     mo.vehicle_nhc_sigma_mps = 0.05;
-    mo.ins.use_stated_attitude_sigma = true;
     mo.ins.nhc_lateral_correlation_time_s = 2.6;
     mo.ins.nhc_vertical_correlation_time_s = 0.84;
   }

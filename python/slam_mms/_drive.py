@@ -211,6 +211,23 @@ def _evaluate(result: DriveResult, drive: pathlib.Path, gnss_outages, num_thread
             _log.warning("map entropy: %s", e)
     method = _C.make_method_report(result.ate, result.relative_error, result.outage_errors,
                                    result.map_entropy, nees)
+    if gt_kind == "oxts" and len(run.trajectory):
+        # The second reference slam_mms_run reports (run_report.cpp): the OXTS velocities
+        # integrated from the first record, sharper over seconds than its positions.
+        try:
+            vel = _C.load_oxts_ground_truth(reader, run.origin, "velocity")["trajectory"]
+            result.extra["oxts_velocity_reference"] = vel
+            v_ate = _C.compute_ate(run.trajectory, vel)
+            v_out = _C.compute_outage_errors(v_ate, list(gnss_outages), reference_ns)
+            v_rel = None
+            if len(run.trajectory) >= 2:
+                p = v_ate.p_gt_world
+                path_m = float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum()) if len(p) else 0.0
+                lengths = "kitti" if path_m >= 400.0 else "short"
+                v_rel = _C.compute_relative_error(run.trajectory, vel, lengths)
+            method.vs_oxts_velocity = _C.make_reference_metrics(v_ate, v_rel, v_out)
+        except (FileNotFoundError, ValueError, IndexError, _C.Error) as e:
+            _log.warning("OXTS velocity reference: %s", e)
     method.scans_per_s = run.scans_processed / run.wall_s if run.wall_s > 0 else 0.0
     method.peak_rss_mb = _C.peak_rss_mb()
     gt_map_mme = None

@@ -220,7 +220,7 @@ class DriveRun:
         ...
     @property
     def extrinsic_calibration(self) -> object:
-        """With estimate_extrinsics: the boresight self-calibration the run was made with (CalibrateExtrinsics' estimate, its sigmas and which of the seven parameters the drive observes), else None."""
+        """With estimate_extrinsics: the boresight self-calibration the run was made with (CalibrateExtrinsics' estimate, its sigmas and which of the seven parameters the drive observes, and which it applied), else None."""
     @property
     def ok(self) -> bool:
         ...
@@ -1639,6 +1639,11 @@ class MethodReport:
         ...
     @peak_rss_mb.setter
     def peak_rss_mb(self, value: Optional[float]) -> None: ...
+    @property
+    def vs_oxts_velocity(self) -> Optional[ReferenceMetrics]:
+        ...
+    @vs_oxts_velocity.setter
+    def vs_oxts_velocity(self, value: Optional[ReferenceMetrics]) -> None: ...
 
 class MotionFactorType:
     """Members:
@@ -2015,6 +2020,36 @@ class RangeProjectionOptions:
         """Raises ValueError naming the first bad field and its rule."""
     def to_dict(*args, **kwargs) -> typing.Any:
         """The fields as a dict (nested options as dicts, arrays as lists)."""
+
+class ReferenceMetrics:
+    """A method's trajectory against a second reference (report.json methods.<m>.vs_oxts_velocity); None is written as null."""
+    def __init__(self: ReferenceMetrics) -> None:
+        ...
+    @property
+    def ate_rmse_m(self) -> Optional[float]:
+        ...
+    @ate_rmse_m.setter
+    def ate_rmse_m(self, value: Optional[float]) -> None: ...
+    @property
+    def rot_rmse_deg(self) -> Optional[float]:
+        ...
+    @rot_rmse_deg.setter
+    def rot_rmse_deg(self, value: Optional[float]) -> None: ...
+    @property
+    def t_rel_pct(self) -> Optional[float]:
+        ...
+    @t_rel_pct.setter
+    def t_rel_pct(self, value: Optional[float]) -> None: ...
+    @property
+    def r_rel_deg_per_100m(self) -> Optional[float]:
+        ...
+    @r_rel_deg_per_100m.setter
+    def r_rel_deg_per_100m(self, value: Optional[float]) -> None: ...
+    @property
+    def max_pos_err_in_outage_m(self) -> Optional[float]:
+        ...
+    @max_pos_err_in_outage_m.setter
+    def max_pos_err_in_outage_m(self, value: Optional[float]) -> None: ...
 
 class RelativeErrorResult:
     """KITTI devkit relative error."""
@@ -2435,8 +2470,14 @@ def has_simulator_ground_truth(drive_dir: os.PathLike[str]) -> bool:
 def load_ground_truth(gt_dir: os.PathLike[str], reader: DriveReader, origin: GeodeticPoint) -> dict:
     """The ground truth slam_mms_run evaluates against (eval::LoadGroundTruth: gt_dir/ground_truth/ of the simulator, else the OXTS records of a KITTI reader; FileNotFoundError otherwise) carried into the ENU frame at origin through WGS-84: {'kind', 'trajectory', 'scene_map', 'source'}."""
 
+def load_oxts_ground_truth(reader: DriveReader, origin: GeodeticPoint, positions: str = 'recorded') -> dict:
+    """The OXTS records of a KITTI reader (eval::LoadOxtsGroundTruth) in the ENU frame at origin, with their recorded positions or their velocities integrated from the first record (positions="velocity": the second reference slam_mms_run reports as vs_oxts_velocity); FileNotFoundError for other readers: {'kind', 'trajectory', 'source'}."""
+
 def make_method_report(ate: AteResult = None, relative: RelativeErrorResult = None, outage: OutageErrorResult = None, entropy: MapEntropyResult = None, nees: NeesResult = None) -> MethodReport:
     """The metric fields of a MethodReport (None leaves null)."""
+
+def make_reference_metrics(ate: AteResult = None, relative: RelativeErrorResult = None, outage: OutageErrorResult = None) -> ReferenceMetrics:
+    """The fields of a ReferenceMetrics (None leaves null)."""
 
 def mapping_mode_name(arg0: MappingMode) -> str:
     ...

@@ -270,6 +270,15 @@ void RegisterEval(py::module_& m) {
       },
       py::arg("estimate"), py::arg("ground_truth"),
       "NEES of the estimate's own (absolute) covariances against the ground truth.");
+  py::class_<ReferenceMetrics>(m, "ReferenceMetrics",
+                               "A method's trajectory against a second reference (report.json "
+                               "methods.<m>.vs_oxts_velocity); None is written as null.")
+      .def(py::init<>())
+      .def_readwrite("ate_rmse_m", &ReferenceMetrics::ate_rmse_m)
+      .def_readwrite("rot_rmse_deg", &ReferenceMetrics::rot_rmse_deg)
+      .def_readwrite("t_rel_pct", &ReferenceMetrics::t_rel_pct)
+      .def_readwrite("r_rel_deg_per_100m", &ReferenceMetrics::r_rel_deg_per_100m)
+      .def_readwrite("max_pos_err_in_outage_m", &ReferenceMetrics::max_pos_err_in_outage_m);
   py::class_<MethodReport>(m, "MethodReport",
                            "One method's numbers in report.json; None is written as null.")
       .def(py::init<>())
@@ -285,7 +294,14 @@ void RegisterEval(py::module_& m) {
       .def_readwrite("mme", &MethodReport::mme)
       .def_readwrite("nees", &MethodReport::nees)
       .def_readwrite("scans_per_s", &MethodReport::scans_per_s)
-      .def_readwrite("peak_rss_mb", &MethodReport::peak_rss_mb);
+      .def_readwrite("peak_rss_mb", &MethodReport::peak_rss_mb)
+      .def_readwrite("vs_oxts_velocity", &MethodReport::vs_oxts_velocity);
+  m.def(
+      "make_reference_metrics",
+      [](const AteResult* ate, const RelativeErrorResult* relative,
+         const OutageErrorResult* outage) { return MakeReferenceMetrics(ate, relative, outage); },
+      py::arg("ate") = nullptr, py::arg("relative") = nullptr, py::arg("outage") = nullptr,
+      "The fields of a ReferenceMetrics (None leaves null).");
   m.def(
       "make_method_report",
       [](const AteResult* ate, const RelativeErrorResult* relative, const OutageErrorResult* outage,
@@ -457,6 +473,29 @@ void RegisterEval(py::module_& m) {
       "gt_dir/ground_truth/ of the simulator, else the OXTS records "
       "of a KITTI reader; FileNotFoundError otherwise) carried into the ENU frame at origin "
       "through WGS-84: {'kind', 'trajectory', 'scene_map', 'source'}.");
+  m.def(
+      "load_oxts_ground_truth",
+      [](const DriveReader& reader, const GeodeticPoint& origin, const std::string& positions) {
+        eval::OxtsPositions p = eval::OxtsPositions::kRecorded;
+        if (positions == "velocity") {
+          p = eval::OxtsPositions::kVelocityIntegrated;
+        } else if (positions != "recorded") {
+          throw py::value_error("positions must be \"recorded\" or \"velocity\", not \"" +
+                                positions + "\"");
+        }
+        eval::GroundTruth gt =
+            ValueOrThrow(WithoutGil([&] { return eval::LoadOxtsGroundTruth(reader, origin, p); }));
+        py::dict d;
+        d["kind"] = gt.kind;
+        d["trajectory"] = std::move(gt.T_world_body);
+        d["source"] = gt.source;
+        return d;
+      },
+      py::arg("reader"), py::arg("origin"), py::arg("positions") = "recorded",
+      "The OXTS records of a KITTI reader (eval::LoadOxtsGroundTruth) in the ENU frame at origin, "
+      "with their recorded positions or their velocities integrated from the first record "
+      "(positions=\"velocity\": the second reference slam_mms_run reports as vs_oxts_velocity); "
+      "FileNotFoundError for other readers: {'kind', 'trajectory', 'source'}.");
   m.def(
       "apply_config_file",
       [](const std::filesystem::path& f, MappingSystem::Options& options) {

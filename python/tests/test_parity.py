@@ -33,6 +33,13 @@ def test_real_frames_full_mode_equal_slam_mms_run(kitti_0013, slam_mms_run, tmp_
     theirs = app_report["methods"]["full"]
     for key in ("ate_rmse_m", "rot_rmse_deg", "t_rel_pct", "mme"):
         assert ours[key] == pytest.approx(theirs[key], rel=1e-12), key
+    # The second reference (the OXTS velocities integrated), also as the app computes it.
+    assert theirs["vs_oxts_velocity"] is not None
+    for key, value in theirs["vs_oxts_velocity"].items():
+        if value is None:
+            assert ours["vs_oxts_velocity"][key] is None, key
+        else:
+            assert ours["vs_oxts_velocity"][key] == pytest.approx(value, rel=1e-12), key
     assert result.report["input"] == app_report["input"]
 
 

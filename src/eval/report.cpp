@@ -70,6 +70,18 @@ MethodReport MakeMethodReport(const AteResult* ate, const RelativeErrorResult* r
   return m;
 }
 
+ReferenceMetrics MakeReferenceMetrics(const AteResult* ate, const RelativeErrorResult* relative,
+                                      const OutageErrorResult* outage) {
+  const MethodReport m = MakeMethodReport(ate, relative, outage, nullptr);
+  ReferenceMetrics r;
+  r.ate_rmse_m = m.ate_rmse_m;
+  r.rot_rmse_deg = m.rot_rmse_deg;
+  r.t_rel_pct = m.t_rel_pct;
+  r.r_rel_deg_per_100m = m.r_rel_deg_per_100m;
+  r.max_pos_err_in_outage_m = m.max_pos_err_in_outage_m;
+  return r;
+}
+
 bool IsReportMethodName(const std::string& name) {
   return name == "full" || name == "gnss_ins" || name == "gnss_ins_smoothed" ||
          name == "lidar_only";
@@ -157,6 +169,16 @@ StatusOr<std::string> ReportToJson(const EvalReport& report) {
     }
     jm["scans_per_s"] = Number(m.scans_per_s);
     jm["peak_rss_mb"] = Number(m.peak_rss_mb);
+    if (m.vs_oxts_velocity) {
+      const ReferenceMetrics& r = *m.vs_oxts_velocity;
+      jm["vs_oxts_velocity"] = Json{{"ate_rmse_m", Number(r.ate_rmse_m)},
+                                    {"rot_rmse_deg", Number(r.rot_rmse_deg)},
+                                    {"t_rel_pct", Number(r.t_rel_pct)},
+                                    {"r_rel_deg_per_100m", Number(r.r_rel_deg_per_100m)},
+                                    {"max_pos_err_in_outage_m", Number(r.max_pos_err_in_outage_m)}};
+    } else {
+      jm["vs_oxts_velocity"] = nullptr;
+    }
     methods[name] = std::move(jm);
   }
   j["methods"] = std::move(methods);

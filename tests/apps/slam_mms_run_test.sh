@@ -48,7 +48,8 @@ check_report() {
     for m in "$@"; do
       jq -e --arg m "$m" '.methods[$m] | keys == ["ate_rmse_m","ate_rmse_xyz_m","max_pos_err_in_outage_m",
         "max_rot_err_in_outage_deg","mme","nees","peak_rss_mb","r_rel_deg_per_100m",
-        "rot_mean_rpy_deg","rot_rmse_deg","rot_rmse_rpy_deg","scans_per_s","t_rel_pct"]' "$report" >/dev/null ||
+        "rot_mean_rpy_deg","rot_rmse_deg","rot_rmse_rpy_deg","scans_per_s","t_rel_pct",
+        "vs_oxts_velocity"]' "$report" >/dev/null ||
         fail "report.json methods.$m keys differ from the schema: $(cat "$report")"
     done
   else
@@ -113,6 +114,21 @@ case $case_name in
              (.methods.gnss_ins.mme | type) == "number" and .methods.gnss_ins.scans_per_s > 0 and
              .methods.gnss_ins.peak_rss_mb > 0' "$tmp/out/report.json" >/dev/null ||
         fail "gnss_ins metrics out of bounds: $(cat "$tmp/out/report.json")"
+      # The second reference (the OXTS velocities integrated), as slam_mms_eval computes it
+      # from the file the run writes.
+      [[ -s $tmp/out/ground_truth_oxts_velocity.tum ]] || fail "no ground_truth_oxts_velocity.tum"
+      "$(dirname "$bin")/slam_mms_eval" --gt "$tmp/out/ground_truth_oxts_velocity.tum" \
+        --est "g=$tmp/out/gnss_ins.tum" --segments short --json "$tmp/vel.json" >/dev/null ||
+        fail "slam_mms_eval on ground_truth_oxts_velocity.tum failed"
+      jq -e --slurpfile e "$tmp/vel.json" '.methods.gnss_ins.vs_oxts_velocity as $v |
+             ($v.ate_rmse_m | type) == "number" and
+             ($v.ate_rmse_m - $e[0].trajectories.g.ate_rmse_m | fabs) < 1e-9 and
+             ($v.rot_rmse_deg - $e[0].trajectories.g.rot_rmse_deg | fabs) < 1e-9 and
+             ($v.ate_rmse_m - .methods.gnss_ins.ate_rmse_m | fabs) > 1e-6' \
+        "$tmp/out/report.json" >/dev/null ||
+        fail "vs_oxts_velocity differs from slam_mms_eval's: $(jq .methods.gnss_ins "$tmp/out/report.json")"
+      grep -q "against the OXTS velocities" "$tmp/out/summary.txt" ||
+        fail "summary.txt lacks the second reference"
     fi
     grep -q "gnss_ins" "$tmp/log" || fail "no summary table in the output"
     ;;
@@ -389,7 +405,8 @@ except (OSError, ValueError):
       jq -e '(.gnss_outages == [[1,1]]) and ((.ground_truth_map.mme | type) == "number") and
              ([.methods[] | .ate_rmse_m | type] == ["number","number","number","number"]) and
              .methods.gnss_ins_smoothed.ate_rmse_m < 1.0 and
-             .methods.full.ate_rmse_m < 1.0 and .methods.gnss_ins.ate_rmse_m < 1.0' \
+             .methods.full.ate_rmse_m < 1.0 and .methods.gnss_ins.ate_rmse_m < 1.0 and
+             ([.methods[] | .vs_oxts_velocity] == [null,null,null,null])' \
         "$tmp/out/report.json" >/dev/null || fail "sim metrics: $(cat "$tmp/out/report.json")"
     fi
     # report.html: self-contained, every image a PNG that decodes, every listed file exists.

@@ -119,7 +119,8 @@ TEST(ReportTest, JsonHasTheSchemaKeysAndRoundTrips) {
                                                 "mme",
                                                 "nees",
                                                 "scans_per_s",
-                                                "peak_rss_mb"};
+                                                "peak_rss_mb",
+                                                "vs_oxts_velocity"};
   const Json& methods = j["methods"];
   EXPECT_EQ(Keys(methods), (std::vector<std::string>{"full", "lidar_only"}));
   const Json& full = methods["full"];
@@ -243,6 +244,39 @@ TEST(ReportTest, MakeMethodReportFromResults) {
   EXPECT_FALSE(empty.ate_rmse_m.has_value());
   EXPECT_TRUE(PeakRssMb().has_value());
   EXPECT_GT(*PeakRssMb(), 0.0);
+}
+
+TEST(ReportTest, SecondReferenceIsWrittenUnderItsMethod) {
+  AteResult ate;
+  ate.ate_rmse_m = 0.25;
+  ate.rot_rmse_deg = 0.5;
+  RelativeErrorResult rel;
+  rel.num_segments = 4;
+  rel.t_rel_pct = 0.75;
+  rel.r_rel_deg_per_100m = 1.25;
+  OutageErrorResult out;  // no pose in an outage: null
+  const ReferenceMetrics r = MakeReferenceMetrics(&ate, &rel, &out);
+  EXPECT_EQ(*r.ate_rmse_m, 0.25);
+  EXPECT_EQ(*r.r_rel_deg_per_100m, 1.25);
+  EXPECT_FALSE(r.max_pos_err_in_outage_m.has_value());
+
+  EvalReport report;
+  report.input.ground_truth = "oxts";
+  MethodReport full;
+  full.ate_rmse_m = 0.5;
+  full.vs_oxts_velocity = r;
+  report.methods.emplace_back("full", full);
+  report.methods.emplace_back("gnss_ins", MethodReport());
+  const Json j = ParseOrFail(ReportToJson(report).value());
+  const Json& v = j["methods"]["full"]["vs_oxts_velocity"];
+  EXPECT_EQ(Keys(v), (std::vector<std::string>{"ate_rmse_m", "rot_rmse_deg", "t_rel_pct",
+                                               "r_rel_deg_per_100m", "max_pos_err_in_outage_m"}));
+  EXPECT_EQ(v["ate_rmse_m"].get<double>(), 0.25);
+  EXPECT_EQ(v["rot_rmse_deg"].get<double>(), 0.5);
+  EXPECT_EQ(v["t_rel_pct"].get<double>(), 0.75);
+  EXPECT_TRUE(v["max_pos_err_in_outage_m"].is_null());
+  EXPECT_EQ(j["methods"]["full"]["ate_rmse_m"].get<double>(), 0.5);  // the first reference's
+  EXPECT_TRUE(j["methods"]["gnss_ins"]["vs_oxts_velocity"].is_null());
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 #include "slam_mms_run/outputs.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -83,6 +84,76 @@ StatusOr<eval::MapEntropyResult> MapEntropyOf(const PointCloud& map, int num_thr
   return eval::ComputeMapEntropy(map, mo);
 }
 
+namespace {
+
+// ATE, outage errors and relative errors of the run's trajectory against `gt` (warnings name the
+// method and `what` reference).
+struct TrajectoryMetrics {
+  std::optional<eval::AteResult> ate;
+  std::optional<eval::RelativeErrorResult> relative;
+  std::optional<eval::OutageErrorResult> outage;
+  std::string relative_label;
+  size_t relative_segments = 0;
+  size_t outage_poses = 0;
+};
+
+TrajectoryMetrics MeasureTrajectory(const ModeRun& run, const Trajectory& gt,
+                                    const std::vector<eval::OutageWindow>& outages,
+                                    Timestamp reference, const char* what) {
+  TrajectoryMetrics t;
+  if (run.trajectory.empty()) return t;
+  StatusOr<eval::AteResult> ate = eval::ComputeAte(run.trajectory, gt);
+  if (ate.ok()) {
+    t.ate = *ate;
+    StatusOr<eval::OutageErrorResult> o =
+        eval::ComputeOutageErrors(ate->errors, outages, reference);
+    if (o.ok()) {
+      t.outage = *o;
+      t.outage_poses = o->num_poses;
+    } else {
+      SLAM_MMS_LOG(kWarning) << run.name << ": outage errors" << what << ": "
+                             << o.status().ToString();
+    }
+  } else {
+    SLAM_MMS_LOG(kWarning) << run.name << ": ATE" << what << ": " << ate.status().ToString();
+  }
+  if (run.trajectory.size() < 2) return t;
+  // The devkit's 100..800 m where the drive is long enough, else 10..80 m (named so).
+  StatusOr<eval::MatchedPoses> matched = eval::MatchByTimestamp(run.trajectory, gt);
+  double path_m = 0.0;
+  if (matched.ok()) {
+    for (size_t i = 1; i < matched->size(); ++i) {
+      path_m +=
+          (matched->T_world_gt[i].translation() - matched->T_world_gt[i - 1].translation()).norm();
+    }
+  }
+  const eval::RelativeErrorOptions rel_options = path_m >= 400.0
+                                                     ? eval::RelativeErrorOptions::Kitti()
+                                                     : eval::RelativeErrorOptions::ShortDrive();
+  t.relative_label = rel_options.LengthsLabel();
+  StatusOr<eval::RelativeErrorResult> r =
+      eval::ComputeRelativeError(run.trajectory, gt, rel_options);
+  if (r.ok()) {
+    t.relative = *r;
+    t.relative_segments = r->num_segments;
+  } else {
+    SLAM_MMS_LOG(kWarning) << run.name << ": relative error" << what << ": "
+                           << r.status().ToString();
+  }
+  return t;
+}
+
+}  // namespace
+
+eval::ReferenceMetrics EvaluateAgainst(const ModeRun& run, const Trajectory& T_world_reference,
+                                       const std::vector<eval::OutageWindow>& outages,
+                                       Timestamp reference) {
+  const TrajectoryMetrics t =
+      MeasureTrajectory(run, T_world_reference, outages, reference, " (second reference)");
+  return eval::MakeReferenceMetrics(t.ate ? &*t.ate : nullptr, t.relative ? &*t.relative : nullptr,
+                                    t.outage ? &*t.outage : nullptr);
+}
+
 MethodEvaluation EvaluateMethod(const ModeRun& run, const eval::GroundTruth* gt,
                                 const std::vector<eval::OutageWindow>& outages, Timestamp reference,
                                 int num_threads) {
@@ -102,46 +173,14 @@ MethodEvaluation EvaluateMethod(const ModeRun& run, const eval::GroundTruth* gt,
       SLAM_MMS_LOG(kWarning) << run.name << ": NEES: " << n.status().ToString();
     }
   }
-  if (gt != nullptr && !run.trajectory.empty()) {
-    StatusOr<eval::AteResult> ate = eval::ComputeAte(run.trajectory, gt->T_world_body);
-    if (ate.ok()) {
-      ev.ate = *ate;
-      StatusOr<eval::OutageErrorResult> o =
-          eval::ComputeOutageErrors(ate->errors, outages, reference);
-      if (o.ok()) {
-        outage = *o;
-        ev.outage_poses = o->num_poses;
-      } else {
-        SLAM_MMS_LOG(kWarning) << run.name << ": outage errors: " << o.status().ToString();
-      }
-    } else {
-      SLAM_MMS_LOG(kWarning) << run.name << ": ATE: " << ate.status().ToString();
-    }
-    if (run.trajectory.size() >= 2) {
-      // The devkit's 100..800 m where the drive is long enough, else 10..80 m (named so).
-      StatusOr<eval::MatchedPoses> matched =
-          eval::MatchByTimestamp(run.trajectory, gt->T_world_body);
-      double path_m = 0.0;
-      if (matched.ok()) {
-        for (size_t i = 1; i < matched->size(); ++i) {
-          path_m +=
-              (matched->T_world_gt[i].translation() - matched->T_world_gt[i - 1].translation())
-                  .norm();
-        }
-      }
-      const eval::RelativeErrorOptions rel_options = path_m >= 400.0
-                                                         ? eval::RelativeErrorOptions::Kitti()
-                                                         : eval::RelativeErrorOptions::ShortDrive();
-      ev.relative_label = rel_options.LengthsLabel();
-      StatusOr<eval::RelativeErrorResult> r =
-          eval::ComputeRelativeError(run.trajectory, gt->T_world_body, rel_options);
-      if (r.ok()) {
-        relative = *r;
-        ev.relative_segments = r->num_segments;
-      } else {
-        SLAM_MMS_LOG(kWarning) << run.name << ": relative error: " << r.status().ToString();
-      }
-    }
+  if (gt != nullptr) {
+    TrajectoryMetrics t = MeasureTrajectory(run, gt->T_world_body, outages, reference, "");
+    ev.ate = std::move(t.ate);
+    relative = std::move(t.relative);
+    outage = std::move(t.outage);
+    ev.relative_label = t.relative_label;
+    ev.relative_segments = t.relative_segments;
+    ev.outage_poses = t.outage_poses;
   }
   if (!run.map.empty()) {
     const StatusOr<eval::MapEntropyResult> e =
@@ -176,6 +215,22 @@ std::string SummaryTable(const std::vector<MethodEvaluation>& evals,
                   Cell(m.max_pos_err_in_outage_m, "%.3f").c_str(), Cell(m.mme, "%.4f").c_str(),
                   Cell(m.scans_per_s, "%.2f").c_str(), Cell(m.peak_rss_mb, "%.0f").c_str());
     s << line;
+  }
+  const bool second = std::any_of(evals.begin(), evals.end(), [](const MethodEvaluation& e) {
+    return e.report.vs_oxts_velocity.has_value();
+  });
+  if (second) {
+    s << "against the OXTS velocities integrated from its first record (sharper over seconds, "
+         "not absolute; ground_truth_oxts_velocity.tum):\n";
+    for (const MethodEvaluation& e : evals) {
+      if (!e.report.vs_oxts_velocity) continue;
+      const eval::ReferenceMetrics& r = *e.report.vs_oxts_velocity;
+      std::snprintf(line, sizeof(line), "%-17s %9s %9s %9s %12s %14s\n", e.name.c_str(),
+                    Cell(r.ate_rmse_m, "%.3f").c_str(), Cell(r.rot_rmse_deg, "%.3f").c_str(),
+                    Cell(r.t_rel_pct, "%.3f").c_str(), Cell(r.r_rel_deg_per_100m, "%.4f").c_str(),
+                    Cell(r.max_pos_err_in_outage_m, "%.3f").c_str());
+      s << line;
+    }
   }
   s << "ground-truth map MME: " << Cell(gt_map_mme, "%.4f") << "\n";
   s << "ATE and rotation RMSE without alignment, against the " << gt_kind

@@ -44,6 +44,13 @@ MethodEvaluation EvaluateMethod(const ModeRun& run, const eval::GroundTruth* gt,
                                 const std::vector<eval::OutageWindow>& outages, Timestamp reference,
                                 int num_threads);
 
+/// ATE, rotation RMSE, relative error (lengths as EvaluateMethod) and the largest position error
+/// in the outages of the run's trajectory against a second reference (an OXTS ground truth's
+/// integrated velocities).
+eval::ReferenceMetrics EvaluateAgainst(const ModeRun& run, const Trajectory& T_world_reference,
+                                       const std::vector<eval::OutageWindow>& outages,
+                                       Timestamp reference);
+
 /// The methods side by side (ATE, rot RMSE, t_rel, max error in outages, MME, scans/s, RSS).
 std::string SummaryTable(const std::vector<MethodEvaluation>& evals,
                          const std::optional<double>& gt_map_mme, const std::string& gt_kind);

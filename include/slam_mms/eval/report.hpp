@@ -16,7 +16,10 @@
 //        "ate_rmse_m": f, "ate_rmse_xyz_m": [f,f,f], "rot_rmse_deg": f, "rot_rmse_rpy_deg":
 //        [f,f,f], "rot_mean_rpy_deg": [f,f,f] (signed), "t_rel_pct": f|null, "r_rel_deg_per_100m":
 //        f|null, "max_pos_err_in_outage_m": f|null, "max_rot_err_in_outage_deg": f|null, "mme": f,
-//        "scans_per_s": f, "peak_rss_mb": f}},
+//        "nees": {...}|null, "scans_per_s": f, "peak_rss_mb": f,
+//        "vs_oxts_velocity": {"ate_rmse_m": f|null, "rot_rmse_deg": f|null, "t_rel_pct": f|null,
+//          "r_rel_deg_per_100m": f|null, "max_pos_err_in_outage_m": f|null}|null (+: an OXTS
+//          ground truth's second reference, its velocities integrated: eval/oxts_reference.hpp)}},
 //    "ground_truth_map": {"mme": f|null},
 //    "options": {...}|null,                 + the effective MappingSystem options (config tree)
 //    "georef": {...}|null,                  + the output CRS and origin (georef.json's object)
@@ -69,6 +72,20 @@ struct ReportInput {
   std::optional<double> oxts_inertial_delay_s;
 };
 
+/// A method's trajectory against a second reference; nullopt is written as null.
+struct ReferenceMetrics {
+  std::optional<double> ate_rmse_m;
+  std::optional<double> rot_rmse_deg;
+  std::optional<double> t_rel_pct;
+  std::optional<double> r_rel_deg_per_100m;
+  std::optional<double> max_pos_err_in_outage_m;
+};
+
+/// The fields of ReferenceMetrics from results; a null pointer leaves its fields null (as
+/// MakeMethodReport).
+ReferenceMetrics MakeReferenceMetrics(const AteResult* ate, const RelativeErrorResult* relative,
+                                      const OutageErrorResult* outage);
+
 /// One method's numbers; nullopt is written as null.
 struct MethodReport {
   std::optional<double> ate_rmse_m;
@@ -86,6 +103,10 @@ struct MethodReport {
   std::optional<NeesResult> nees;
   std::optional<double> scans_per_s;
   std::optional<double> peak_rss_mb;
+  /// Where the ground truth is an OXTS's recorded positions: the same trajectory against the
+  /// OXTS's velocities integrated from its first record (sharper over seconds, not absolute:
+  /// eval/oxts_reference.hpp); null otherwise.
+  std::optional<ReferenceMetrics> vs_oxts_velocity;
 };
 
 /// Fills the metric fields of a MethodReport from results; a null pointer leaves its fields null.

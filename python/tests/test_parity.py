@@ -63,11 +63,11 @@ def test_manual_feed_equals_run_drive(sim_drive):
     assert streams.imu_noise is not None  # the simulator states its IMU (imu_noise.yaml)
     assert streams.imu_frame_is_vehicle_frame  # KITTI raw: the OXTS frame is the car's
     stated = options.copy()  # what apply_input_models does where the models are switched on
-    stated.use_stated_imu_noise = True  # off by default (docs/ins.md)
-    stated.vehicle_nhc_sigma_mps = 0.1  # off by default
+    stated.use_stated_imu_noise = True  # the default (docs/ins.md)
+    stated.vehicle_nhc_sigma_mps = 0.05  # the default
     stated = slam_mms.apply_input_models(stated, streams)
     assert stated.ins.gyro_noise_density == streams.imu_noise.gyro_noise_density
-    assert stated.ins.nhc_sigma_mps == 0.1
+    assert stated.ins.nhc_sigma_mps == 0.05
     options = slam_mms.apply_input_models(options, streams)  # as run_drive does (the defaults)
     system = slam_mms.MappingSystem(options)
     system.initialize_pos(streams.initial_state, streams.initial_attitude_sigma_rpy_rad)

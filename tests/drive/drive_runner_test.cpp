@@ -327,8 +327,7 @@ TEST_F(DriveRunnerTest, StatedImuNoiseIsAppliedUnlessSwitchedOff) {
   ASSERT_TRUE(in.imu_noise.has_value());
   EXPECT_EQ(in.imu_noise_source, (sim_->drive_dir / "imu_noise.yaml").string());
   MappingSystem::Options options = OptionsFor(MappingMode::kGnssIns, *reader);
-  EXPECT_FALSE(options.use_stated_imu_noise);  // off by default (docs/ins.md)
-  options.use_stated_imu_noise = true;
+  EXPECT_TRUE(options.use_stated_imu_noise);  // on by default since session 42 (docs/ins.md)
   const MappingSystem::Options applied = ApplyInputModels(options, in);
   EXPECT_EQ(applied.ins.gyro_noise_density, in.imu_noise->gyro_noise_density);
   EXPECT_EQ(applied.localizer.imu.accel_bias_random_walk, in.imu_noise->AccelBiasRandomWalk());
@@ -354,8 +353,11 @@ TEST_F(DriveRunnerTest, VehicleConstraintWhereTheInputStatesItsImuFrame) {
   EXPECT_TRUE(in.imu_frame_is_vehicle_frame);
   MappingSystem::Options options = OptionsFor(MappingMode::kGnssIns, *reader);
   EXPECT_EQ(options.ins.nhc_sigma_mps, 0.0);
-  EXPECT_EQ(options.vehicle_nhc_sigma_mps, 0.0);  // off by default (docs/ins.md)
-  EXPECT_FALSE(UsesVehicleConstraint(options, in));
+  EXPECT_EQ(options.vehicle_nhc_sigma_mps, 0.05);  // on by default since session 42 (docs/ins.md)
+  EXPECT_TRUE(UsesVehicleConstraint(options, in));
+  MappingSystem::Options off = options;
+  off.vehicle_nhc_sigma_mps = 0.0;
+  EXPECT_FALSE(UsesVehicleConstraint(off, in));
   options.vehicle_nhc_sigma_mps = 0.1;
   EXPECT_TRUE(UsesVehicleConstraint(options, in));
   EXPECT_EQ(ApplyInputModels(options, in).ins.nhc_sigma_mps, options.vehicle_nhc_sigma_mps);

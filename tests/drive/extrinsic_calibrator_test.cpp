@@ -249,7 +249,9 @@ TEST(ExtrinsicCalibratorTest, ARightFileStaysRightOnAPosThatDrifts) {
     EXPECT_LT((r->T_body_lidar_estimated.translation() - truth.translation()).norm(), 0.01);
     EXPECT_LT(std::abs(r->time_offset_s), 0.001);
     EXPECT_GT(r->pos_drift_knots, 10);
-    if (pos == &drifting) EXPECT_NEAR(r->pos_drift_rate_rms_mps.z(), kDriftMps, 0.01);
+    if (pos == &drifting) {
+      EXPECT_NEAR(r->pos_drift_rate_rms_mps.z(), kDriftMps, 0.01);
+    }
     // What is held is exactly the file's; what is applied is significant.
     for (int i = 0; i < 7; ++i) {
       if (r->applied[i]) {

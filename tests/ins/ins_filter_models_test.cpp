@@ -436,6 +436,9 @@ TEST(InsFilterModelsTest, NonHolonomicConstraintEstimatesTheImuMisalignment) {
       InsFilter::Options o = BaseOptions();
       o.SetImuNoise(imu);
       o.nhc_sigma_mps = c == 0 ? 0.0 : 0.05;
+      // This car's only constraint error is the mounting: the constraint taken as white (the
+      // defaults' correlation times weaken it, and with it what an unmodelled mounting costs).
+      o.nhc_lateral_correlation_time_s = o.nhc_vertical_correlation_time_s = 0.0;
       o.vehicle_misalignment_sigma_rad = c == 2 ? 0.0175 : 0.0;
       if (c == 3) {
         o.vehicle_pitch_misalignment_rad = kPitch;
@@ -530,6 +533,8 @@ TEST(InsFilterModelsTest, NonHolonomicConstraintEstimatesTheLeverArmToTheRearAxl
       InsFilter::Options o = BaseOptions();
       o.SetImuNoise(imu);
       o.nhc_sigma_mps = c == 0 ? 0.0 : 0.05;
+      // This car's only constraint error is its lateral model: the constraint taken as white.
+      o.nhc_lateral_correlation_time_s = o.nhc_vertical_correlation_time_s = 0.0;
       o.vehicle_misalignment_sigma_rad = 0.0;
       if (c != 2) o.vehicle_lever_arm_sigma_m = o.vehicle_sideslip_sigma_rad_per_mps2 = 0.0;
       if (c == 3) {
@@ -612,6 +617,7 @@ TEST(InsFilterModelsTest, CorrelatedConstraintErrorsAreNotTakenAsWhite) {
       InsFilter::Options o = BaseOptions();
       o.SetImuNoise(imu);
       o.nhc_sigma_mps = c == 0 ? 0.0 : 0.05;
+      o.nhc_lateral_correlation_time_s = 0.0;  // only the vertical row is examined
       o.nhc_vertical_correlation_time_s = c == 2 ? 1.0 : 0.0;
       o.vehicle_misalignment_sigma_rad = 0.0;
       o.vehicle_lever_arm_sigma_m = o.vehicle_sideslip_sigma_rad_per_mps2 = 0.0;

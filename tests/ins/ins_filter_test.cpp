@@ -467,11 +467,11 @@ TEST(InsFilterTest, StatedInitialAttitudeSigma) {
   EXPECT_NEAR(unknown[0], o.init_sigma_roll_pitch_rad, 1e-12);
   EXPECT_NEAR(unknown[1], o.init_sigma_roll_pitch_rad, 1e-12);
   EXPECT_NEAR(unknown[2], o.init_sigma_yaw_rad, 1e-12);
-  // Off (the default): the stated sigma is ignored.
+  // Off: the stated sigma is ignored (on by default since session 42).
   o.use_stated_attitude_sigma = false;
   const Eigen::Vector3d ignored = world_sigmas(stated, 0.0);
   EXPECT_LT((ignored - unknown).cwiseAbs().maxCoeff(), 1e-12);
-  EXPECT_FALSE(InsFilter::Options().use_stated_attitude_sigma);
+  EXPECT_TRUE(InsFilter::Options().use_stated_attitude_sigma);
   // A sigma that is not finite and positive is refused, naming it.
   InsFilter filter;
   for (const Eigen::Vector3d& bad :

@@ -132,6 +132,13 @@ SubmapManager::Options ChainOptions() {
   o.use_loops = false;         // a straight chain: no loop to find
   o.gnss_correlation_s = 0.0;  // independent fixes: the expected accuracy does not hinge on it
   o.icp.max_correspondence_distance = 0.5;  // the clouds are exact: no far associations
+  // The synthetic chains drift up to 1 deg and 0.5 m over a few submaps, far beyond a real level
+  // 1 (the defaults' reckon, fitted to level 1 on the sweep, would take it as a 20-sigma error):
+  // the reckon states a drift of that size, fixed per axis.
+  o.reckon_sigma_rot_rad = 0.002;
+  o.reckon_sigma_trans_m = 0.05;
+  o.reckon_sigma_rot_rad_per_m = 0.0;
+  o.reckon_sigma_trans_per_m = 0.0;
   return o;
 }
 

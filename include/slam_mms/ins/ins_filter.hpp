@@ -117,12 +117,12 @@ class InsFilter {
     double init_sigma_gyro_bias_radps = 1.0e-3;
     /// Start from the initial attitude's stated accuracy where its source gives one
     /// (InitializeAttitude's sigma_rpy_rad: a KITTI OXTS record, initial_state.csv's sigma
-    /// columns, a bag's orientation_covariance); false: always the init sigmas above. Off by
-    /// default: with this filter's default IMU model (3-25x a tactical IMU's noise) the stated
-    /// prior outweighs what GNSS and motion tell of the attitude (docs/sweep.md, fix 5); with the
-    /// stated IMU noise and the vehicle constraint it helps most drives but not all (docs/ins.md,
-    /// "A land vehicle's POS").
-    bool use_stated_attitude_sigma = false;
+    /// columns, a bag's orientation_covariance); false: always the init sigmas above. On by
+    /// default since session 42, with the stated IMU noise and the vehicle constraint
+    /// (docs/ins.md, "A land vehicle's POS"); alone, with this filter's default IMU model (3-25x a
+    /// tactical IMU's noise), the stated prior outweighs what GNSS and motion tell of the
+    /// attitude (docs/sweep.md, fix 5).
+    bool use_stated_attitude_sigma = true;
     double max_imu_gap_s = 0.6;         ///< Longer IMU gaps are bridged but logged [s].
     double max_fix_latency_s = 0.25;    ///< Older fixes (than the state) are rejected [s].
     double max_extrapolation_s = 0.25;  ///< StateAt beyond the last state by at most this [s].
@@ -149,15 +149,15 @@ class InsFilter {
     double nhc_sigma_mps = 0.0;
     double nhc_min_speed_mps = 1.0;  ///< Applied above this estimated speed [m/s].
     /// Correlation times of the constraint's errors, lateral (y) and vertical (z) rows [s]; 0:
-    /// white (default). A car's velocity off its axes is not white noise: tyre slip, the road's
+    /// white. A car's velocity off its axes is not white noise: tyre slip, the road's
     /// camber and grade changes, suspension pitch under braking last seconds (KITTI's records,
     /// 40 drives: 2.6 s lateral, 0.8 s vertical; docs/ins.md). Taken as white at the
     /// constraint's rate, n updates of one error count as n independent ones; with a correlation
     /// time tau each update's variance is nhc_sigma_mps^2 * max(1, 2 tau / dt) (dt: the time
     /// since the last constraint update), the white noise of the same spectral density at low
-    /// frequencies, which is what a drift in heading or height integrates.
-    double nhc_lateral_correlation_time_s = 0.0;
-    double nhc_vertical_correlation_time_s = 0.0;
+    /// frequencies, which is what a drift in heading or height integrates. Defaults: KITTI's.
+    double nhc_lateral_correlation_time_s = 2.6;
+    double nhc_vertical_correlation_time_s = 0.84;
     /// IMU-to-vehicle misalignment the constraint starts from: the vehicle frame is the body
     /// frame turned by pitch about body y and yaw about body z [rad] (a calibrated mounting).
     double vehicle_pitch_misalignment_rad = 0.0;

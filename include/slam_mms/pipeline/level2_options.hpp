@@ -29,18 +29,21 @@ struct Level2Options {
   /// off), not for drift. > 0.
   double loop_gate_chi2 = 50.0;
   double long_outage_s = 10.0;  ///< GNSS back after at least this long: solve.
-  /// F_Reckon's covariance: fixed per axis (the default), or (reckon_from_level1) level 1's own
-  /// covariance of the new reference's pose in the previous submap (SubmapRecord::cov_prev_this:
-  /// the sliding window's marginal, whose reference is held). Against the truth on 30 simulated
-  /// drives the fixed sigmas are about 3x too loose and level 1's own about 1.3x too tight in
-  /// sigma (docs/sweep.md, session 38): off by default, an option to measure with.
-  double reckon_sigma_rot_rad = 0.002;
-  double reckon_sigma_trans_m = 0.05;
+  /// F_Reckon's covariance: per axis, a floor plus a rate per metre (the default), or
+  /// (reckon_from_level1) level 1's own covariance of the new reference's pose in the previous
+  /// submap (SubmapRecord::cov_prev_this: the sliding window's marginal, whose reference is
+  /// held), which against the truth on 30 simulated drives is about 1.3x too tight in sigma
+  /// (docs/sweep.md, session 38): off by default, an option to measure with. The defaults are
+  /// fitted to level 1's reckon errors against the truth of 91 factors of the whole sweep
+  /// (session 39; chi2 mean 5.9 / 5.4 / 7.7 of 6 at 0-20 / 20-60 / 60-300 m); the fixed 0.002 rad
+  /// / 0.05 m before session 42 were about 3x too loose.
+  double reckon_sigma_rot_rad = 0.0003;
+  double reckon_sigma_trans_m = 0.01;
   /// Level 1's drift grows with the distance between the two references (d, the reckon's
-  /// translation): the fixed sigmas above are the floor, and these add in quadrature per metre of
-  /// d (sigma = hypot(floor, per_m * d)) [rad/m] and [m/m]. 0: fixed sigmas. >= 0.
-  double reckon_sigma_rot_rad_per_m = 0.0;
-  double reckon_sigma_trans_per_m = 0.0;
+  /// translation): the sigmas above are the floor, and these add in quadrature per metre of d
+  /// (sigma = hypot(floor, per_m * d)) [rad/m] and [m/m]. 0: fixed sigmas. >= 0.
+  double reckon_sigma_rot_rad_per_m = 1.0e-5;
+  double reckon_sigma_trans_per_m = 3.5e-4;
   bool reckon_from_level1 = false;
   double gnss_sigma_scale = 1.0;  ///< Multiplies the GNSS measurement covariance.
   /// GNSS errors are time-correlated (an RTK-float or single-point bias wanders over tens of
@@ -68,8 +71,9 @@ struct Level2Options {
   /// each axis with its own correlation): the first submap's POS attitude a prior, each later
   /// one an attitude chain factor, the conditional of its error given the previous one's
   /// (SubmapGraph::AddAttitudeChainFactor). Where the POS gives no cross-covariance (an external
-  /// POS, the first submap after an initialisation or an outage) a prior as above.
-  bool pos_attitude_cross_covariance = false;
+  /// POS, the first submap after an initialisation or an outage) a prior as above. On by default
+  /// since session 42 (docs/sweep.md, "Session 42").
+  bool pos_attitude_cross_covariance = true;
   /// GNSS errors as level 2's own Gauss-Markov biases (the POS filter's model, InsFilter::
   /// Options::gnss_error_*) instead of the gnss_correlation_s window: the fixes of one run of a
   /// solution class (RTK fixed, float, code; a new run after another class or a gap of more than

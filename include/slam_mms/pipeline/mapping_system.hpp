@@ -83,17 +83,17 @@ class MappingSystem {
     /// Model the IMU with the noise its input states (DriveStreams::imu_noise) where RunDrive
     /// and the apps apply an input to these options (ApplyInputModels in drive_runner.hpp);
     /// false: the ins / localizer.imu densities as set. Hosts that feed a MappingSystem
-    /// themselves call SetImuNoise. Off by default: alone it made attitudes worse on the
-    /// sweep's 10 s windows (session 19); with the stated initial attitude accuracy and the
-    /// vehicle constraint below it helps most drives but not all (docs/ins.md, "A land
-    /// vehicle's POS", session 25).
-    bool use_stated_imu_noise = false;
+    /// themselves call SetImuNoise. On by default since session 42, with the stated initial
+    /// attitude accuracy and the vehicle constraint below (docs/ins.md, "A land vehicle's POS";
+    /// alone it made attitudes worse on the sweep's 10 s windows, session 19).
+    bool use_stated_imu_noise = true;
     /// The non-holonomic constraint's 1-sigma [m/s] that ApplyInputModels sets as
     /// ins.nhc_sigma_mps where the input states that its IMU frame is the vehicle's
-    /// (DriveStreams::imu_frame_is_vehicle_frame) and ins.nhc_sigma_mps is 0 (not set); 0 (the
-    /// default): never. 0.1 m/s is a car's sideways velocity at its IMU as the KITTI OXTS records
-    /// show it (RMS 0.06 m/s, 99th percentile 0.15 m/s over 20 drives; docs/ins.md).
-    double vehicle_nhc_sigma_mps = 0.0;
+    /// (DriveStreams::imu_frame_is_vehicle_frame) and ins.nhc_sigma_mps is 0 (not set); 0:
+    /// never. 0.05 m/s (the default since session 42) with the errors' correlation times of
+    /// ins.nhc_*_correlation_time_s: a car's velocity off its axes at its IMU as 40 KITTI drives'
+    /// OXTS records show it (docs/ins.md, "The constraint's correlated errors").
+    double vehicle_nhc_sigma_mps = 0.05;
     [[nodiscard]] Status Validate() const;
     /// The IMU's noise from its datasheet (DriveStreams::imu_noise where the input states it) in
     /// both places it is modelled: the POS filter (ins) and level 1's preintegration

@@ -98,10 +98,28 @@ def table2(d):
     return "\n".join(out) + "\n"
 
 
+def velocity_table(rows):
+    """The same runs against the OXTS velocities integrated (report.json vs_oxts_velocity)."""
+    out = ["| run | method | ATE [m] | rot RMSE [deg] | t_rel [%] | r_rel [deg/100 m] | "
+           "max err in outage [m] |", "|---|---|---|---|---|---|---|"]
+    for label, rep in rows:
+        for m in ["full", "gnss_ins", "gnss_ins_smoothed", "lidar_only"]:
+            r = (rep or {}).get("methods", {}).get(m, {}).get("vs_oxts_velocity")
+            if r is None:
+                continue
+            out.append(f"| {label} | {m} | {fmt(r['ate_rmse_m'])} | {fmt(r['rot_rmse_deg'])} | "
+                       f"{fmt(r['t_rel_pct'])} | {fmt(r['r_rel_deg_per_100m'])} | "
+                       f"{fmt(r['max_pos_err_in_outage_m'])} |")
+    return out
+
+
 def kitti(d):
     rows = [(x, load(os.path.join(d, x, "report.json"))) for x in sorted(os.listdir(d))]
     return "\n".join(["## Real KITTI frames (OXTS as ground truth)", ""] + methods_table(rows) +
-                     [""] + ratio_lines(rows)) + "\n"
+                      [""] + ratio_lines(rows) +
+                      ["", "Against the OXTS velocities integrated from the first record "
+                       "(docs/user_guide.md, \"A second reference for OXTS ground truth\"):", ""] +
+                      velocity_table(rows)) + "\n"
 
 
 if __name__ == "__main__":

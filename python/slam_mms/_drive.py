@@ -155,6 +155,16 @@ def _split_skipped(entry: str) -> Tuple[str, str]:
     return source, reason
 
 
+def _relative_lengths(ate) -> str:
+    """The devkit's 100..800 m ("kitti") where the ground-truth path matched by `ate` is at least
+    400 m long, else 10..80 m ("short"), as slam_mms_run chooses."""
+    path_m = 0.0
+    if ate is not None:
+        p = ate.p_gt_world
+        path_m = float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum()) if len(p) else 0.0
+    return "kitti" if path_m >= 400.0 else "short"
+
+
 def _evaluate(result: DriveResult, drive: pathlib.Path, gnss_outages, num_threads: int,
               ground_truth_map: bool) -> dict:
     """slam_mms_run's evaluation of one method (examples/apps/slam_mms_run/outputs.cpp,
@@ -191,12 +201,7 @@ def _evaluate(result: DriveResult, drive: pathlib.Path, gnss_outages, num_thread
         except (ValueError, IndexError, _C.Error) as e:
             _log.warning("ATE: %s", e)
         if len(run.trajectory) >= 2:
-            # The devkit's 100..800 m where the ground-truth path is long enough, else 10..80 m.
-            path_m = 0.0
-            if result.ate is not None:
-                p = result.ate.p_gt_world
-                path_m = float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum()) if len(p) else 0.0
-            lengths = "kitti" if path_m >= 400.0 else "short"
+            lengths = _relative_lengths(result.ate)
             result.extra["relative_label"] = {"kitti": "kitti_100-800m",
                                               "short": "short_10-80m"}[lengths]
             try:
@@ -221,10 +226,7 @@ def _evaluate(result: DriveResult, drive: pathlib.Path, gnss_outages, num_thread
             v_out = _C.compute_outage_errors(v_ate, list(gnss_outages), reference_ns)
             v_rel = None
             if len(run.trajectory) >= 2:
-                p = v_ate.p_gt_world
-                path_m = float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum()) if len(p) else 0.0
-                lengths = "kitti" if path_m >= 400.0 else "short"
-                v_rel = _C.compute_relative_error(run.trajectory, vel, lengths)
+                v_rel = _C.compute_relative_error(run.trajectory, vel, _relative_lengths(v_ate))
             method.vs_oxts_velocity = _C.make_reference_metrics(v_ate, v_rel, v_out)
         except (FileNotFoundError, ValueError, IndexError, _C.Error) as e:
             _log.warning("OXTS velocity reference: %s", e)

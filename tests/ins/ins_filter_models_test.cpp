@@ -39,6 +39,7 @@ using Receiver = std::function<ReceiverState(double t)>;
 // reported variance is a first-order Gauss-Markov bias with correlation time `tau`, redrawn from
 // its stationary distribution when the solution type changes; the rest is white.
 struct ErrorProcess {
+  double rho_fixed = 0.0, tau_fixed = 30.0;
   double rho_float = 0.9, tau_float = 30.0;
   double rho_code = 0.9, tau_code = 60.0;
 };
@@ -117,8 +118,8 @@ DriveRun RunModelDrive(const Truth& truth, double duration_s, const Receiver& re
       if (rs.available) {
         const bool fixed = rs.type == GnssFixType::kRtkFixed;
         const bool is_float = rs.type == GnssFixType::kRtkFloat;
-        const double rho = fixed ? 0.0 : is_float ? ep.rho_float : ep.rho_code;
-        const double tau = is_float ? ep.tau_float : ep.tau_code;
+        const double rho = fixed ? ep.rho_fixed : is_float ? ep.rho_float : ep.rho_code;
+        const double tau = fixed ? ep.tau_fixed : is_float ? ep.tau_float : ep.tau_code;
         const Eigen::Vector3d sigma(rs.sigma_h, rs.sigma_h, rs.sigma_v);
         if (rs.type != last_type) {
           bias = std::sqrt(rho) * sigma.cwiseProduct(randn3());
@@ -304,6 +305,55 @@ TEST(InsFilterModelsTest, PositionCovarianceIsConsistentUnderCorrelatedFloatErro
   EXPECT_GE(inside[1], 0.9);
   EXPECT_LT(mean[1], 6.0);
   EXPECT_LT(inside[0], inside[1]);  // the white model is overconfident
+}
+
+TEST(InsFilterModelsTest, CorrelatedFixedErrorModelIsConsistentWhereTheWhiteOneIsNot) {
+  // RTK fixed for 300 s. The receiver's fixed errors are white, or (multipath, residual
+  // atmosphere, a blended output converging) 90 % a 30 s Gauss-Markov bias; the filter models
+  // them as white (the default) or as the float class by default (90 %, 30 s:
+  // scripts/experiments/rtk_fixed_correlated.yaml).
+  EXPECT_DOUBLE_EQ(InsFilter::Options().gnss_error_rtk_fixed.correlated_fraction, 0.0);
+  const Receiver rx = [](double) { return Fixed(); };
+  double mean[2][2], inside[2][2], rms[2][2];
+  for (int truth = 0; truth < 2; ++truth) {
+    for (int model = 0; model < 2; ++model) {
+      ErrorProcess ep;
+      if (truth == 1) ep.rho_fixed = 0.9;
+      InsFilter::Options o = BaseOptions();
+      if (model == 1) o.gnss_error_rtk_fixed = {0.9, 30.0};
+      InsFilter f = InsFilter::Create(o).value();
+      const DriveRun r = RunModelDrive(AnalyticDrive(), 300.0, rx, ep, &f, 17);
+      int in = 0, cnt = 0;
+      double sum = 0.0, sq = 0.0;
+      for (size_t i = 0; i < r.t.size(); ++i) {
+        if (r.t[i] < 20.0) continue;
+        ++cnt;
+        sum += r.nees_pos[i];
+        sq += r.pos_err[i] * r.pos_err[i];
+        if (r.nees_pos[i] >= 0.0717 && r.nees_pos[i] <= 12.84) ++in;  // 99 %, 3 dof
+      }
+      mean[truth][model] = sum / cnt;
+      inside[truth][model] = static_cast<double>(in) / cnt;
+      rms[truth][model] = std::sqrt(sq / cnt);
+    }
+  }
+  std::printf(
+      "RTK fixed 300 s, position NEES mean / share inside the 99 %% bounds / error RMS:\n"
+      "  white errors:      white model %.2f / %.1f %% / %.4f m, correlated %.2f / %.1f %% / %.4f "
+      "m\n"
+      "  correlated errors: white model %.2f / %.1f %% / %.4f m, correlated %.2f / %.1f %% / %.4f "
+      "m\n",
+      mean[0][0], 100.0 * inside[0][0], rms[0][0], mean[0][1], 100.0 * inside[0][1], rms[0][1],
+      mean[1][0], 100.0 * inside[1][0], rms[1][0], mean[1][1], 100.0 * inside[1][1], rms[1][1]);
+  // Correlated errors: the correlated model is consistent, the white one overconfident.
+  EXPECT_GE(inside[1][1], 0.9);
+  EXPECT_LT(mean[1][1], 6.0);
+  EXPECT_GT(mean[1][0], 2.0 * mean[1][1]);
+  EXPECT_LT(inside[1][0], inside[1][1]);
+  // White errors: the correlated model errs on the safe side (not overconfident) and its
+  // position stays at the fixes' accuracy (2 cm horizontal, 3 cm vertical).
+  EXPECT_LT(mean[0][1], 3.0);
+  EXPECT_LT(rms[0][1], 0.04);
 }
 
 TEST(InsFilterModelsTest, ZeroVelocityUpdatesHoldAStandingVehicleAndRelease) {

@@ -192,6 +192,29 @@ double MeanIn(const DriveRun& r, const std::vector<double>& v, double a, double 
   return n > 0 ? sum / n : 0.0;
 }
 
+// Position NEES (3 dof) and error from `from_s` on: the mean NEES, the share of epochs inside
+// the two-sided 99 % interval of chi-square with 3 dof, and the error's RMS [m].
+struct PositionConsistency {
+  double nees_mean = 0.0, inside_99 = 0.0, error_rms_m = 0.0;
+};
+PositionConsistency PositionConsistencyFrom(const DriveRun& r, double from_s) {
+  int in = 0, cnt = 0;
+  double sum = 0.0, sq = 0.0;
+  for (size_t i = 0; i < r.t.size(); ++i) {
+    if (r.t[i] < from_s) continue;
+    ++cnt;
+    sum += r.nees_pos[i];
+    sq += r.pos_err[i] * r.pos_err[i];
+    if (r.nees_pos[i] >= 0.0717 && r.nees_pos[i] <= 12.84) ++in;
+  }
+  PositionConsistency c;
+  if (cnt == 0) return c;
+  c.nees_mean = sum / cnt;
+  c.inside_99 = static_cast<double>(in) / cnt;
+  c.error_rms_m = std::sqrt(sq / cnt);
+  return c;
+}
+
 double ValueAt(const DriveRun& r, const std::vector<double>& v, double t) {
   for (size_t i = 0; i < v.size(); ++i)
     if (r.t[i] >= t - 1e-6) return v[i];
@@ -285,17 +308,9 @@ TEST(InsFilterModelsTest, PositionCovarianceIsConsistentUnderCorrelatedFloatErro
     if (model == 0) o.gnss_error_rtk_float.correlated_fraction = 0.0;
     InsFilter f = InsFilter::Create(o).value();
     const DriveRun r = RunModelDrive(AnalyticDrive(), 300.0, rx, ErrorProcess(), &f, 5);
-    int in = 0, cnt = 0;
-    double sum = 0.0;
-    for (size_t i = 0; i < r.t.size(); ++i) {
-      if (r.t[i] < 20.0) continue;
-      ++cnt;
-      sum += r.nees_pos[i];
-      // Two-sided 99 % interval of chi-square with 3 dof.
-      if (r.nees_pos[i] >= 0.0717 && r.nees_pos[i] <= 12.84) ++in;
-    }
-    inside[model] = static_cast<double>(in) / cnt;
-    mean[model] = sum / cnt;
+    const PositionConsistency c = PositionConsistencyFrom(r, 20.0);
+    inside[model] = c.inside_99;
+    mean[model] = c.nees_mean;
   }
   std::printf(
       "float fixes 300 s (90 %% of the variance a 30 s Gauss-Markov bias): position NEES (3 dof) "
@@ -323,26 +338,18 @@ TEST(InsFilterModelsTest, CorrelatedFixedErrorModelIsConsistentWhereTheWhiteOneI
       if (model == 1) o.gnss_error_rtk_fixed = {0.9, 30.0};
       InsFilter f = InsFilter::Create(o).value();
       const DriveRun r = RunModelDrive(AnalyticDrive(), 300.0, rx, ep, &f, 17);
-      int in = 0, cnt = 0;
-      double sum = 0.0, sq = 0.0;
-      for (size_t i = 0; i < r.t.size(); ++i) {
-        if (r.t[i] < 20.0) continue;
-        ++cnt;
-        sum += r.nees_pos[i];
-        sq += r.pos_err[i] * r.pos_err[i];
-        if (r.nees_pos[i] >= 0.0717 && r.nees_pos[i] <= 12.84) ++in;  // 99 %, 3 dof
-      }
-      mean[truth][model] = sum / cnt;
-      inside[truth][model] = static_cast<double>(in) / cnt;
-      rms[truth][model] = std::sqrt(sq / cnt);
+      const PositionConsistency c = PositionConsistencyFrom(r, 20.0);
+      mean[truth][model] = c.nees_mean;
+      inside[truth][model] = c.inside_99;
+      rms[truth][model] = c.error_rms_m;
     }
   }
   std::printf(
       "RTK fixed 300 s, position NEES mean / share inside the 99 %% bounds / error RMS:\n"
-      "  white errors:      white model %.2f / %.1f %% / %.4f m, correlated %.2f / %.1f %% / %.4f "
-      "m\n"
-      "  correlated errors: white model %.2f / %.1f %% / %.4f m, correlated %.2f / %.1f %% / %.4f "
-      "m\n",
+      "  white errors:      white model %.2f / %.1f %% / %.4f m, "
+      "correlated %.2f / %.1f %% / %.4f m\n"
+      "  correlated errors: white model %.2f / %.1f %% / %.4f m, "
+      "correlated %.2f / %.1f %% / %.4f m\n",
       mean[0][0], 100.0 * inside[0][0], rms[0][0], mean[0][1], 100.0 * inside[0][1], rms[0][1],
       mean[1][0], 100.0 * inside[1][0], rms[1][0], mean[1][1], 100.0 * inside[1][1], rms[1][1]);
   // Correlated errors: the correlated model is consistent, the white one overconfident.
